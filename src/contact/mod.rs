@@ -1,0 +1,115 @@
+//! Contacts: gap functions `g(q)`, their Jacobians `G(q)` (eq. 1, 5) and impact laws.
+//!
+//! A [`ContactSet`] lists the candidate contacts of a scene. Each contact `α` has a
+//! gap `g^α(q)` (positive when open), a Jacobian column `G_α = ∇g^α` with a fixed
+//! sparsity pattern, and a Newton restitution coefficient `e^α` (eq. 6). The local
+//! velocity is `U = Gᵀ v` and the generalized reaction `r = G λ` (eq. 5).
+//!
+//! [`plane::NodesOnPlane`] is linear (constant `G`, so the integrators precompute the
+//! Delassus operator once); [`sphere::InsideSphere`] is nonlinear (`G` depends on
+//! `q`, so the Newton loop of eq. 42–51 re-linearizes it every iteration).
+
+pub mod plane;
+pub mod sphere;
+
+/// A candidate contact set: the gap functions and Jacobians of eq. 1e.
+pub trait ContactSet: Send {
+    /// Number of candidate contacts `m`.
+    fn len(&self) -> usize;
+    /// True when there is no candidate contact.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// True when `g` is affine in `q` (then `G` is constant).
+    fn is_linear(&self) -> bool;
+    /// The dofs touched by each Jacobian column (a fixed pattern).
+    fn pattern(&self) -> Vec<Vec<usize>>;
+    /// Evaluates `g(q)` into `gap` and `G(q)` into `jac` (same pattern as [`ContactSet::pattern`]).
+    fn evaluate(&self, q: &[f64], gap: &mut [f64], jac: &mut ContactJacobian);
+    /// Restitution coefficient of each contact (eq. 6).
+    fn restitution(&self) -> &[f64];
+}
+
+/// The `n × m` Jacobian `G` stored by columns with a fixed pattern (one column per contact).
+#[derive(Clone, Debug)]
+pub struct ContactJacobian {
+    col_ptr: Vec<usize>,
+    dofs: Vec<usize>,
+    values: Vec<f64>,
+}
+
+impl ContactJacobian {
+    /// Allocates a Jacobian with the pattern of `set` (values zero).
+    pub fn for_set(set: &dyn ContactSet) -> Self {
+        let pattern = set.pattern();
+        let mut col_ptr = Vec::with_capacity(pattern.len() + 1);
+        col_ptr.push(0);
+        let mut dofs = Vec::new();
+        for p in &pattern {
+            dofs.extend_from_slice(p);
+            col_ptr.push(dofs.len());
+        }
+        let values = vec![0.0; dofs.len()];
+        ContactJacobian {
+            col_ptr,
+            dofs,
+            values,
+        }
+    }
+
+    /// Number of columns (contacts).
+    pub fn ncols(&self) -> usize {
+        self.col_ptr.len() - 1
+    }
+
+    /// Dofs and values of column `alpha`.
+    pub fn col(&self, alpha: usize) -> (&[usize], &[f64]) {
+        let r = self.col_ptr[alpha]..self.col_ptr[alpha + 1];
+        (&self.dofs[r.clone()], &self.values[r])
+    }
+
+    /// Mutable values of column `alpha` (pattern as in [`ContactJacobian::col`]).
+    pub fn col_values_mut(&mut self, alpha: usize) -> &mut [f64] {
+        let r = self.col_ptr[alpha]..self.col_ptr[alpha + 1];
+        &mut self.values[r]
+    }
+
+    /// `G_αᵀ x`.
+    pub fn dot(&self, alpha: usize, x: &[f64]) -> f64 {
+        let (d, v) = self.col(alpha);
+        d.iter().zip(v).map(|(&i, &g)| g * x[i]).sum()
+    }
+
+    /// `y += s G_α`.
+    pub fn axpy(&self, alpha: usize, s: f64, y: &mut [f64]) {
+        let (d, v) = self.col(alpha);
+        for (&i, &g) in d.iter().zip(v) {
+            y[i] += s * g;
+        }
+    }
+
+    /// `out = Gᵀ x` for all contacts.
+    pub fn transpose_mul(&self, x: &[f64], out: &mut [f64]) {
+        for (a, o) in out.iter_mut().enumerate() {
+            *o = self.dot(a, x);
+        }
+    }
+
+    /// `G_αᵀ G_β` (used for the Euclidean projection metric, eq. 58).
+    pub fn col_dot_col(&self, alpha: usize, beta: usize, scratch: &mut [f64]) -> f64 {
+        self.axpy(beta, 1.0, scratch);
+        let r = self.dot(alpha, scratch);
+        self.axpy(beta, -1.0, scratch);
+        // restore exact zeros (the pattern entries were 0 before)
+        let (d, _) = self.col(beta);
+        for &i in d {
+            scratch[i] = 0.0;
+        }
+        r
+    }
+}
+
+/// Checks a restitution coefficient (must lie in `[0, 1]`).
+pub fn check_restitution(field: &str, e: f64) -> Result<f64, crate::error::Error> {
+    crate::error::require_in(field, e, 0.0, 1.0)
+}

@@ -1,0 +1,774 @@
+//! The θ-method machinery shared by Moreau–Jean, Algorithm 1, Algorithm 2 and the
+//! position-level trapezoidal rule.
+//!
+//! For `F(t, q, v) = f − C v − K q` the iteration matrix `M̂ = M + hθC + h²θ²K`
+//! (eq. 47) is constant: it is formed and factored once. Each step computes the free
+//! velocity (eq. 18 with `P = 0`)
+//!
+//! `M̂ (v_free − v_k) = h f − h C v_k − h K (q_k + hθ v_k)`,
+//!
+//! and every iterate of the decoupled Newton loop (eq. 56–58, with the sign erratum
+//! of the module [`crate::integrators`]) is then
+//!
+//! `vⁿ⁺¹ = v_free + M̂⁻¹G Pⁿ⁺¹ − hθ M̂⁻¹K N G τⁿ`,
+//! `qⁿ⁺¹ = q_k + h(1−θ)v_k + hθ vⁿ⁺¹ + N G τⁿ⁺¹`,
+//!
+//! with `N = I` (eq. 58) or `N = M̂⁻¹` (eq. 60). In contact space this needs only
+//! `W = GᵀM̂⁻¹G`, `W_D = Gᵀ M̂⁻¹K N G` and `W_N = GᵀNG`, computed once when `G` is
+//! constant (DESIGN.md §4): the velocity LCP (eq. 57) is
+//! `U + eU_k = W_AA P_A + (U_free − hθ W_D τⁿ + e U_k)_A`, the linearized gaps
+//! (eq. 51) are `g = g(qⁿ) + Gᵀ(q_k + h(1−θ)v_k − qⁿ) + hθ U + W_N τ`, and `v, q` are
+//! formed once per step. For nonlinear contacts `G(qⁿ)` and the operators are
+//! recomputed every Newton iteration (`m` extra solves).
+//!
+//! The dense `n × m` blocks `M̂⁻¹G` and `M̂⁻¹K N G` suit the tens of contacts of the
+//! bar and the academic examples; scenes with thousands of candidates will take the
+//! per-active-column path of DESIGN.md §4.
+
+use super::{Forecast, Metric, NewtonParams, SchemeParams, State, StepStats};
+use crate::assembly::linear_combination;
+use crate::contact::{ContactJacobian, ContactSet};
+use crate::error::Error;
+use crate::linalg::{SpdFactor, spmv, spmv_add};
+use crate::model::LinearSystem;
+use crate::solvers::lcp::LcpSolver;
+use crate::solvers::mlcp::Mlcp;
+use crate::solvers::{SolveError, SolveInfo};
+
+/// What the position step enforces (eq. 58 for Algorithm 1, eq. 68 for Algorithm 2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PositionRule {
+    /// No position correction (Moreau–Jean).
+    None,
+    /// `0 ≤ g ⊥ τ ≥ 0` over every contact (Algorithm 1, eq. 28 and 58).
+    AllComplementarity,
+    /// Over the contacts of `pos_mask`: `g = 0` with free `τ` where `P > 0`
+    /// (or everywhere when `project_all`), `0 ≤ g ⊥ τ ≥ 0` elsewhere (eq. 68–70).
+    Combined {
+        /// Project every active contact (Siconos' behaviour) instead of `P > 0` only.
+        project_all: bool,
+    },
+}
+
+/// How the impulse `P` is determined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VelocityLaw {
+    /// Newton's impact law at velocity level on `vel_mask`:
+    /// `0 ≤ U_{k+1} + e U_k ⊥ P ≥ 0` (eq. 18d, 57).
+    Impact,
+    /// Signorini's condition at position level on every contact:
+    /// `0 ≤ g(q_{k+1}) ⊥ P ≥ 0` with `q_{k+1} = q_k + h v_{k+θ}` (the trapezoidal rule of
+    /// sec. 6.2, Fig. 11 when θ = 1/2).
+    PositionLevel,
+}
+
+/// Dense sub-problem workspace: gathers a principal sub-block, solves, scatters.
+#[derive(Debug)]
+pub(crate) struct Workspace {
+    pub idx: Vec<usize>,
+    sub: Vec<f64>,
+    q: Vec<f64>,
+    z: Vec<f64>,
+    w: Vec<f64>,
+    eq: Vec<bool>,
+    pub lcp: LcpSolver,
+    mlcp: Mlcp,
+}
+
+impl Workspace {
+    pub fn new(m: usize, params: &SchemeParams) -> Self {
+        Workspace {
+            idx: Vec::with_capacity(m),
+            sub: vec![0.0; m * m],
+            q: vec![0.0; m],
+            z: vec![0.0; m],
+            w: vec![0.0; m],
+            eq: vec![false; m],
+            lcp: LcpSolver::new(params.lcp, m),
+            mlcp: Mlcp::with_capacity(m),
+        }
+    }
+
+    /// Gathers `mat[idx, idx]` (scaled by `scale`), `rhs[idx]`, the warm start and the
+    /// equality flags.
+    pub fn gather(
+        &mut self,
+        mat: &[f64],
+        m: usize,
+        scale: f64,
+        rhs: &[f64],
+        warm: &[f64],
+        eq: impl Fn(usize) -> bool,
+    ) {
+        let k = self.idx.len();
+        for (b, &j) in self.idx.iter().enumerate() {
+            for (a, &i) in self.idx.iter().enumerate() {
+                self.sub[a + b * k] = scale * mat[i + j * m];
+            }
+            self.q[b] = rhs[j];
+            self.z[b] = warm[j];
+            self.eq[b] = eq(j);
+        }
+    }
+
+    /// Solves the gathered problem (an LCP when no row is an equality).
+    pub fn solve(&mut self) -> Result<SolveInfo, SolveError> {
+        let k = self.idx.len();
+        if self.eq[..k].iter().any(|&e| e) {
+            self.mlcp.solve(
+                &self.sub[..k * k],
+                k,
+                &self.q[..k],
+                &self.eq[..k],
+                &mut self.lcp,
+                &mut self.z[..k],
+                &mut self.w[..k],
+            )
+        } else {
+            self.lcp.solve(
+                &self.sub[..k * k],
+                k,
+                &self.q[..k],
+                &mut self.z[..k],
+                &mut self.w[..k],
+            )
+        }
+    }
+
+    /// `out[idx] = z`, zero elsewhere.
+    pub fn scatter(&self, out: &mut [f64]) {
+        out.iter_mut().for_each(|x| *x = 0.0);
+        for (a, &i) in self.idx.iter().enumerate() {
+            out[i] = self.z[a];
+        }
+    }
+}
+
+/// Shared θ-method data and buffers (see the module doc).
+pub struct ThetaCore {
+    pub(crate) sys: LinearSystem,
+    pub(crate) contacts: Box<dyn ContactSet>,
+    pub(crate) h: f64,
+    pub(crate) theta: f64,
+    pub(crate) n: usize,
+    pub(crate) m: usize,
+    factor: SpdFactor,
+    pub(crate) jac: ContactJacobian,
+    pub(crate) e: Vec<f64>,
+    metric: Metric,
+    with_projection: bool,
+    pub(crate) linear: bool,
+    jac_at_qk: bool,
+    pub(crate) newton: NewtonParams,
+    pub(crate) projection_tolerance: f64,
+    // contact-space operators at the current linearization point
+    pub(crate) cg: Vec<f64>,
+    pub(crate) w: Vec<f64>,
+    d: Vec<f64>,
+    wd: Vec<f64>,
+    wn: Vec<f64>,
+    pub(crate) state: State,
+    // n-vectors
+    pub(crate) v_free: Vec<f64>,
+    work: Vec<f64>,
+    q_lin: Vec<f64>,
+    pub(crate) v_new: Vec<f64>,
+    pub(crate) q_new: Vec<f64>,
+    // m-vectors
+    g_at_lin: Vec<f64>,
+    pub(crate) u_k: Vec<f64>,
+    pub(crate) u_free: Vec<f64>,
+    u_new: Vec<f64>,
+    coupling: Vec<f64>,
+    a: Vec<f64>,
+    pub(crate) b: Vec<f64>,
+    pub(crate) g_lin: Vec<f64>,
+    pub(crate) p: Vec<f64>,
+    p_warm: Vec<f64>,
+    pub(crate) tau: Vec<f64>,
+    tau_prev: Vec<f64>,
+    tau_used: Vec<f64>,
+    dtau: Vec<f64>,
+    /// Contacts whose velocity-level impact law is enforced this round.
+    pub(crate) vel_mask: Vec<bool>,
+    /// Contacts projected this round (Algorithm 2).
+    pub(crate) pos_mask: Vec<bool>,
+    pub(crate) ws: Workspace,
+}
+
+impl ThetaCore {
+    /// Forms and factors `M̂`, evaluates the contacts at `q0` and condenses the
+    /// Delassus operators. `with_projection` also prepares `W_D` and `W_N`.
+    pub fn new(
+        params: &SchemeParams,
+        sys: LinearSystem,
+        contacts: Box<dyn ContactSet>,
+        q0: &[f64],
+        v0: &[f64],
+        h: f64,
+        with_projection: bool,
+    ) -> Result<Self, Error> {
+        params.validate()?;
+        crate::error::require_positive("dt", h)?;
+        let n = sys.ndof();
+        check_vector("initial displacement", q0, n)?;
+        check_vector("initial velocity", v0, n)?;
+        let m = contacts.len();
+        let theta = params.theta;
+        let mut terms = vec![(1.0, &sys.mass), (h * h * theta * theta, &sys.stiffness)];
+        if let Some(c) = &sys.damping {
+            terms.push((h * theta, c));
+        }
+        let mhat = linear_combination(&terms);
+        let factor = SpdFactor::new(mhat.as_ref(), "iteration matrix M + hθC + h²θ²K")?;
+        let jac = ContactJacobian::for_set(contacts.as_ref());
+        let e = contacts.restitution().to_vec();
+        let linear = contacts.is_linear();
+        let state = State {
+            step: 0,
+            time: 0.0,
+            q: q0.to_vec(),
+            v: v0.to_vec(),
+            gap: vec![0.0; m],
+            local_velocity: vec![0.0; m],
+            impulse: vec![0.0; m],
+            projection: vec![0.0; m],
+        };
+        let nm = if with_projection { n * m } else { 0 };
+        let mm = if with_projection { m * m } else { 0 };
+        let mut core = ThetaCore {
+            sys,
+            contacts,
+            h,
+            theta,
+            n,
+            m,
+            factor,
+            jac,
+            e,
+            metric: params.metric,
+            with_projection,
+            linear,
+            jac_at_qk: true,
+            newton: params.newton,
+            projection_tolerance: params.projection_tolerance,
+            cg: vec![0.0; n * m],
+            w: vec![0.0; m * m],
+            d: vec![0.0; nm],
+            wd: vec![0.0; mm],
+            wn: vec![0.0; mm],
+            state,
+            v_free: vec![0.0; n],
+            work: vec![0.0; n],
+            q_lin: vec![0.0; n],
+            v_new: vec![0.0; n],
+            q_new: vec![0.0; n],
+            g_at_lin: vec![0.0; m],
+            u_k: vec![0.0; m],
+            u_free: vec![0.0; m],
+            u_new: vec![0.0; m],
+            coupling: vec![0.0; m],
+            a: vec![0.0; m],
+            b: vec![0.0; m],
+            g_lin: vec![0.0; m],
+            p: vec![0.0; m],
+            p_warm: vec![0.0; m],
+            tau: vec![0.0; m],
+            tau_prev: vec![0.0; m],
+            tau_used: vec![0.0; m],
+            dtau: vec![0.0; m],
+            vel_mask: vec![false; m],
+            pos_mask: vec![false; m],
+            ws: Workspace::new(m, params),
+        };
+        let q = std::mem::take(&mut core.state.q);
+        core.contacts
+            .evaluate(&q, &mut core.state.gap, &mut core.jac);
+        core.state.q = q;
+        core.condense();
+        let v = std::mem::take(&mut core.state.v);
+        core.jac.transpose_mul(&v, &mut core.state.local_velocity);
+        core.state.v = v;
+        Ok(core)
+    }
+
+    /// A description of the linear-algebra path, for summaries.
+    pub fn path(&self) -> String {
+        format!(
+            "M̂ = M + hθC + h²θ²K factored once (sparse Cholesky, n = {}); {} contact(s), {}; \
+             Delassus W = GᵀM̂⁻¹G dense {}×{}{}",
+            self.n,
+            self.m,
+            if self.linear {
+                "linear gap: G constant, W condensed once, no Newton iteration for the dynamics"
+            } else {
+                "nonlinear gap: G(q) re-linearized every Newton iteration"
+            },
+            self.m,
+            self.m,
+            if self.with_projection {
+                format!("; projection metric {}", self.metric.name())
+            } else {
+                String::new()
+            }
+        )
+    }
+
+    /// Recomputes `M̂⁻¹G`, `W` and (with projection) `M̂⁻¹K N G`, `W_D`, `W_N` for the
+    /// current `G` (`m` or `2m` sparse solves).
+    fn condense(&mut self) {
+        let (n, m) = (self.n, self.m);
+        for a in 0..m {
+            let col = &mut self.cg[a * n..(a + 1) * n];
+            col.iter_mut().for_each(|x| *x = 0.0);
+            self.jac.axpy(a, 1.0, col);
+            self.factor.solve_in_place(col);
+        }
+        for b in 0..m {
+            for a in 0..m {
+                self.w[a + b * m] = self.jac.dot(a, &self.cg[b * n..(b + 1) * n]);
+            }
+        }
+        if !self.with_projection {
+            return;
+        }
+        for a in 0..m {
+            // work = N G_α
+            match self.metric {
+                Metric::Euclidean => {
+                    self.work.iter_mut().for_each(|x| *x = 0.0);
+                    self.jac.axpy(a, 1.0, &mut self.work);
+                }
+                Metric::Mass => self.work.copy_from_slice(&self.cg[a * n..(a + 1) * n]),
+            }
+            let col = &mut self.d[a * n..(a + 1) * n];
+            spmv(self.sys.stiffness.as_ref(), &self.work, col);
+            self.factor.solve_in_place(col);
+        }
+        for b in 0..m {
+            for a in 0..m {
+                self.wd[a + b * m] = self.jac.dot(a, &self.d[b * n..(b + 1) * n]);
+                self.wn[a + b * m] = match self.metric {
+                    Metric::Euclidean => self.jac.col_dot_col(a, b, &mut self.work),
+                    Metric::Mass => self.w[a + b * m],
+                };
+            }
+        }
+    }
+
+    /// Free velocity and the contact-space data at the start of a step.
+    pub fn begin_step(&mut self) {
+        let (h, th) = (self.h, self.theta);
+        let s = &self.state;
+        // work = h f − h K (q + hθ v) − h C v
+        for i in 0..self.n {
+            self.q_lin[i] = s.q[i] + h * th * s.v[i];
+        }
+        for (w, f) in self.work.iter_mut().zip(&self.sys.force) {
+            *w = h * f;
+        }
+        spmv_add(self.sys.stiffness.as_ref(), -h, &self.q_lin, &mut self.work);
+        if let Some(c) = &self.sys.damping {
+            spmv_add(c.as_ref(), -h, &s.v, &mut self.work);
+        }
+        self.factor.solve_in_place(&mut self.work);
+        for i in 0..self.n {
+            self.v_free[i] = s.v[i] + self.work[i];
+        }
+        self.u_k.copy_from_slice(&s.local_velocity);
+        self.jac.transpose_mul(&self.v_free, &mut self.u_free);
+        self.q_lin.copy_from_slice(&self.state.q);
+        self.g_at_lin.copy_from_slice(&self.state.gap);
+    }
+
+    /// Sets `vel_mask` from the forecast `ḡ_{k+1}` (eq. 61 or 62): active iff `ḡ ≤ 0`.
+    pub fn forecast(&mut self, f: Forecast) {
+        let (h, th) = (self.h, self.theta);
+        for a in 0..self.m {
+            let g = self.state.gap[a];
+            let gbar = match f {
+                Forecast::Explicit { gamma } => g + gamma * h * self.u_k[a],
+                Forecast::Free => g + h * (th * self.u_free[a] + (1.0 - th) * self.u_k[a]),
+            };
+            self.vel_mask[a] = gbar <= 0.0;
+        }
+    }
+
+    /// Runs the decoupled Newton loop (eq. 56–58) for fixed `vel_mask` (and `pos_mask`
+    /// for [`PositionRule::Combined`]), leaving `P`, `τ`, the linearized gaps `g_lin`
+    /// and the new `v`, `q` in the core's buffers.
+    pub fn newton(
+        &mut self,
+        law: VelocityLaw,
+        rule: PositionRule,
+        stats: &mut StepStats,
+    ) -> Result<(), Error> {
+        let (h, th, m) = (self.h, self.theta, self.m);
+        if !self.linear && !self.jac_at_qk {
+            let q = std::mem::take(&mut self.state.q);
+            self.contacts
+                .evaluate(&q, &mut self.g_at_lin, &mut self.jac);
+            self.state.q = q;
+            self.condense();
+            self.jac.transpose_mul(&self.v_free, &mut self.u_free);
+            self.jac_at_qk = true;
+        }
+        self.tau_prev.iter_mut().for_each(|x| *x = 0.0);
+        self.p.iter_mut().for_each(|x| *x = 0.0);
+        self.q_lin.copy_from_slice(&self.state.q);
+        self.g_at_lin.copy_from_slice(&self.state.gap);
+        let mut relinearized = false;
+        let mut converged = false;
+        let mut it = 0;
+        while it < self.newton.max_iterations {
+            it += 1;
+            stats.newton_iterations += 1;
+            if !self.linear && it > 1 {
+                let q = std::mem::take(&mut self.q_lin);
+                self.contacts
+                    .evaluate(&q, &mut self.g_at_lin, &mut self.jac);
+                self.q_lin = q;
+                self.condense();
+                self.jac.transpose_mul(&self.v_free, &mut self.u_free);
+                relinearized = true;
+                self.jac_at_qk = false;
+            }
+            // coupling hθ W_D τⁿ (zero without projection)
+            let any_tau = self.tau_prev.iter().any(|&t| t != 0.0);
+            for a in 0..m {
+                self.coupling[a] = if any_tau {
+                    h * th
+                        * (0..m)
+                            .map(|b| self.wd[a + b * m] * self.tau_prev[b])
+                            .sum::<f64>()
+                } else {
+                    0.0
+                };
+                self.a[a] = self.u_free[a] - self.coupling[a] + self.e[a] * self.u_k[a];
+            }
+            // linearized gaps without contact impulse or projection (eq. 51)
+            for a in 0..m {
+                self.g_lin[a] = if self.linear || !relinearized {
+                    self.state.gap[a] + h * (1.0 - th) * self.u_k[a]
+                } else {
+                    self.g_at_lin[a]
+                        + self.jac.dot(a, &self.state.q)
+                        + h * (1.0 - th) * self.jac.dot(a, &self.state.v)
+                        - self.jac.dot(a, &self.q_lin)
+                };
+            }
+            match law {
+                VelocityLaw::Impact => {
+                    // velocity LCP (eq. 57) on the active set
+                    self.ws.idx.clear();
+                    self.ws.idx.extend((0..m).filter(|&a| self.vel_mask[a]));
+                    if !self.ws.idx.is_empty() {
+                        self.ws.gather(&self.w, m, 1.0, &self.a, &self.p, |_| false);
+                        let info = self.ws.solve().map_err(|e| self.fail("velocity LCP", e))?;
+                        stats.lcp_iterations += info.iterations;
+                        stats.lcp_residual = stats.lcp_residual.max(info.residual);
+                        self.ws.scatter(&mut self.p);
+                    } else {
+                        self.p.iter_mut().for_each(|x| *x = 0.0);
+                    }
+                }
+                VelocityLaw::PositionLevel => {
+                    // 0 ≤ g_base + hθ (U_free + W P) ⊥ P ≥ 0 on every contact
+                    for a in 0..m {
+                        self.a[a] = self.g_lin[a] + h * th * self.u_free[a];
+                    }
+                    self.p_warm.copy_from_slice(&self.p);
+                    grow_solve(
+                        &mut self.ws,
+                        &self.w,
+                        m,
+                        h * th,
+                        &self.a,
+                        &self.p_warm,
+                        &mut self.p,
+                        0.0,
+                        stats,
+                    )
+                    .map_err(|e| self.fail("position-level LCP", e))?;
+                }
+            }
+            for a in 0..m {
+                let wp: f64 = (0..m).map(|b| self.w[a + b * m] * self.p[b]).sum();
+                self.u_new[a] = self.u_free[a] + wp - self.coupling[a];
+                self.b[a] = self.g_lin[a] + h * th * self.u_new[a];
+            }
+            // position problem
+            let projected = self.solve_position(rule, stats)?;
+            if projected {
+                stats.projection_iterations += 1;
+            }
+            for a in 0..m {
+                let wt: f64 = if self.with_projection {
+                    (0..m).map(|b| self.wn[a + b * m] * self.tau[b]).sum()
+                } else {
+                    0.0
+                };
+                self.g_lin[a] = self.b[a] + wt;
+            }
+            self.tau_used.copy_from_slice(&self.tau_prev);
+            for a in 0..m {
+                self.dtau[a] = self.tau[a] - self.tau_prev[a];
+            }
+            self.tau_prev.copy_from_slice(&self.tau);
+            // convergence
+            let r = if self.linear {
+                self.linear_residual()
+            } else {
+                self.form();
+                let mut dq: f64 = 0.0;
+                let mut inc: f64 = 0.0;
+                let mut qn: f64 = 0.0;
+                for i in 0..self.n {
+                    dq = dq.max((self.q_new[i] - self.q_lin[i]).abs());
+                    inc = inc.max((self.q_new[i] - self.state.q[i]).abs());
+                    qn = qn.max(self.q_new[i].abs());
+                }
+                self.q_lin.copy_from_slice(&self.q_new);
+                dq / (inc + 8.0 * f64::EPSILON * qn).max(f64::MIN_POSITIVE)
+            };
+            stats.newton_residual = r;
+            if r <= self.newton.tol {
+                converged = true;
+                break;
+            }
+        }
+        if !converged {
+            stats.caps_hit += 1;
+        }
+        Ok(())
+    }
+
+    /// Dimensionless change that the last `Δτ` would make to the next iterate (linear `G`).
+    fn linear_residual(&self) -> f64 {
+        if !self.with_projection || self.dtau.iter().all(|&x| x == 0.0) {
+            return 0.0;
+        }
+        let (h, th, m) = (self.h, self.theta, self.m);
+        let mut s_v: f64 = 0.0;
+        let mut s_g: f64 = 0.0;
+        for a in 0..m {
+            s_v = s_v
+                .max(self.u_free[a].abs())
+                .max(self.u_k[a].abs())
+                .max(self.u_new[a].abs());
+            s_g = s_g.max(self.b[a].abs());
+        }
+        let mut dv: f64 = 0.0;
+        let mut dg: f64 = 0.0;
+        for a in 0..m {
+            let (mut x, mut y) = (0.0, 0.0);
+            for b in 0..m {
+                x += self.wd[a + b * m] * self.dtau[b];
+                y += self.wn[a + b * m] * self.dtau[b];
+            }
+            dv = dv.max(h * th * x.abs());
+            dg = dg.max(y.abs());
+        }
+        // Rounding floor: 8 ulps of the quantities the iterate is built from.
+        let fv = 8.0 * f64::EPSILON * s_v;
+        let fg = 8.0 * f64::EPSILON * (s_g + h * s_v);
+        let rv = if dv <= fv {
+            0.0
+        } else {
+            dv / s_v.max(f64::MIN_POSITIVE)
+        };
+        let rg = if dg <= fg {
+            0.0
+        } else {
+            dg / (h * s_v).max(f64::MIN_POSITIVE)
+        };
+        rv.max(rg)
+    }
+
+    /// Solves the position problem for `rule`; returns whether any `τ ≠ 0`.
+    fn solve_position(&mut self, rule: PositionRule, stats: &mut StepStats) -> Result<bool, Error> {
+        let m = self.m;
+        let ptol = self.projection_tolerance;
+        match rule {
+            PositionRule::None => {
+                self.tau.iter_mut().for_each(|x| *x = 0.0);
+                return Ok(false);
+            }
+            PositionRule::AllComplementarity => {
+                // 0 ≤ b + W_N τ ⊥ τ ≥ 0 over all contacts
+                grow_solve(
+                    &mut self.ws,
+                    &self.wn,
+                    m,
+                    1.0,
+                    &self.b,
+                    &self.tau_prev,
+                    &mut self.tau,
+                    ptol,
+                    stats,
+                )
+                .map_err(|e| self.fail("position LCP", e))?;
+            }
+            PositionRule::Combined { project_all } => {
+                // eq. 68: equality where P > 0 (eq. 69/70), complementarity elsewhere
+                // in the active set; rows already within the tolerance are dropped.
+                let (p, b) = (&self.p, &self.b);
+                let eq = |a: usize| project_all || p[a] > 0.0;
+                self.ws.idx.clear();
+                self.ws.idx.extend((0..m).filter(|&a| {
+                    self.pos_mask[a]
+                        && if eq(a) {
+                            b[a].abs() > ptol || (ptol == 0.0 && b[a] != 0.0)
+                        } else {
+                            b[a] < -ptol
+                        }
+                }));
+                if self.ws.idx.is_empty() {
+                    self.tau.iter_mut().for_each(|x| *x = 0.0);
+                } else {
+                    self.ws.gather(&self.wn, m, 1.0, b, &self.tau_prev, eq);
+                    let info = self.ws.solve().map_err(|e| self.fail("position MLCP", e))?;
+                    stats.lcp_iterations += info.iterations;
+                    stats.lcp_residual = stats.lcp_residual.max(info.residual);
+                    self.ws.scatter(&mut self.tau);
+                }
+            }
+        }
+        Ok(self.tau.iter().any(|&t| t != 0.0))
+    }
+
+    /// `v = v_free + M̂⁻¹G P − hθ M̂⁻¹K N G τ_used`, `q = q_k + h(1−θ)v_k + hθ v + N G τ`.
+    pub(crate) fn form(&mut self) {
+        let (h, th, n) = (self.h, self.theta, self.n);
+        self.v_new.copy_from_slice(&self.v_free);
+        for a in 0..self.m {
+            let p = self.p[a];
+            if p != 0.0 {
+                axpy(p, &self.cg[a * n..(a + 1) * n], &mut self.v_new);
+            }
+            let t = self.tau_used[a];
+            if t != 0.0 {
+                axpy(-h * th * t, &self.d[a * n..(a + 1) * n], &mut self.v_new);
+            }
+        }
+        let s = &self.state;
+        for i in 0..n {
+            self.q_new[i] = s.q[i] + h * ((1.0 - th) * s.v[i] + th * self.v_new[i]);
+        }
+        for a in 0..self.m {
+            let t = self.tau[a];
+            if t != 0.0 {
+                match self.metric {
+                    Metric::Euclidean => self.jac.axpy(a, t, &mut self.q_new),
+                    Metric::Mass => axpy(t, &self.cg[a * n..(a + 1) * n], &mut self.q_new),
+                }
+            }
+        }
+    }
+
+    /// Accepts `v_new`, `q_new`, `P`, `τ` as the state at `t_{k+1}` and evaluates the
+    /// contacts there (re-condensing for nonlinear contacts).
+    pub fn commit(&mut self, stats: &mut StepStats) {
+        if self.linear {
+            self.form();
+        }
+        std::mem::swap(&mut self.state.q, &mut self.q_new);
+        std::mem::swap(&mut self.state.v, &mut self.v_new);
+        self.state.impulse.copy_from_slice(&self.p);
+        self.state.projection.copy_from_slice(&self.tau);
+        self.state.step += 1;
+        self.state.time = self.state.step as f64 * self.h;
+        self.contacts
+            .evaluate(&self.state.q, &mut self.state.gap, &mut self.jac);
+        if !self.linear {
+            self.condense();
+            self.jac_at_qk = true;
+        }
+        self.jac
+            .transpose_mul(&self.state.v, &mut self.state.local_velocity);
+        stats.max_violation = self.state.gap.iter().fold(0.0_f64, |acc, &g| acc.max(-g));
+    }
+
+    /// An error for a failed one-step solve, with the step and time.
+    pub(crate) fn fail(&self, what: &str, e: SolveError) -> Error {
+        Error::NotConverged {
+            solver: what.to_string(),
+            step: self.state.step + 1,
+            time: self.state.time,
+            detail: e.to_string(),
+        }
+    }
+}
+
+/// Solves `0 ≤ rhs + scale·mat z ⊥ z ≥ 0` over all `m` rows by solving on the rows
+/// violated at `z = 0` (`rhs < −tol`) and adding any row the solution leaves violated,
+/// until none is: the result then solves the full LCP, with work proportional to the
+/// rows that matter. At most `m` growth rounds (a cap counted in `stats`).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn grow_solve(
+    ws: &mut Workspace,
+    mat: &[f64],
+    m: usize,
+    scale: f64,
+    rhs: &[f64],
+    warm: &[f64],
+    out: &mut [f64],
+    tol: f64,
+    stats: &mut StepStats,
+) -> Result<(), SolveError> {
+    ws.idx.clear();
+    ws.idx.extend((0..m).filter(|&a| rhs[a] < -tol));
+    out.iter_mut().for_each(|x| *x = 0.0);
+    let mut rounds = 0;
+    while !ws.idx.is_empty() {
+        rounds += 1;
+        ws.gather(mat, m, scale, rhs, warm, |_| false);
+        let info = ws.solve()?;
+        stats.lcp_iterations += info.iterations;
+        stats.lcp_residual = stats.lcp_residual.max(info.residual);
+        ws.scatter(out);
+        let before = ws.idx.len();
+        for a in 0..m {
+            if ws.idx.contains(&a) {
+                continue;
+            }
+            let g: f64 = rhs[a] + scale * (0..m).map(|b| mat[a + b * m] * out[b]).sum::<f64>();
+            if g < -tol {
+                ws.idx.push(a);
+            }
+        }
+        if ws.idx.len() == before {
+            break;
+        }
+        if rounds > m {
+            stats.caps_hit += 1;
+            break;
+        }
+    }
+    Ok(())
+}
+
+fn axpy(s: f64, x: &[f64], y: &mut [f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi += s * xi;
+    }
+}
+
+/// Checks a user-given vector: length and finiteness.
+pub(crate) fn check_vector(field: &str, x: &[f64], n: usize) -> Result<(), Error> {
+    if x.len() != n {
+        return Err(Error::invalid(
+            field,
+            format!("{} values", x.len()),
+            &format!("needs {n} values (one per dof)"),
+        ));
+    }
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        return Err(Error::invalid(
+            &format!("{field}[{i}]"),
+            x[i],
+            "must be finite",
+        ));
+    }
+    Ok(())
+}

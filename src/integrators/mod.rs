@@ -1,0 +1,295 @@
+//! Time integrators: the paper's five event-capturing schemes.
+//!
+//! | scheme | file | paper |
+//! |---|---|---|
+//! | Moreau–Jean | [`moreau_jean`] | eq. 18, forecasts eq. 61 (γ) and eq. 62 (free) |
+//! | Schatzman–Paoli | [`schatzman_paoli`] | eq. 20–22 |
+//! | trapezoidal rule, position-level contact | [`trapezoid`] | sec. 6.2, Fig. 11 |
+//! | direct projection (Algorithm 1, decoupled) | [`direct_projection`] | eq. 28, 56–58, 60 |
+//! | combined activation/projection (Algorithm 2) | [`combined_projection`] | eq. 65–70 |
+//!
+//! An integrator is built once (iteration matrix factored, Delassus operator
+//! `W = Gᵀ M̂⁻¹ G` condensed, buffers sized) and stepped many times; [`Integrator::step`]
+//! does not allocate and returns its [`StepStats`] as data.
+//!
+//! The θ-method schemes share [`core::ThetaCore`]: the free velocity of eq. 18/45,
+//! the condensed operators of DESIGN.md §4, and the decoupled Newton loop of
+//! eq. 56–58 written in contact space (for a linear system with constant `G` every
+//! iterate is a small `m`-dimensional computation; `v` and `q` are formed once per
+//! step).
+//!
+//! Erratum carried here: as printed, eq. 45, 48 and 56a give the stiffness terms
+//! `+hθK(q_k − qⁿ + h(1−θ)v_k)` and `+hθK G τ`. Substituting the second line of eq. 44
+//! into its first gives `−hθK(q_k − qⁿ + h(1−θ)v_k + hθvⁿ) − hθK G τ`; only this sign
+//! reduces to the plain θ-method (eq. 18) when `τ = 0`. The code uses the derived form.
+
+pub mod combined_projection;
+pub mod core;
+pub mod direct_projection;
+pub mod moreau_jean;
+pub mod schatzman_paoli;
+pub mod trapezoid;
+
+use serde::{Deserialize, Serialize};
+
+use crate::contact::ContactSet;
+use crate::error::Error;
+use crate::model::LinearSystem;
+use crate::solvers::LcpKind;
+
+/// Positions, velocities and contact quantities at time `t_k`.
+#[derive(Clone, Debug, Default)]
+pub struct State {
+    /// Index of the last completed step (0 before the first step).
+    pub step: usize,
+    /// Time `t_k` (s).
+    pub time: f64,
+    /// Generalized coordinates `q_k` (nodal displacements, m).
+    pub q: Vec<f64>,
+    /// Generalized velocities `v_k` (m/s).
+    pub v: Vec<f64>,
+    /// Gaps `g(q_k)` per contact (m; negative means penetration).
+    pub gap: Vec<f64>,
+    /// Local normal velocities `U_k = G(q_k)ᵀ v_k` per contact (m/s).
+    pub local_velocity: Vec<f64>,
+    /// Contact impulse `P` over the last step per contact (N·s); force = `P/h`.
+    pub impulse: Vec<f64>,
+    /// Position projection multiplier `τ` of the last step per contact (eq. 28; units
+    /// of the projection metric: m for Euclidean, kg·m for `M̂⁻¹`).
+    pub projection: Vec<f64>,
+}
+
+/// Statistics of one step, as the paper's Table 3 reports them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct StepStats {
+    /// Newton iterations (eq. 42–51), summed over the index-set rounds.
+    pub newton_iterations: usize,
+    /// Newton iterations in which a non-zero position correction `τ` was applied.
+    pub projection_iterations: usize,
+    /// Rounds of the activation loop of Algorithm 2 (eq. 66), including the free round.
+    pub index_set_iterations: usize,
+    /// LCP/MLCP pivots or sweeps, summed over all one-step problems.
+    pub lcp_iterations: usize,
+    /// Largest LCP complementarity residual met in the step.
+    pub lcp_residual: f64,
+    /// Final Newton convergence measure (dimensionless; ≤ the tolerance unless capped).
+    pub newton_residual: f64,
+    /// Largest penetration `max(0, −g(q_{k+1}))` over the contacts (m).
+    pub max_violation: f64,
+    /// Number of iteration caps hit in this step (Newton, activation, growth).
+    pub caps_hit: usize,
+}
+
+/// A time integrator for a linear structure with contacts.
+pub trait Integrator {
+    /// Short name, as on the command line.
+    fn name(&self) -> &'static str;
+    /// Advances one step of size `h`. Does not allocate.
+    fn step(&mut self) -> Result<StepStats, Error>;
+    /// The current state.
+    fn state(&self) -> &State;
+    /// The mechanical system being integrated.
+    fn system(&self) -> &LinearSystem;
+    /// The time step `h` (s).
+    fn dt(&self) -> f64;
+    /// A one-line description of the solution path taken (factorization, Delassus
+    /// data, Newton or not), for summaries.
+    fn path(&self) -> String;
+}
+
+/// Which scheme to run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SchemeKind {
+    /// Moreau–Jean (eq. 18).
+    MoreauJean,
+    /// Schatzman–Paoli (eq. 20–22).
+    SchatzmanPaoli,
+    /// θ-method with the contact at position level (Fig. 11).
+    TrapezoidPosition,
+    /// Algorithm 1.
+    DirectProjection,
+    /// Algorithm 2 (default).
+    CombinedProjection,
+}
+
+impl SchemeKind {
+    /// All schemes, in the paper's order.
+    pub const ALL: [SchemeKind; 5] = [
+        SchemeKind::MoreauJean,
+        SchemeKind::SchatzmanPaoli,
+        SchemeKind::TrapezoidPosition,
+        SchemeKind::DirectProjection,
+        SchemeKind::CombinedProjection,
+    ];
+
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            SchemeKind::MoreauJean => "moreau-jean",
+            SchemeKind::SchatzmanPaoli => "schatzman-paoli",
+            SchemeKind::TrapezoidPosition => "trapezoid-position",
+            SchemeKind::DirectProjection => "direct-projection",
+            SchemeKind::CombinedProjection => "combined-projection",
+        }
+    }
+
+    /// Parses a command-line name.
+    pub fn parse(s: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == s)
+    }
+}
+
+/// Activation forecast `ḡ_{k+1}` for the velocity-level schemes (sec. 4.4).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Forecast {
+    /// `ḡ = g_k + γ h U_k` (eq. 61), γ in [0, 2].
+    Explicit {
+        /// Extrapolation factor γ.
+        gamma: f64,
+    },
+    /// `ḡ = g_k + h (θ U_free + (1 − θ) U_k)` (eq. 62).
+    Free,
+}
+
+/// Position projection metric `N` (eq. 58 and remark 3, eq. 59–60).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Metric {
+    /// `N = I`: `q ← q + G τ` (eq. 58). Kicks only the contact dofs.
+    Euclidean,
+    /// `N = M̂⁻¹`: `q ← q + M̂⁻¹ G τ` (eq. 60); the same matrix as the velocity LCP.
+    Mass,
+}
+
+impl Metric {
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Metric::Euclidean => "euclidean",
+            Metric::Mass => "mass",
+        }
+    }
+}
+
+/// Newton loop controls shared by every scheme.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NewtonParams {
+    /// Relative tolerance of the Newton / fixed-point loop (default 1e-10): the loop
+    /// stops when the last update changes the contact velocities and gaps by less than
+    /// `tol` times the step's own scale (`|U|∞` and `h |U|∞`); for nonlinear contacts
+    /// also when `q` moved by less than `tol` times the step increment.
+    pub tol: f64,
+    /// Iteration cap (default 50); reaching it is counted in [`StepStats::caps_hit`].
+    pub max_iterations: usize,
+}
+
+impl Default for NewtonParams {
+    fn default() -> Self {
+        NewtonParams {
+            tol: 1e-10,
+            max_iterations: 50,
+        }
+    }
+}
+
+/// Every knob of every scheme, with the defaults of the reference runs.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SchemeParams {
+    /// Which scheme.
+    pub kind: SchemeKind,
+    /// θ in [1/2, 1] (default 1/2: no numerical dissipation).
+    pub theta: f64,
+    /// Activation forecast for Moreau–Jean and Algorithm 1 (default: free, eq. 62).
+    pub forecast: Forecast,
+    /// Projection metric for Algorithms 1 and 2 (default: `M̂⁻¹`, see DESIGN.md §3).
+    pub metric: Metric,
+    /// Algorithm 2: project every active contact instead of only those with `P > 0`
+    /// (eq. 67–70). `false` (default) follows the paper; `true` reproduces Siconos.
+    pub project_all_active: bool,
+    /// Stop projecting when the violation is below this (m). 0 (default): project to
+    /// machine accuracy.
+    pub projection_tolerance: f64,
+    /// LCP algorithm (default Lemke).
+    pub lcp: LcpKind,
+    /// Newton loop controls.
+    pub newton: NewtonParams,
+}
+
+impl Default for SchemeParams {
+    fn default() -> Self {
+        SchemeParams {
+            kind: SchemeKind::CombinedProjection,
+            theta: 0.5,
+            forecast: Forecast::Free,
+            metric: Metric::Mass,
+            project_all_active: false,
+            projection_tolerance: 0.0,
+            lcp: LcpKind::Lemke,
+            newton: NewtonParams::default(),
+        }
+    }
+}
+
+impl SchemeParams {
+    /// Checks the ranges; errors name the field.
+    pub fn validate(&self) -> Result<(), Error> {
+        crate::error::require_in("theta", self.theta, 0.5, 1.0)?;
+        if let Forecast::Explicit { gamma } = self.forecast {
+            crate::error::require_in("gamma", gamma, 0.0, 2.0)?;
+        }
+        crate::error::require_in(
+            "projection_tolerance",
+            self.projection_tolerance,
+            0.0,
+            1e300,
+        )?;
+        crate::error::require_in("newton.tol", self.newton.tol, 0.0, 1.0)?;
+        if self.newton.max_iterations == 0 {
+            return Err(Error::invalid(
+                "newton.max_iterations",
+                0,
+                "must be at least 1",
+            ));
+        }
+        if let LcpKind::Pgs { tol, max_sweeps } = self.lcp {
+            crate::error::require_positive("lcp.tol", tol)?;
+            if max_sweeps == 0 {
+                return Err(Error::invalid("lcp.max_sweeps", 0, "must be at least 1"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Builds the integrator chosen by `params` for `system` with `contacts`, initial
+/// state `(q0, v0)` at `t = 0` and step `h`.
+pub fn build(
+    params: &SchemeParams,
+    system: LinearSystem,
+    contacts: Box<dyn ContactSet>,
+    q0: &[f64],
+    v0: &[f64],
+    h: f64,
+) -> Result<Box<dyn Integrator>, Error> {
+    params.validate()?;
+    crate::error::require_positive("dt", h)?;
+    Ok(match params.kind {
+        SchemeKind::MoreauJean => Box::new(moreau_jean::MoreauJean::new(
+            params, system, contacts, q0, v0, h,
+        )?),
+        SchemeKind::DirectProjection => Box::new(direct_projection::DirectProjection::new(
+            params, system, contacts, q0, v0, h,
+        )?),
+        SchemeKind::CombinedProjection => Box::new(combined_projection::CombinedProjection::new(
+            params, system, contacts, q0, v0, h,
+        )?),
+        SchemeKind::TrapezoidPosition => Box::new(trapezoid::TrapezoidPosition::new(
+            params, system, contacts, q0, v0, h,
+        )?),
+        SchemeKind::SchatzmanPaoli => Box::new(schatzman_paoli::SchatzmanPaoli::new(
+            params, system, contacts, q0, v0, h,
+        )?),
+    })
+}

@@ -1,0 +1,305 @@
+//! `signorini`: command-line front end. Parses flags, prints progress and results;
+//! all the work is in the library.
+
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use signorini::integrators::{Forecast, Metric, SchemeKind};
+use signorini::model::MassKind;
+use signorini::run::{self, Progress};
+use signorini::scene::bar::BarScene;
+
+#[derive(Parser)]
+#[command(
+    name = "signorini",
+    version,
+    about = "Finite-element impact and contact solver (Acary 2013 projected schemes)",
+    long_about = "Finite-element impact and contact solver implementing the event-capturing \
+                  schemes of Acary (CMAME 2013). Without a subcommand, runs the reference \
+                  impacting bar with Algorithm 2 (same as `signorini bar`)."
+)]
+#[command(args_conflicts_with_subcommands = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    /// The bar flags, accepted without the subcommand too.
+    #[command(flatten)]
+    bar: BarArgs,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// The impacting elastic bar (sec. 6.2): N rod elements hitting a rigid wall.
+    Bar(BarArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SchemeArg {
+    MoreauJean,
+    SchatzmanPaoli,
+    TrapezoidPosition,
+    DirectProjection,
+    CombinedProjection,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ForecastArg {
+    Explicit,
+    Free,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum MassArg {
+    Consistent,
+    Lumped,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum MetricArg {
+    Euclidean,
+    Mass,
+}
+
+#[derive(Args)]
+struct BarArgs {
+    /// Number of rod elements N.
+    #[arg(long, default_value_t = 1000)]
+    elements: usize,
+    /// Time step h (s).
+    #[arg(long, default_value_t = 2e-7, allow_negative_numbers = true)]
+    dt: f64,
+    /// End time (s).
+    #[arg(long, default_value_t = 1e-3, allow_negative_numbers = true)]
+    t_end: f64,
+    /// θ of the θ-method, in [1/2, 1].
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    theta: f64,
+    /// Time-stepping scheme.
+    #[arg(long, value_enum, default_value = "combined-projection")]
+    scheme: SchemeArg,
+    /// Activation forecast for moreau-jean and direct-projection (eq. 61 / 62).
+    #[arg(long, value_enum, default_value = "free")]
+    forecast: ForecastArg,
+    /// γ of the explicit forecast (eq. 61), in [0, 2].
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    gamma: f64,
+    /// Restitution coefficient e at the tip, in [0, 1].
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    restitution: f64,
+    /// Initial gap between the tip and the wall (m).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    gap: f64,
+    /// Initial velocity of the bar (m/s; negative moves towards the wall).
+    #[arg(long, default_value_t = -0.1, allow_negative_numbers = true)]
+    velocity: f64,
+    /// Length L (m).
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    length: f64,
+    /// Cross-section S (m²); default π·10⁻⁴.
+    #[arg(long, default_value_t = std::f64::consts::PI * 1e-4, allow_negative_numbers = true)]
+    area: f64,
+    /// Young's modulus E (Pa).
+    #[arg(long, default_value_t = 210e9, allow_negative_numbers = true)]
+    young: f64,
+    /// Density ρ (kg/m³).
+    #[arg(long, default_value_t = 7800.0, allow_negative_numbers = true)]
+    density: f64,
+    /// Mass matrix.
+    #[arg(long, value_enum, default_value = "consistent")]
+    mass: MassArg,
+    /// Position projection metric for the projection schemes (eq. 58 / 60).
+    #[arg(long, value_enum, default_value = "mass")]
+    metric: MetricArg,
+    /// Algorithm 2: project every active contact (Siconos' rule) instead of P > 0 only.
+    #[arg(long)]
+    project_all_active: bool,
+    /// Stop projecting below this violation (m); 0 projects to machine accuracy.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    projection_tolerance: f64,
+    /// Output directory.
+    #[arg(long, default_value = "out/bar")]
+    out: PathBuf,
+    /// Print nothing but errors.
+    #[arg(long)]
+    quiet: bool,
+}
+
+impl BarArgs {
+    fn scene(&self) -> BarScene {
+        let mut s = BarScene {
+            elements: self.elements,
+            dt: self.dt,
+            t_end: self.t_end,
+            length: self.length,
+            area: self.area,
+            young: self.young,
+            density: self.density,
+            velocity: self.velocity,
+            gap: self.gap,
+            restitution: self.restitution,
+            mass: match self.mass {
+                MassArg::Consistent => MassKind::Consistent,
+                MassArg::Lumped => MassKind::Lumped,
+            },
+            ..BarScene::default()
+        };
+        let p = &mut s.scheme;
+        p.kind = match self.scheme {
+            SchemeArg::MoreauJean => SchemeKind::MoreauJean,
+            SchemeArg::SchatzmanPaoli => SchemeKind::SchatzmanPaoli,
+            SchemeArg::TrapezoidPosition => SchemeKind::TrapezoidPosition,
+            SchemeArg::DirectProjection => SchemeKind::DirectProjection,
+            SchemeArg::CombinedProjection => SchemeKind::CombinedProjection,
+        };
+        p.theta = self.theta;
+        p.forecast = match self.forecast {
+            ForecastArg::Explicit => Forecast::Explicit { gamma: self.gamma },
+            ForecastArg::Free => Forecast::Free,
+        };
+        p.metric = match self.metric {
+            MetricArg::Euclidean => Metric::Euclidean,
+            MetricArg::Mass => Metric::Mass,
+        };
+        p.project_all_active = self.project_all_active;
+        p.projection_tolerance = self.projection_tolerance;
+        s
+    }
+}
+
+/// Progress on stderr: a rewritten line on a terminal, a line per 10 % otherwise.
+struct CliProgress {
+    tty: bool,
+    last_decile: usize,
+    start: std::time::Instant,
+}
+
+impl Progress for CliProgress {
+    fn update(&mut self, step: usize, total: usize) {
+        let frac = step as f64 / total as f64;
+        let el = self.start.elapsed().as_secs_f64();
+        let eta = if frac > 0.0 { el / frac - el } else { 0.0 };
+        let rate = step as f64 / el.max(1e-9);
+        if self.tty {
+            eprint!(
+                "\r  step {step}/{total} ({:5.1} %), {rate:.0} steps/s, ETA {eta:.1} s   ",
+                100.0 * frac
+            );
+            if step == total {
+                eprintln!();
+            }
+            let _ = std::io::stderr().flush();
+        } else {
+            let decile = (frac * 10.0).floor() as usize;
+            if decile > self.last_decile || step == total {
+                self.last_decile = decile;
+                eprintln!(
+                    "  step {step}/{total} ({:.0} %), {rate:.0} steps/s, ETA {eta:.1} s",
+                    100.0 * frac
+                );
+            }
+        }
+    }
+}
+
+fn run_bar(args: &BarArgs) -> Result<(), signorini::Error> {
+    let scene = args.scene();
+    scene.validate()?;
+    if !args.quiet {
+        eprintln!(
+            "signorini bar: {} elements, h = {:e} s, T = {:e} s, {} steps, scheme {}, θ = {}",
+            scene.elements,
+            scene.dt,
+            scene.t_end,
+            scene.steps(),
+            scene.scheme.kind.name(),
+            scene.scheme.theta
+        );
+    }
+    let mut quiet = run::Quiet;
+    let mut cli = CliProgress {
+        tty: std::io::stderr().is_terminal(),
+        last_decile: 0,
+        start: std::time::Instant::now(),
+    };
+    let progress: &mut dyn Progress = if args.quiet { &mut quiet } else { &mut cli };
+    let result = run::run_bar(&scene, Some(&args.out), progress)?;
+    if args.quiet {
+        return Ok(());
+    }
+    let s = &result.summary;
+    println!("scheme              {}", s.scheme);
+    println!("path                {}", s.path);
+    println!(
+        "steps               {} in {:.3} s ({:.3} µs/step, {:.2} ns/dof/step; output {:.0} %)",
+        s.steps,
+        s.wall_seconds,
+        1e6 * s.seconds_per_step,
+        1e9 * s.seconds_per_step / (s.elements + 1) as f64,
+        100.0 * s.output_seconds / s.wall_seconds.max(1e-12)
+    );
+    println!("max violation       {:.3e} m", s.max_violation);
+    println!(
+        "iterations          newton {:.3}/{}  projection {:.3}/{}  index-set {:.3}/{}  lcp {:.3}/{} (mean/max); caps hit {}",
+        s.iterations.newton.mean,
+        s.iterations.newton.max,
+        s.iterations.projection.mean,
+        s.iterations.projection.max,
+        s.iterations.index_set.mean,
+        s.iterations.index_set.max,
+        s.iterations.lcp.mean,
+        s.iterations.lcp.max,
+        s.caps_hit
+    );
+    if let Some(c) = &s.contact {
+        let rel = |a: f64, b: f64| 100.0 * (a / b - 1.0);
+        println!("                    measured        analytic        difference");
+        println!(
+            "contact force       {:<12.3} N  {:<12.3} N  {:+.3} % (plateau std {:.2} N)",
+            c.plateau_force,
+            c.analytic_force,
+            rel(c.plateau_force, c.analytic_force),
+            c.plateau_std
+        );
+        println!(
+            "contact duration    {:<12.4e} s  {:<12.4e} s  {:+.3} %",
+            c.duration,
+            c.analytic_duration,
+            rel(c.duration, c.analytic_duration)
+        );
+        println!(
+            "release velocity    {:<12.5} m/s {:<12.5} m/s {:+.3} %",
+            c.release_velocity,
+            c.analytic_release_velocity,
+            rel(c.release_velocity, c.analytic_release_velocity)
+        );
+        println!(
+            "total impulse       {:<12.5e} Ns {:<12.5e} Ns {:+.3} %",
+            c.total_impulse,
+            c.analytic_total_impulse,
+            rel(c.total_impulse, c.analytic_total_impulse)
+        );
+    }
+    println!(
+        "wrote               {}/summary.json, {}/history.csv",
+        args.out.display(),
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let args = match cli.command {
+        Some(Command::Bar(a)) => a,
+        None => cli.bar,
+    };
+    match run_bar(&args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}

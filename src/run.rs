@@ -1,0 +1,327 @@
+//! Running a scene: steps the integrator, streams the history, measures the contact
+//! response against the analytic reference and assembles the [`Summary`].
+//!
+//! The loop allocates nothing per step: the integrator works in its own buffers and the
+//! force record is reserved for every step up front.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::analytic::ImpactingBar;
+use crate::error::Error;
+use crate::integrators::{self, Forecast, Integrator, StepStats};
+use crate::io::{HistoryWriter, write_atomic};
+use crate::scene::bar::BarScene;
+
+/// Receives progress; the CLI prints it, the library stays silent.
+pub trait Progress {
+    /// Called after `step` of `total` steps.
+    fn update(&mut self, step: usize, total: usize);
+}
+
+/// A progress sink that prints nothing.
+pub struct Quiet;
+
+impl Progress for Quiet {
+    fn update(&mut self, _: usize, _: usize) {}
+}
+
+/// Mean and maximum of a per-step count.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct MeanMax {
+    /// Mean over the steps.
+    pub mean: f64,
+    /// Maximum over the steps.
+    pub max: usize,
+}
+
+/// Iteration statistics over the run (the paper's Table 3 columns).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Iterations {
+    /// Newton iterations per step.
+    pub newton: MeanMax,
+    /// Projection iterations per step.
+    pub projection: MeanMax,
+    /// Index-set rounds per step (Algorithm 2).
+    pub index_set: MeanMax,
+    /// LCP pivots or sweeps per step.
+    pub lcp: MeanMax,
+}
+
+/// Measured contact response with its analytic counterpart.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct ContactSummary {
+    /// Mean force over the middle 80 % of the first contact interval (N).
+    pub plateau_force: f64,
+    /// Standard deviation of the force over the same window (N).
+    pub plateau_std: f64,
+    /// `E S |v0| / c0` (N).
+    pub analytic_force: f64,
+    /// Length of the first contact interval (s).
+    pub duration: f64,
+    /// `2 L / c0` (s).
+    pub analytic_duration: f64,
+    /// Start of the first step with a positive impulse (s).
+    pub first_contact_time: f64,
+    /// Centre-of-mass velocity at the end of the run (m/s).
+    pub release_velocity: f64,
+    /// `−v0` (m/s).
+    pub analytic_release_velocity: f64,
+    /// Sum of all contact impulses over the run (N·s).
+    pub total_impulse: f64,
+    /// `2 ρ S L |v0|` (N·s).
+    pub analytic_total_impulse: f64,
+}
+
+/// Everything a run reports (`summary.json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    /// Scheme name.
+    pub scheme: String,
+    /// Number of elements.
+    pub elements: usize,
+    /// Time step (s).
+    pub dt: f64,
+    /// θ.
+    pub theta: f64,
+    /// Steps run.
+    pub steps: usize,
+    /// Final time (s).
+    pub t_end: f64,
+    /// Wall-clock time of the step loop including output (s).
+    pub wall_seconds: f64,
+    /// `wall_seconds / steps`.
+    pub seconds_per_step: f64,
+    /// Seconds spent writing the history (included in `wall_seconds`).
+    pub output_seconds: f64,
+    /// Largest penetration over the run (m, ≥ 0).
+    pub max_violation: f64,
+    /// Contact response vs analytic (bar scenes).
+    pub contact: Option<ContactSummary>,
+    /// Iteration statistics.
+    pub iterations: Iterations,
+    /// Total iteration caps hit.
+    pub caps_hit: usize,
+    /// Largest LCP complementarity residual met.
+    pub max_lcp_residual: f64,
+    /// Energy (kinetic + potential) at the start and at the end (J).
+    pub energy: [f64; 2],
+    /// Linear-algebra path taken.
+    pub path: String,
+    /// The scene parameters as run.
+    pub parameters: serde_json::Value,
+}
+
+/// What [`run_bar`] returns: the summary and the per-step contact force.
+pub struct RunResult {
+    /// The run summary.
+    pub summary: Summary,
+    /// Total contact force `Σ P / h` at each step (N).
+    pub force: Vec<f64>,
+}
+
+#[derive(Default)]
+struct Acc {
+    sum: [usize; 4],
+    max: [usize; 4],
+    caps: usize,
+    lcp_res: f64,
+    violation: f64,
+}
+
+impl Acc {
+    fn add(&mut self, s: &StepStats) {
+        let v = [
+            s.newton_iterations,
+            s.projection_iterations,
+            s.index_set_iterations,
+            s.lcp_iterations,
+        ];
+        for i in 0..4 {
+            self.sum[i] += v[i];
+            self.max[i] = self.max[i].max(v[i]);
+        }
+        self.caps += s.caps_hit;
+        self.lcp_res = self.lcp_res.max(s.lcp_residual);
+        self.violation = self.violation.max(s.max_violation);
+    }
+    fn iterations(&self, steps: usize) -> Iterations {
+        let mm = |i: usize| MeanMax {
+            mean: self.sum[i] as f64 / steps.max(1) as f64,
+            max: self.max[i],
+        };
+        Iterations {
+            newton: mm(0),
+            projection: mm(1),
+            index_set: mm(2),
+            lcp: mm(3),
+        }
+    }
+}
+
+/// Runs the bar scene; writes `history.csv` and `summary.json` into `out_dir` if given.
+pub fn run_bar(
+    scene: &BarScene,
+    out_dir: Option<&Path>,
+    progress: &mut dyn Progress,
+) -> Result<RunResult, Error> {
+    let model = scene.build()?;
+    let mut integ = integrators::build(
+        &scene.scheme,
+        model.system,
+        model.contacts,
+        &model.q0,
+        &model.v0,
+        scene.dt,
+    )?;
+    let parameters = serde_json::to_value(scene).expect("scene serializes");
+    run(
+        integ.as_mut(),
+        scene.steps(),
+        scene.elements,
+        scene.scheme.theta,
+        scene.analytic(),
+        parameters,
+        out_dir,
+        progress,
+    )
+}
+
+/// Steps `integ` `steps` times, streaming the history and measuring the contact.
+#[allow(clippy::too_many_arguments)]
+pub fn run(
+    integ: &mut dyn Integrator,
+    steps: usize,
+    elements: usize,
+    theta: f64,
+    reference: Option<ImpactingBar>,
+    parameters: serde_json::Value,
+    out_dir: Option<&Path>,
+    progress: &mut dyn Progress,
+) -> Result<RunResult, Error> {
+    let h = integ.dt();
+    let m = integ.state().gap.len();
+    let mut history = match out_dir {
+        Some(d) => {
+            std::fs::create_dir_all(d).map_err(|e| Error::io(d, e))?;
+            Some(HistoryWriter::create(&d.join("history.csv"), m)?)
+        }
+        None => None,
+    };
+    let energy0 = {
+        let s = integ.state();
+        integ.system().kinetic_energy(&s.v) + integ.system().potential_energy(&s.q)
+    };
+    let mut force = Vec::with_capacity(steps);
+    let mut min_gap = Vec::with_capacity(steps);
+    let mut acc = Acc::default();
+    let mut output_seconds = 0.0;
+    let start = Instant::now();
+    let report_every = (steps / 100).max(1);
+    for k in 0..steps {
+        let st = integ.step()?;
+        acc.add(&st);
+        let s = integ.state();
+        force.push(s.impulse.iter().sum::<f64>() / h);
+        min_gap.push(s.gap.iter().copied().fold(f64::INFINITY, f64::min));
+        if let Some(w) = history.as_mut() {
+            let t0 = Instant::now();
+            let ke = integ.system().kinetic_energy(&s.v);
+            let pe = integ.system().potential_energy(&s.q);
+            w.row(s, &st, ke, pe)?;
+            output_seconds += t0.elapsed().as_secs_f64();
+        }
+        if (k + 1) % report_every == 0 || k + 1 == steps {
+            progress.update(k + 1, steps);
+        }
+    }
+    if let Some(w) = history {
+        let t0 = Instant::now();
+        w.finish()?;
+        output_seconds += t0.elapsed().as_secs_f64();
+    }
+    let wall = start.elapsed().as_secs_f64();
+    let s = integ.state();
+    let sys = integ.system();
+    let energy1 = sys.kinetic_energy(&s.v) + sys.potential_energy(&s.q);
+    let contact = reference.map(|r| contact_summary(&force, &min_gap, h, sys, &s.v, r));
+    let summary = Summary {
+        scheme: integ.name().to_string(),
+        elements,
+        dt: h,
+        theta,
+        steps,
+        t_end: s.time,
+        wall_seconds: wall,
+        seconds_per_step: wall / steps.max(1) as f64,
+        output_seconds,
+        max_violation: acc.violation,
+        contact,
+        iterations: acc.iterations(steps),
+        caps_hit: acc.caps,
+        max_lcp_residual: acc.lcp_res,
+        energy: [energy0, energy1],
+        path: integ.path(),
+        parameters,
+    };
+    if let Some(d) = out_dir {
+        let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
+        write_atomic(&d.join("summary.json"), json.as_bytes())?;
+    }
+    Ok(RunResult { summary, force })
+}
+
+/// The first contact interval is the first run of steps that are closed (positive
+/// impulse, or gap ≤ 0) and contain a positive impulse; its duration runs from the
+/// start of its first step with a positive impulse to the end of its last one.
+fn contact_summary(
+    force: &[f64],
+    min_gap: &[f64],
+    h: f64,
+    sys: &crate::model::LinearSystem,
+    v: &[f64],
+    r: ImpactingBar,
+) -> ContactSummary {
+    let first = force.iter().position(|&f| f > 0.0);
+    let (mut plateau, mut std, mut duration, mut t0) = (0.0, 0.0, 0.0, f64::NAN);
+    if let Some(i0) = first {
+        let mut last = i0;
+        let mut k = i0;
+        while k < force.len() && (force[k] > 0.0 || min_gap[k] <= 0.0) {
+            if force[k] > 0.0 {
+                last = k;
+            }
+            k += 1;
+        }
+        let len = last + 1 - i0;
+        let lo = i0 + len / 10;
+        let hi = (last + 1 - len / 10).max(lo + 1);
+        let win = &force[lo..hi];
+        plateau = win.iter().sum::<f64>() / win.len() as f64;
+        std = (win.iter().map(|f| (f - plateau).powi(2)).sum::<f64>() / win.len() as f64).sqrt();
+        duration = len as f64 * h;
+        t0 = i0 as f64 * h;
+    }
+    ContactSummary {
+        plateau_force: plateau,
+        plateau_std: std,
+        analytic_force: r.contact_force(),
+        duration,
+        analytic_duration: r.contact_duration(),
+        first_contact_time: t0,
+        release_velocity: sys.momentum(v) / sys.total_mass(),
+        analytic_release_velocity: r.release_velocity(),
+        total_impulse: force.iter().sum::<f64>() * h,
+        analytic_total_impulse: r.total_impulse(),
+    }
+}
+
+/// The forecast as a short string for printing.
+pub fn forecast_name(f: Forecast) -> String {
+    match f {
+        Forecast::Explicit { gamma } => format!("explicit (γ = {gamma})"),
+        Forecast::Free => "free".to_string(),
+    }
+}

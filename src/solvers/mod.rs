@@ -1,0 +1,82 @@
+//! One-step nonsmooth problems: the small dense LCPs and MLCPs that every scheme solves
+//! in contact space.
+//!
+//! - [`lcp::Lemke`]: complementary pivoting, exact up to rounding (finite termination for
+//!   P-matrices such as the Delassus blocks `W_αα` of eq. 57 and `GᵀNG` of eq. 58/60).
+//! - [`lcp::Pgs`]: projected Gauss–Seidel with tolerance, iteration cap and warm start.
+//! - [`mlcp::Mlcp`]: the projection problem of Algorithm 2 (eq. 65, 68), with equality
+//!   rows (`g^α = 0`, free `τ^α`, for contacts with a positive impulse) and
+//!   complementarity rows (`0 ≤ g ⊥ τ ≥ 0`), reduced to an LCP by a Schur complement.
+//!
+//! All solvers work in caller-sized workspaces allocated once, so the step loop does
+//! not allocate. Matrices are dense, column-major, `k × k` with leading dimension `k`.
+//! Each returns its iteration count and complementarity residual
+//! `max_i |min(z_i, w_i)|` as data.
+
+pub mod lcp;
+pub mod mlcp;
+
+/// What a one-step solve reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SolveInfo {
+    /// Pivots (Lemke) or sweeps (PGS).
+    pub iterations: usize,
+    /// `max_i |min(z_i, w_i)|` computed from the returned `z` and `w = M z + q`.
+    pub residual: f64,
+}
+
+/// Why a one-step solve failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    /// Lemke's method met an unbounded ray (the matrix is not a P-matrix, or the data
+    /// are not finite).
+    #[error("Lemke ray termination after {0} pivots (matrix not P or data not finite)")]
+    RayTermination(usize),
+    /// The iteration cap was reached.
+    #[error("iteration cap {cap} reached, residual {residual:e}")]
+    Cap {
+        /// The cap.
+        cap: usize,
+        /// Residual at the cap.
+        residual: f64,
+    },
+    /// An equality block was not positive definite.
+    #[error("equality block of the MLCP is not positive definite")]
+    Singular,
+}
+
+/// Which LCP algorithm the schemes use.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LcpKind {
+    /// Lemke's complementary pivoting (exact; default).
+    Lemke,
+    /// Projected Gauss–Seidel with the given tolerance and cap.
+    Pgs {
+        /// Stop when the complementarity residual is below `tol · max(1, |q|∞)`.
+        tol: f64,
+        /// Maximal number of sweeps.
+        max_sweeps: usize,
+    },
+}
+
+/// Complementarity residual `max_i |min(z_i, w_i)|`.
+pub fn complementarity_residual(z: &[f64], w: &[f64]) -> f64 {
+    z.iter()
+        .zip(w)
+        .map(|(&a, &b)| a.min(b).abs())
+        .fold(0.0, f64::max)
+}
+
+/// `w = M z + q` for a dense column-major `k × k` matrix.
+pub fn affine(m: &[f64], k: usize, z: &[f64], q: &[f64], w: &mut [f64]) {
+    w[..k].copy_from_slice(&q[..k]);
+    for j in 0..k {
+        let zj = z[j];
+        if zj != 0.0 {
+            for i in 0..k {
+                w[i] += m[i + j * k] * zj;
+            }
+        }
+    }
+}
