@@ -115,6 +115,10 @@ struct BarArgs {
     /// Algorithm 2: project every active contact (Siconos' rule) instead of P > 0 only.
     #[arg(long)]
     project_all_active: bool,
+    /// Projection schemes: update only q with τ (Siconos' practice), not v through the
+    /// −hθK N G τ term of eq. 56a.
+    #[arg(long)]
+    no_projection_feedback: bool,
     /// Stop projecting below this violation (m); 0 projects to machine accuracy.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     projection_tolerance: f64,
@@ -163,6 +167,7 @@ impl BarArgs {
             MetricArg::Mass => Metric::Mass,
         };
         p.project_all_active = self.project_all_active;
+        p.projection_feedback = !self.no_projection_feedback;
         p.projection_tolerance = self.projection_tolerance;
         s
     }

@@ -59,8 +59,10 @@ pub struct ContactSummary {
     pub plateau_std: f64,
     /// `E S |v0| / c0` (N).
     pub analytic_force: f64,
-    /// Length of the first contact interval (s).
+    /// Width of the first contact interval at half the plateau force (s).
     pub duration: f64,
+    /// Whole length of the first closed interval, first to last positive impulse (s).
+    pub closed_duration: f64,
     /// `2 L / c0` (s).
     pub analytic_duration: f64,
     /// Start of the first step with a positive impulse (s).
@@ -273,9 +275,16 @@ pub fn run(
     Ok(RunResult { summary, force })
 }
 
-/// The first contact interval is the first run of steps that are closed (positive
-/// impulse, or gap ≤ 0) and contain a positive impulse; its duration runs from the
-/// start of its first step with a positive impulse to the end of its last one.
+/// Measures the first contact interval.
+///
+/// The interval is the first run of steps that are closed (positive impulse, or
+/// gap ≤ 0) and contain a positive impulse. Sample `k` (0-based) is the mean force
+/// over `[k h, (k+1) h]`, placed at its midpoint. The plateau is the mean over the
+/// middle 80 % of the interval's steps. The duration is measured between the
+/// half-plateau crossings (linear interpolation between samples, zero force before
+/// the first sample): the release front of a space-discretized bar is smeared over a
+/// few steps by dispersion, and the half-height width is the time its centre takes,
+/// independent of how far the tails reach. `closed_duration` counts the whole run.
 fn contact_summary(
     force: &[f64],
     min_gap: &[f64],
@@ -284,38 +293,52 @@ fn contact_summary(
     v: &[f64],
     r: ImpactingBar,
 ) -> ContactSummary {
-    let first = force.iter().position(|&f| f > 0.0);
-    let (mut plateau, mut std, mut duration, mut t0) = (0.0, 0.0, 0.0, f64::NAN);
-    if let Some(i0) = first {
-        let mut last = i0;
-        let mut k = i0;
-        while k < force.len() && (force[k] > 0.0 || min_gap[k] <= 0.0) {
-            if force[k] > 0.0 {
-                last = k;
-            }
-            k += 1;
-        }
-        let len = last + 1 - i0;
-        let lo = i0 + len / 10;
-        let hi = (last + 1 - len / 10).max(lo + 1);
-        let win = &force[lo..hi];
-        plateau = win.iter().sum::<f64>() / win.len() as f64;
-        std = (win.iter().map(|f| (f - plateau).powi(2)).sum::<f64>() / win.len() as f64).sqrt();
-        duration = len as f64 * h;
-        t0 = i0 as f64 * h;
-    }
-    ContactSummary {
-        plateau_force: plateau,
-        plateau_std: std,
+    let mut c = ContactSummary {
         analytic_force: r.contact_force(),
-        duration,
         analytic_duration: r.contact_duration(),
-        first_contact_time: t0,
+        first_contact_time: f64::NAN,
         release_velocity: sys.momentum(v) / sys.total_mass(),
         analytic_release_velocity: r.release_velocity(),
         total_impulse: force.iter().sum::<f64>() * h,
         analytic_total_impulse: r.total_impulse(),
+        ..ContactSummary::default()
+    };
+    let Some(i0) = force.iter().position(|&f| f > 0.0) else {
+        return c;
+    };
+    let mut last = i0;
+    let mut k = i0;
+    while k < force.len() && (force[k] > 0.0 || min_gap[k] <= 0.0) {
+        if force[k] > 0.0 {
+            last = k;
+        }
+        k += 1;
     }
+    let len = last + 1 - i0;
+    let lo = i0 + len / 10;
+    let hi = (last + 1 - len / 10).max(lo + 1);
+    let win = &force[lo..hi];
+    let plateau = win.iter().sum::<f64>() / win.len() as f64;
+    c.plateau_force = plateau;
+    c.plateau_std =
+        (win.iter().map(|f| (f - plateau).powi(2)).sum::<f64>() / win.len() as f64).sqrt();
+    c.closed_duration = len as f64 * h;
+    c.first_contact_time = i0 as f64 * h;
+    let half = 0.5 * plateau;
+    let at = |j: usize| if j < force.len() { force[j] } else { 0.0 };
+    // rising crossing: first sample ≥ half, interpolated from the previous one
+    let up = (i0..=last).find(|&j| force[j] >= half).unwrap_or(i0);
+    let prev = if up > 0 { force[up - 1] } else { 0.0 };
+    let t_up = (up as f64 - 0.5) * h + h * (half - prev) / (force[up] - prev);
+    // falling crossing: last sample ≥ half, interpolated to the next one
+    let down = (i0..=last)
+        .rev()
+        .find(|&j| force[j] >= half)
+        .unwrap_or(last);
+    let next = at(down + 1);
+    let t_down = (down as f64 + 0.5) * h + h * (force[down] - half) / (force[down] - next);
+    c.duration = t_down - t_up;
+    c
 }
 
 /// The forecast as a short string for printing.

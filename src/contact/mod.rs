@@ -95,17 +95,20 @@ impl ContactJacobian {
         }
     }
 
-    /// `G_αᵀ G_β` (used for the Euclidean projection metric, eq. 58).
-    pub fn col_dot_col(&self, alpha: usize, beta: usize, scratch: &mut [f64]) -> f64 {
-        self.axpy(beta, 1.0, scratch);
-        let r = self.dot(alpha, scratch);
-        self.axpy(beta, -1.0, scratch);
-        // restore exact zeros (the pattern entries were 0 before)
-        let (d, _) = self.col(beta);
-        for &i in d {
-            scratch[i] = 0.0;
+    /// `G_αᵀ G_β` (used for the Euclidean projection metric, eq. 58). Columns hold a
+    /// node's few dofs, so the pairwise scan is cheaper than a scatter.
+    pub fn col_dot_col(&self, alpha: usize, beta: usize) -> f64 {
+        let (da, va) = self.col(alpha);
+        let (db, vb) = self.col(beta);
+        let mut s = 0.0;
+        for (i, x) in da.iter().zip(va) {
+            for (j, y) in db.iter().zip(vb) {
+                if i == j {
+                    s += x * y;
+                }
+            }
         }
-        r
+        s
     }
 }
 

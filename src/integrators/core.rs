@@ -157,6 +157,7 @@ pub struct ThetaCore {
     pub(crate) e: Vec<f64>,
     metric: Metric,
     with_projection: bool,
+    feedback: bool,
     pub(crate) linear: bool,
     jac_at_qk: bool,
     pub(crate) newton: NewtonParams,
@@ -248,6 +249,7 @@ impl ThetaCore {
             e,
             metric: params.metric,
             with_projection,
+            feedback: params.projection_feedback,
             linear,
             jac_at_qk: true,
             newton: params.newton,
@@ -349,7 +351,7 @@ impl ThetaCore {
             for a in 0..m {
                 self.wd[a + b * m] = self.jac.dot(a, &self.d[b * n..(b + 1) * n]);
                 self.wn[a + b * m] = match self.metric {
-                    Metric::Euclidean => self.jac.col_dot_col(a, b, &mut self.work),
+                    Metric::Euclidean => self.jac.col_dot_col(a, b),
                     Metric::Mass => self.w[a + b * m],
                 };
             }
@@ -434,7 +436,7 @@ impl ThetaCore {
                 self.jac_at_qk = false;
             }
             // coupling hθ W_D τⁿ (zero without projection)
-            let any_tau = self.tau_prev.iter().any(|&t| t != 0.0);
+            let any_tau = self.feedback && self.tau_prev.iter().any(|&t| t != 0.0);
             for a in 0..m {
                 self.coupling[a] = if any_tau {
                     h * th
@@ -545,7 +547,7 @@ impl ThetaCore {
 
     /// Dimensionless change that the last `Δτ` would make to the next iterate (linear `G`).
     fn linear_residual(&self) -> f64 {
-        if !self.with_projection || self.dtau.iter().all(|&x| x == 0.0) {
+        if !self.with_projection || !self.feedback || self.dtau.iter().all(|&x| x == 0.0) {
             return 0.0;
         }
         let (h, th, m) = (self.h, self.theta, self.m);
@@ -647,7 +649,7 @@ impl ThetaCore {
                 axpy(p, &self.cg[a * n..(a + 1) * n], &mut self.v_new);
             }
             let t = self.tau_used[a];
-            if t != 0.0 {
+            if t != 0.0 && self.feedback {
                 axpy(-h * th * t, &self.d[a * n..(a + 1) * n], &mut self.v_new);
             }
         }

@@ -208,6 +208,12 @@ pub struct SchemeParams {
     /// Algorithm 2: project every active contact instead of only those with `P > 0`
     /// (eq. 67–70). `false` (default) follows the paper; `true` reproduces Siconos.
     pub project_all_active: bool,
+    /// Feed the projection back into the velocity update through the stiffness term
+    /// `−hθK N G τⁿ` of eq. 56a (default `true`, the paper's decoupled scheme). `false`
+    /// updates only `q`, as Siconos does; with the Euclidean metric that kicks the
+    /// contact node and excites the highest modes of the bar (force plateau std about
+    /// 229 N against 11 N with the feedback at N = 1000, h = 5e-6).
+    pub projection_feedback: bool,
     /// Stop projecting when the violation is below this (m). 0 (default): project to
     /// machine accuracy.
     pub projection_tolerance: f64,
@@ -225,6 +231,7 @@ impl Default for SchemeParams {
             forecast: Forecast::Free,
             metric: Metric::Mass,
             project_all_active: false,
+            projection_feedback: true,
             projection_tolerance: 0.0,
             lcp: LcpKind::Lemke,
             newton: NewtonParams::default(),
