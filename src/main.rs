@@ -68,13 +68,13 @@ struct BarArgs {
     #[arg(long, default_value_t = 1000)]
     elements: usize,
     /// Time step h (s).
-    #[arg(long, default_value_t = 2e-7, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 2e-7, allow_hyphen_values = true)]
     dt: f64,
     /// End time (s).
-    #[arg(long, default_value_t = 1e-3, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
     t_end: f64,
     /// θ of the θ-method, in [1/2, 1].
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
     theta: f64,
     /// Time-stepping scheme.
     #[arg(long, value_enum, default_value = "combined-projection")]
@@ -83,28 +83,28 @@ struct BarArgs {
     #[arg(long, value_enum, default_value = "free")]
     forecast: ForecastArg,
     /// γ of the explicit forecast (eq. 61), in [0, 2].
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     gamma: f64,
     /// Restitution coefficient e at the tip, in [0, 1].
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     restitution: f64,
     /// Initial gap between the tip and the wall (m).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     gap: f64,
     /// Initial velocity of the bar (m/s; negative moves towards the wall).
-    #[arg(long, default_value_t = -0.1, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = -0.1, allow_hyphen_values = true)]
     velocity: f64,
     /// Length L (m).
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     length: f64,
     /// Cross-section S (m²); default π·10⁻⁴.
-    #[arg(long, default_value_t = std::f64::consts::PI * 1e-4, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = std::f64::consts::PI * 1e-4, allow_hyphen_values = true)]
     area: f64,
     /// Young's modulus E (Pa).
-    #[arg(long, default_value_t = 210e9, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 210e9, allow_hyphen_values = true)]
     young: f64,
     /// Density ρ (kg/m³).
-    #[arg(long, default_value_t = 7800.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 7800.0, allow_hyphen_values = true)]
     density: f64,
     /// Mass matrix.
     #[arg(long, value_enum, default_value = "consistent")]
@@ -120,7 +120,7 @@ struct BarArgs {
     #[arg(long)]
     no_projection_feedback: bool,
     /// Stop projecting below this violation (m); 0 projects to machine accuracy.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     projection_tolerance: f64,
     /// Output directory.
     #[arg(long, default_value = "out/bar")]

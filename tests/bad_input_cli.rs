@@ -1,0 +1,62 @@
+//! Bad command-line input: a clear error naming the flag and value, exit code 2, no
+//! panic, no output files.
+
+use std::process::Command;
+
+fn signorini(args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .args(args)
+        .output()
+        .expect("binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    (out.status.code().unwrap_or(-1), stderr)
+}
+
+#[test]
+fn invalid_numbers_name_the_field_and_value() {
+    let dir = std::env::temp_dir().join("signorini-bad-input");
+    let out = dir.to_str().unwrap();
+    let cases: &[(&[&str], &[&str])] = &[
+        (&["--dt", "-1e-7"], &["dt", "-0.0000001"]),
+        (&["--dt", "0"], &["dt", "0"]),
+        (&["--young", "nan"], &["young", "NaN"]),
+        (&["--density", "-7800"], &["density", "-7800"]),
+        (&["--area", "inf"], &["area", "inf"]),
+        (&["--elements", "0"], &["elements", "0"]),
+        (&["--theta", "0.3"], &["theta", "0.3"]),
+        (&["--gamma", "3", "--forecast", "explicit"], &["gamma", "3"]),
+        (&["--restitution", "1.5"], &["restitution", "1.5"]),
+        (&["--gap", "-0.1"], &["gap", "-0.1"]),
+        (&["--t-end", "1e-9"], &["t-end"]),
+        (&["--velocity", "nan"], &["velocity", "NaN"]),
+    ];
+    for (args, needles) in cases {
+        let mut a = args.to_vec();
+        a.extend(["--out", out, "--quiet"]);
+        let (code, err) = signorini(&a);
+        assert_eq!(code, 2, "{args:?}: exit {code}, {err}");
+        for n in *needles {
+            assert!(err.contains(n), "{args:?}: message lacks {n:?}: {err}");
+        }
+        assert!(
+            !dir.join("summary.json").exists(),
+            "{args:?} left a summary behind"
+        );
+    }
+}
+
+#[test]
+fn unknown_names_are_rejected_by_the_parser() {
+    for args in [
+        &["--scheme", "newmark"][..],
+        &["--metric", "l2"][..],
+        &["--mass", "heavy"][..],
+        &["--no-such-flag"][..],
+        &["bar", "--elements", "ten"][..],
+    ] {
+        let (code, err) = signorini(args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(err.contains("error"), "{err}");
+    }
+}

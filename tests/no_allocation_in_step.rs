@@ -1,0 +1,91 @@
+//! `Integrator::step` does not allocate: a counting global allocator watches every
+//! scheme through impact, contact, release and free flight, for linear and nonlinear
+//! contacts.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use signorini::contact::sphere::InsideSphere;
+use signorini::integrators::{self, Metric, SchemeKind, SchemeParams};
+use signorini::model::point_mass::point_mass;
+use signorini::scene::bar::BarScene;
+
+struct Counting;
+
+thread_local! {
+    // Per thread: the test harness runs other tests (which do allocate) in parallel.
+    static ALLOCS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn bump() {
+    ALLOCS.with(|c| c.set(c.get() + 1));
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        bump();
+        unsafe { System.alloc(l) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        unsafe { System.dealloc(p, l) }
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
+        bump();
+        unsafe { System.realloc(p, l, n) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn count_steps(integ: &mut dyn integrators::Integrator, steps: usize) -> usize {
+    let before = ALLOCS.with(|c| c.get());
+    for _ in 0..steps {
+        integ.step().unwrap();
+    }
+    ALLOCS.with(|c| c.get()) - before
+}
+
+#[test]
+fn bar_steps_do_not_allocate() {
+    for kind in SchemeKind::ALL {
+        for metric in [Metric::Mass, Metric::Euclidean] {
+            let mut s = BarScene {
+                elements: 100,
+                dt: 2e-6,
+                ..BarScene::default()
+            };
+            s.scheme.kind = kind;
+            s.scheme.metric = metric;
+            let m = s.build().unwrap();
+            let mut integ =
+                integrators::build(&s.scheme, m.system, m.contacts, &m.q0, &m.v0, s.dt).unwrap();
+            // 500 steps: contact (≈ 200 steps at this mesh and step), release, flight.
+            let n = count_steps(integ.as_mut(), 500);
+            assert_eq!(n, 0, "{} {:?} allocated {n} times", kind.name(), metric);
+        }
+    }
+}
+
+#[test]
+fn nonlinear_contact_steps_do_not_allocate() {
+    for kind in SchemeKind::ALL {
+        let sys = point_mass(2, 1.0, &[0.0, 0.0]).unwrap();
+        let c = InsideSphere::new(
+            vec![vec![0, 1]],
+            vec![vec![0.0, 0.0]],
+            vec![0.0, 0.0],
+            1.0,
+            0.5,
+        )
+        .unwrap();
+        let p = SchemeParams {
+            kind,
+            ..SchemeParams::default()
+        };
+        let mut integ =
+            integrators::build(&p, sys, Box::new(c), &[0.0, 0.5], &[1.0, 0.37], 1e-2).unwrap();
+        let n = count_steps(integ.as_mut(), 1000);
+        assert_eq!(n, 0, "{} allocated {n} times", kind.name());
+    }
+}
