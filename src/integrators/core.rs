@@ -29,7 +29,7 @@ use super::{Forecast, Metric, NewtonParams, SchemeParams, State, StepStats};
 use crate::assembly::linear_combination;
 use crate::contact::{ContactJacobian, ContactSet};
 use crate::error::Error;
-use crate::linalg::{SpdFactor, spmv, spmv_add};
+use crate::linalg::{SpdFactor, spmv, sym_spmv_add};
 use crate::model::LinearSystem;
 use crate::solvers::lcp::LcpSolver;
 use crate::solvers::mlcp::Mlcp;
@@ -362,20 +362,25 @@ impl ThetaCore {
     pub fn begin_step(&mut self) {
         let (h, th) = (self.h, self.theta);
         let s = &self.state;
-        // work = h f − h K (q + hθ v) − h C v
-        for i in 0..self.n {
-            self.q_lin[i] = s.q[i] + h * th * s.v[i];
+        // work = h f − h K (q + hθ v) − h C v, one pass over the rows of the
+        // symmetric K (and C): their CSC arrays are their CSR arrays.
+        let k = self.sys.stiffness.as_ref();
+        let (kp, ki, kv) = (k.col_ptr(), k.row_idx(), k.val());
+        for (i, (w, f)) in self.work.iter_mut().zip(&self.sys.force).enumerate() {
+            let r = kp[i]..kp[i + 1];
+            let kx: f64 = ki[r.clone()]
+                .iter()
+                .zip(&kv[r])
+                .map(|(&j, &a)| a * (s.q[j] + h * th * s.v[j]))
+                .sum();
+            *w = h * (f - kx);
         }
-        for (w, f) in self.work.iter_mut().zip(&self.sys.force) {
-            *w = h * f;
-        }
-        spmv_add(self.sys.stiffness.as_ref(), -h, &self.q_lin, &mut self.work);
         if let Some(c) = &self.sys.damping {
-            spmv_add(c.as_ref(), -h, &s.v, &mut self.work);
+            sym_spmv_add(c.as_ref(), -h, &s.v, &mut self.work);
         }
         self.factor.solve_in_place(&mut self.work);
-        for i in 0..self.n {
-            self.v_free[i] = s.v[i] + self.work[i];
+        for ((vf, v), w) in self.v_free.iter_mut().zip(&s.v).zip(&self.work) {
+            *vf = v + w;
         }
         self.u_k.copy_from_slice(&s.local_velocity);
         self.jac.transpose_mul(&self.v_free, &mut self.u_free);
@@ -642,7 +647,13 @@ impl ThetaCore {
     /// `v = v_free + M̂⁻¹G P − hθ M̂⁻¹K N G τ_used`, `q = q_k + h(1−θ)v_k + hθ v + N G τ`.
     pub(crate) fn form(&mut self) {
         let (h, th, n) = (self.h, self.theta, self.n);
-        self.v_new.copy_from_slice(&self.v_free);
+        if self.linear {
+            // called once per step: v_free is not needed afterwards (begin_step
+            // rewrites it), so hand its buffer over instead of copying
+            std::mem::swap(&mut self.v_new, &mut self.v_free);
+        } else {
+            self.v_new.copy_from_slice(&self.v_free);
+        }
         for a in 0..self.m {
             let p = self.p[a];
             if p != 0.0 {
@@ -654,8 +665,8 @@ impl ThetaCore {
             }
         }
         let s = &self.state;
-        for i in 0..n {
-            self.q_new[i] = s.q[i] + h * ((1.0 - th) * s.v[i] + th * self.v_new[i]);
+        for (((qn, q), v), vn) in self.q_new.iter_mut().zip(&s.q).zip(&s.v).zip(&self.v_new) {
+            *qn = q + h * ((1.0 - th) * v + th * vn);
         }
         for a in 0..self.m {
             let t = self.tau[a];
