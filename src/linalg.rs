@@ -1,11 +1,12 @@
 //! Sparse and small dense linear algebra used by the integrators.
 //!
 //! Owns:
-//! - [`SpdFactor`]: a sparse Cholesky factorization of the iteration matrix
-//!   `M̂ = M + hθC + h²θ²K` (eq. 47), computed with faer (AMD ordering, symbolic
-//!   analysis once, numeric factorization into a buffer we own) and solved in place
-//!   without allocating, so it can be called from `step()`.
-//! - [`spmv`] / [`spmv_add`]: `y = A x` for a CSC matrix. Written here rather than
+//! - [`SpdFactor`]: the Cholesky factorization of the iteration matrix
+//!   `M̂ = M + hθC + h²θ²K` (eq. 47): faer's sparse Cholesky (AMD ordering, symbolic
+//!   analysis once, numeric factorization into a buffer we own), or our tridiagonal
+//!   `L D Lᵀ` for 1-D chains; solved in place without allocating, so it can be
+//!   called from `step()`.
+//! - [`spmv`] / [`spmv_add`] / [`sym_spmv_add`]: `y = A x` for a CSC matrix. Written here rather than
 //!   calling `faer::sparse::linalg::matmul::sparse_dense_matmul` because the vectors
 //!   are plain slices owned by the integrator and the loop is five lines; faer's
 //!   kernel goes through `MatMut` views and a `Par` dispatch that costs more than the
@@ -29,22 +30,33 @@ use crate::error::Error;
 /// Owned sparse matrix type used throughout (compressed sparse columns, `usize` indices).
 pub type SparseMatrix = SparseColMat<usize, f64>;
 
-/// Sparse Cholesky factor `A = L Lᵀ` of a symmetric positive definite matrix.
+/// Cholesky factor of a symmetric positive definite sparse matrix.
 ///
-/// The symbolic analysis (fill-reducing ordering and elimination tree) is done
-/// once in [`SpdFactor::new`]; [`SpdFactor::refactor`] recomputes the numeric values
-/// for a matrix with the same pattern (a new time step `h`, or a new tangent).
+/// Two backends, chosen by the matrix:
+/// - tridiagonal (the 1-D bar): our `L D Lᵀ` ([`Tridiagonal`]'s doc says why);
+/// - anything else: faer's sparse Cholesky with AMD ordering. The symbolic analysis is
+///   done once in [`SpdFactor::new`]; [`SpdFactor::refactor`] recomputes the numeric
+///   values for the same pattern (a new `h`, a new tangent). Simplicial factors are
+///   solved by our loops over faer's arrays, supernodal ones by faer.
+///
 /// [`SpdFactor::solve_in_place`] does not allocate.
 pub struct SpdFactor {
+    n: usize,
+    backend: Backend,
+}
+
+enum Backend {
+    Tridiagonal(Tridiagonal),
+    Faer(Box<FaerLlt>),
+}
+
+struct FaerLlt {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
     mem: MemBuffer,
     scratch: Vec<f64>,
-    n: usize,
-    /// Simplicial factors in solve-ready form (see [`SpdFactor::solve_in_place`]).
+    /// Simplicial factors in solve-ready form.
     simplicial: Option<SimplicialSolve>,
-    /// Tridiagonal matrices (the 1-D bar) bypass faer.
-    tridiagonal: Option<Tridiagonal>,
 }
 
 /// `A = L D Lᵀ` of a symmetric tridiagonal matrix, `L` unit lower bidiagonal.
@@ -53,7 +65,8 @@ pub struct SpdFactor {
 /// recurrences, not by arithmetic: faer's general sparse path (and the simplicial
 /// loop below) carry a load–multiply–store chain per row, measured at 13.6 ns per row
 /// for the 1001-dof bar, while `y_i = r_i − l_i y_{i−1}` and
-/// `x_i = y_i/d_i − l_{i+1} x_{i+1}` keep one fused multiply-add per row in the chain.
+/// `x_i = y_i/d_i − l_{i+1} x_{i+1}` keep one fused multiply-add per row in the chain
+/// (3.8 ns per row, `cargo bench --bench kernels`).
 #[derive(Debug, Default)]
 struct Tridiagonal {
     /// `l_i` for `i ≥ 1` (`l[0]` unused).
@@ -63,9 +76,18 @@ struct Tridiagonal {
 }
 
 impl Tridiagonal {
-    /// Factors `a` if it is tridiagonal; `None` if it is not, `Some(Err)` if a pivot
-    /// is not positive.
-    fn try_factor(a: SparseColMatRef<'_, usize, f64>) -> Option<Result<Self, usize>> {
+    /// Whether every entry of `a` lies within one diagonal of the main one.
+    fn is_tridiagonal(a: SparseColMatRef<'_, usize, f64>) -> bool {
+        let (cp, ri) = (a.col_ptr(), a.row_idx());
+        (0..a.ncols()).all(|j| {
+            ri[cp[j]..cp[j + 1]]
+                .iter()
+                .all(|&i| i + 1 >= j && i <= j + 1)
+        })
+    }
+
+    /// Factors a tridiagonal `a`; `Err(i)` if pivot `i` is not positive.
+    fn factor(a: SparseColMatRef<'_, usize, f64>) -> Result<Self, usize> {
         let n = a.nrows();
         let (cp, ri, v) = (a.col_ptr(), a.row_idx(), a.val());
         let mut diag = vec![0.0; n];
@@ -77,8 +99,6 @@ impl Tridiagonal {
                     diag[j] += v[k];
                 } else if i == j + 1 {
                     sub[i] += v[k];
-                } else if i + 1 != j {
-                    return None;
                 }
             }
         }
@@ -93,16 +113,19 @@ impl Tridiagonal {
                 diag[i] - l[i] * sub[i]
             };
             if !(d > 0.0 && d.is_finite()) {
-                return Some(Err(i));
+                return Err(i);
             }
             dinv[i] = 1.0 / d;
             d_prev = d;
         }
-        Some(Ok(Tridiagonal { l, dinv }))
+        Ok(Tridiagonal { l, dinv })
     }
 
     fn solve(&self, x: &mut [f64]) {
         let n = x.len();
+        if n == 0 {
+            return;
+        }
         let mut y = x[0];
         for i in 1..n {
             y = x[i] - self.l[i] * y;
@@ -131,19 +154,39 @@ impl std::fmt::Debug for SpdFactor {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("SpdFactor")
             .field("n", &self.n)
-            .field("len_val", &self.values.len())
+            .field("backend", &self.backend_name())
             .finish()
     }
 }
 
+fn not_spd(what: &str, detail: String) -> Error {
+    Error::Numerical(format!(
+        "{what} is not positive definite ({detail}); check that the mass matrix has no zero \
+         rows and that the material parameters are positive"
+    ))
+}
+
 impl SpdFactor {
-    /// Analyses the pattern of `a` and factors its values. `what` names the matrix
-    /// in error messages.
+    /// Factors `a`, picking the backend (see the type doc). `what` names the matrix in
+    /// error messages.
     pub fn new(a: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<Self, Error> {
+        if Tridiagonal::is_tridiagonal(a) {
+            let t = Tridiagonal::factor(a)
+                .map_err(|i| not_spd(what, format!("pivot {i} of its LDLᵀ is not positive")))?;
+            return Ok(SpdFactor {
+                n: a.nrows(),
+                backend: Backend::Tridiagonal(t),
+            });
+        }
+        Self::new_general(a, what)
+    }
+
+    /// Factors `a` with faer's sparse Cholesky whatever its pattern.
+    pub fn new_general(a: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<Self, Error> {
         let n = a.nrows();
         // AMD always: faer 0.24.4's `SymmetricOrdering::Identity` path factors the
         // wrong matrix with `Side::Lower` (a 3×3 tridiagonal [4, −1] gave x = [1.14,
-        // 1.55, 1.52] for x = [1, 1, 1]; see the test below), so it is not offered.
+        // 1.55, 1.52] for x = [1, 1, 1]; pinned by a test below), so it is not offered.
         let symbolic = factorize_symbolic_cholesky(
             a.symbolic(),
             Side::Lower,
@@ -158,68 +201,76 @@ impl SpdFactor {
         ]);
         let values = vec![0.0; symbolic.len_val()];
         let mut this = SpdFactor {
-            symbolic,
-            values,
-            mem: MemBuffer::new(req),
-            scratch: vec![0.0; n],
             n,
-            simplicial: None,
-            tridiagonal: None,
+            backend: Backend::Faer(Box::new(FaerLlt {
+                symbolic,
+                values,
+                mem: MemBuffer::new(req),
+                scratch: vec![0.0; n],
+                simplicial: None,
+            })),
         };
         this.refactor(a, what)?;
         Ok(this)
     }
 
-    /// Recomputes the numeric factor for a matrix with the pattern given to [`SpdFactor::new`].
+    /// Which backend factored the matrix, for summaries.
+    pub fn backend_name(&self) -> &'static str {
+        match &self.backend {
+            Backend::Tridiagonal(_) => "tridiagonal LDLᵀ",
+            Backend::Faer(f) => match f.simplicial {
+                Some(_) => "faer simplicial LLᵀ, AMD",
+                None => "faer supernodal LLᵀ, AMD",
+            },
+        }
+    }
+
+    /// Recomputes the numeric factor for a matrix with the pattern given to
+    /// [`SpdFactor::new`].
     pub fn refactor(
         &mut self,
         a: SparseColMatRef<'_, usize, f64>,
         what: &str,
     ) -> Result<(), Error> {
-        if let Some(t) = Tridiagonal::try_factor(a) {
-            self.tridiagonal = Some(t.map_err(|i| {
-                Error::Numerical(format!(
-                    "{what} is not positive definite (pivot {i} of its tridiagonal LDLᵀ is \
-                     not positive); check that the material parameters are positive"
-                ))
-            })?);
-            return Ok(());
-        }
-        self.symbolic
+        let f = match &mut self.backend {
+            Backend::Tridiagonal(t) => {
+                *t = Tridiagonal::factor(a)
+                    .map_err(|i| not_spd(what, format!("pivot {i} of its LDLᵀ is not positive")))?;
+                return Ok(());
+            }
+            Backend::Faer(f) => f,
+        };
+        f.symbolic
             .factorize_numeric_llt::<f64>(
-                &mut self.values,
+                &mut f.values,
                 a,
                 Side::Lower,
                 LltRegularization::default(),
                 Par::Seq,
-                MemStack::new(&mut self.mem),
+                MemStack::new(&mut f.mem),
                 Default::default(),
             )
-            .map_err(|e| {
-                Error::Numerical(format!(
-                    "{what} is not positive definite (Cholesky failed: {e:?}); check that the mass \
-                     matrix has no zero rows and that the material parameters are positive"
-                ))
-            })?;
-        self.simplicial = match self.symbolic.raw() {
+            .map_err(|e| not_spd(what, format!("Cholesky failed: {e:?}")))?;
+        f.simplicial = match f.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(sym) => {
                 let (cp, ri) = (sym.col_ptr(), sym.row_idx());
-                let mut f = SimplicialSolve {
-                    dinv: Vec::with_capacity(self.n),
-                    ptr: Vec::with_capacity(self.n + 1),
-                    row: Vec::with_capacity(ri.len() - self.n),
-                    val: Vec::with_capacity(ri.len() - self.n),
+                let n = self.n;
+                let mut s = SimplicialSolve {
+                    dinv: Vec::with_capacity(n),
+                    ptr: Vec::with_capacity(n + 1),
+                    row: Vec::with_capacity(ri.len() - n),
+                    val: Vec::with_capacity(ri.len() - n),
                 };
-                f.ptr.push(0);
-                for j in 0..self.n {
+                s.ptr.push(0);
+                for j in 0..n {
                     let r = cp[j]..cp[j + 1];
                     debug_assert_eq!(ri[r.start], j, "diagonal first");
-                    f.dinv.push(1.0 / self.values[r.start]);
-                    f.row.extend_from_slice(&ri[r.start + 1..r.end]);
-                    f.val.extend_from_slice(&self.values[r.start + 1..r.end]);
-                    f.ptr.push(f.row.len());
+                    s.dinv.push(1.0 / f.values[r.start]);
+                    s.row.extend_from_slice(&ri[r.start + 1..r.end]);
+                    s.val.extend_from_slice(&f.values[r.start + 1..r.end]);
+                    s.ptr.push(s.row.len());
                 }
-                Some(f)
+                Some(s)
             }
             SymbolicCholeskyRaw::Supernodal(_) => None,
         };
@@ -232,42 +283,36 @@ impl SpdFactor {
     }
 
     /// Overwrites `x` with `A⁻¹ x`. Does not allocate.
-    ///
-    /// A simplicial factor (what faer picks for banded and small matrices) is solved by
-    /// the two loops of `simplicial_solve` over a copy of faer's `L` with the inverse
-    /// diagonal precomputed: the forward and backward sweeps are a dependency chain
-    /// per row, and a multiply instead of faer's division shortens it (faer's generic
-    /// solve also spends about 95 instructions per row of a bidiagonal factor,
-    /// callgrind). Supernodal factors go through faer.
     pub fn solve_in_place(&mut self, x: &mut [f64]) {
         debug_assert_eq!(x.len(), self.n);
-        if let Some(t) = &self.tridiagonal {
-            t.solve(x);
-            return;
-        }
-        if let Some(f) = &self.simplicial {
-            match self.symbolic.perm() {
-                None => simplicial_solve(f, x),
+        let f = match &mut self.backend {
+            Backend::Tridiagonal(t) => return t.solve(x),
+            Backend::Faer(f) => f,
+        };
+        if let Some(s) = &f.simplicial {
+            match f.symbolic.perm() {
+                None => simplicial_solve(s, x),
                 Some(p) => {
                     let (fwd, _) = p.arrays();
-                    for (y, &i) in self.scratch.iter_mut().zip(fwd) {
+                    for (y, &i) in f.scratch.iter_mut().zip(fwd) {
                         *y = x[i];
                     }
-                    simplicial_solve(f, &mut self.scratch);
-                    for (y, &i) in self.scratch.iter().zip(fwd) {
+                    simplicial_solve(s, &mut f.scratch);
+                    for (y, &i) in f.scratch.iter().zip(fwd) {
                         x[i] = *y;
                     }
                 }
             }
             return;
         }
-        let llt = LltRef::<usize, f64>::new(&self.symbolic, &self.values);
+        let llt = LltRef::<usize, f64>::new(&f.symbolic, &f.values);
         let rhs = MatMut::from_column_major_slice_mut(x, self.n, 1);
-        llt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.mem));
+        llt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut f.mem));
     }
 }
 
-/// Solves `L Lᵀ x = b` in place.
+/// Solves `L Lᵀ x = b` in place (forward then backward sweep over the columns of `L`;
+/// multiplying by the stored inverse diagonal keeps a division off the chain).
 fn simplicial_solve(f: &SimplicialSolve, x: &mut [f64]) {
     let n = x.len();
     for j in 0..n {
@@ -445,7 +490,10 @@ mod tests {
         }
         let a = SparseMatrix::try_new_from_triplets(n, n, &t).unwrap();
         let mut f = SpdFactor::new(a.as_ref(), "arrow").unwrap();
-        assert!(f.symbolic.perm().is_some(), "AMD should have been chosen");
+        match &f.backend {
+            Backend::Faer(g) => assert!(g.symbolic.perm().is_some(), "AMD permutes the hub"),
+            Backend::Tridiagonal(_) => panic!("an arrow matrix is not tridiagonal"),
+        }
         let x_true: Vec<f64> = (0..n).map(|i| 1.0 + (i as f64).cos()).collect();
         let mut b = vec![0.0; n];
         let mut b2 = vec![0.0; n];
@@ -475,10 +523,14 @@ mod tests {
             Triplet::new(2, 1, -1.0),
         ];
         let a = SparseMatrix::try_new_from_triplets(3, 3, &t).unwrap();
-        let mut f = SpdFactor::new(a.as_ref(), "3x3").unwrap();
-        let mut b = vec![3.0, 2.0, 3.0];
-        f.solve_in_place(&mut b);
-        assert!(b.iter().all(|x| (x - 1.0).abs() < 1e-15), "{b:?}");
+        for mut f in [
+            SpdFactor::new(a.as_ref(), "3x3").unwrap(),
+            SpdFactor::new_general(a.as_ref(), "3x3").unwrap(),
+        ] {
+            let mut b = vec![3.0, 2.0, 3.0];
+            f.solve_in_place(&mut b);
+            assert!(b.iter().all(|x| (x - 1.0).abs() < 1e-15), "{b:?}");
+        }
     }
 
     #[test]
@@ -494,7 +546,7 @@ mod tests {
         }
         let a = SparseMatrix::try_new_from_triplets(n, n, &t).unwrap();
         let mut f = SpdFactor::new(a.as_ref(), "tri").unwrap();
-        assert!(f.tridiagonal.is_some());
+        assert_eq!(f.backend_name(), "tridiagonal LDLᵀ");
         let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
         let mut x1 = b.clone();
         f.solve_in_place(&mut x1);

@@ -297,8 +297,9 @@ impl ThetaCore {
     /// A description of the linear-algebra path, for summaries.
     pub fn path(&self) -> String {
         format!(
-            "M̂ = M + hθC + h²θ²K factored once (sparse Cholesky, n = {}); {} contact(s), {}; \
+            "M̂ = M + hθC + h²θ²K factored once ({}, n = {}); {} contact(s), {}; \
              Delassus W = GᵀM̂⁻¹G dense {}×{}{}",
+            self.factor.backend_name(),
             self.n,
             self.m,
             if self.linear {
@@ -362,8 +363,11 @@ impl ThetaCore {
     pub fn begin_step(&mut self) {
         let (h, th) = (self.h, self.theta);
         let s = &self.state;
-        // work = h f − h K (q + hθ v) − h C v, one pass over the rows of the
-        // symmetric K (and C): their CSC arrays are their CSR arrays.
+        // work = h f − h K (q + hθ v) − h C v; K and C are symmetric, so their CSC
+        // arrays are their CSR arrays and each row is a gather.
+        for ((ql, q), v) in self.q_lin.iter_mut().zip(&s.q).zip(&s.v) {
+            *ql = q + h * th * v;
+        }
         let k = self.sys.stiffness.as_ref();
         let (kp, ki, kv) = (k.col_ptr(), k.row_idx(), k.val());
         for (i, (w, f)) in self.work.iter_mut().zip(&self.sys.force).enumerate() {
@@ -371,7 +375,7 @@ impl ThetaCore {
             let kx: f64 = ki[r.clone()]
                 .iter()
                 .zip(&kv[r])
-                .map(|(&j, &a)| a * (s.q[j] + h * th * s.v[j]))
+                .map(|(&j, &a)| a * self.q_lin[j])
                 .sum();
             *w = h * (f - kx);
         }

@@ -286,8 +286,9 @@ impl Integrator for SchatzmanPaoli {
     }
     fn path(&self) -> String {
         format!(
-            "M + h²θK + (hθ/2)C factored once (sparse Cholesky, n = {}); {} contact(s), {}; \
+            "M + h²θK + (hθ/2)C factored once ({}, n = {}); {} contact(s), {}; \
              W_SP = GᵀM_SP⁻¹G dense {}×{}",
+            self.factor.backend_name(),
             self.n,
             self.m,
             if self.linear {
