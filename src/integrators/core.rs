@@ -303,7 +303,8 @@ impl ThetaCore {
             self.n,
             self.m,
             if self.linear {
-                "linear gap: G constant, W condensed once, no Newton iteration for the dynamics"
+                "linear gap: G and W constant (condensed once), one sparse solve per step; \
+                 Newton iterations only re-solve the contact-space problem (eq. 56a)"
             } else {
                 "nonlinear gap: G(q) re-linearized every Newton iteration"
             },
