@@ -10,6 +10,7 @@ use signorini::integrators::{Forecast, Metric, SchemeKind};
 use signorini::model::MassKind;
 use signorini::run::{self, Progress};
 use signorini::scene::bar::BarScene;
+use signorini::solvers::LcpKind;
 
 #[derive(Parser)]
 #[command(
@@ -54,6 +55,12 @@ enum ForecastArg {
 enum MassArg {
     Consistent,
     Lumped,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum LcpArg {
+    Lemke,
+    Pgs,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -122,6 +129,21 @@ struct BarArgs {
     /// Stop projecting below this violation (m); 0 projects to machine accuracy.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     projection_tolerance: f64,
+    /// One-step LCP solver: exact pivoting or projected Gauss–Seidel.
+    #[arg(long, value_enum, default_value = "lemke")]
+    lcp: LcpArg,
+    /// PGS tolerance on the complementarity residual, relative to max(1, |q|).
+    #[arg(long, default_value_t = 1e-12, allow_hyphen_values = true)]
+    lcp_tol: f64,
+    /// PGS sweep cap.
+    #[arg(long, default_value_t = 10_000)]
+    lcp_max_sweeps: usize,
+    /// Newton / fixed-point tolerance (relative).
+    #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
+    newton_tol: f64,
+    /// Newton iteration cap per step (caps hit are counted in the summary).
+    #[arg(long, default_value_t = 50)]
+    newton_max_iterations: usize,
     /// Output directory.
     #[arg(long, default_value = "out/bar")]
     out: PathBuf,
@@ -169,6 +191,15 @@ impl BarArgs {
         p.project_all_active = self.project_all_active;
         p.projection_feedback = !self.no_projection_feedback;
         p.projection_tolerance = self.projection_tolerance;
+        p.lcp = match self.lcp {
+            LcpArg::Lemke => LcpKind::Lemke,
+            LcpArg::Pgs => LcpKind::Pgs {
+                tol: self.lcp_tol,
+                max_sweeps: self.lcp_max_sweeps,
+            },
+        };
+        p.newton.tol = self.newton_tol;
+        p.newton.max_iterations = self.newton_max_iterations;
         s
     }
 }

@@ -9,8 +9,10 @@
 //!
 //! Submodules build systems: [`rod`] (P1 rod elements, eq. 71) and [`point_mass`].
 
+pub mod generate;
 pub mod point_mass;
 pub mod rod;
+pub mod solid;
 
 use crate::linalg::{SparseMatrix, quadratic_form};
 
@@ -53,6 +55,9 @@ pub struct LinearSystem {
     pub damping: Option<SparseMatrix>,
     /// Constant external force `f` (N); zero for the free bar.
     pub force: Vec<f64>,
+    /// Displacement components per node (1 for rods, 2 or 3 for solids); dof `i`
+    /// is component `i % dofs_per_node` of node `i / dofs_per_node`.
+    pub dofs_per_node: usize,
 }
 
 impl LinearSystem {
@@ -73,21 +78,34 @@ impl LinearSystem {
             - self.force.iter().zip(q).map(|(f, x)| f * x).sum::<f64>()
     }
 
-    /// Linear momentum along the generalized coordinates, `1ᵀ M v` (kg·m/s) for a
-    /// one-component model.
+    /// Linear momentum along the first axis, `e_xᵀ M v` (kg·m/s), where `e_x` is 1 on
+    /// every x-component dof.
     pub fn momentum(&self, v: &[f64]) -> f64 {
         let m = self.mass.as_ref();
+        let d = self.dofs_per_node;
         let mut s = 0.0;
         for (j, &vj) in v.iter().enumerate() {
             for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
-                s += m.val()[k] * vj;
+                if m.row_idx()[k] % d == 0 {
+                    s += m.val()[k] * vj;
+                }
             }
         }
         s
     }
 
-    /// Total mass `1ᵀ M 1` (kg) for a one-component model.
+    /// Total mass `e_xᵀ M e_x` (kg).
     pub fn total_mass(&self) -> f64 {
-        self.mass.val().iter().sum()
+        let m = self.mass.as_ref();
+        let d = self.dofs_per_node;
+        let mut s = 0.0;
+        for j in (0..m.ncols()).step_by(d) {
+            for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
+                if m.row_idx()[k] % d == 0 {
+                    s += m.val()[k];
+                }
+            }
+        }
+        s
     }
 }

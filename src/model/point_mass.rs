@@ -25,5 +25,6 @@ pub fn point_mass(dim: usize, mass: f64, force: &[f64]) -> Result<LinearSystem, 
         stiffness: ak.finish(),
         damping: None,
         force: force.to_vec(),
+        dofs_per_node: dim,
     })
 }

@@ -87,6 +87,7 @@ impl Rod {
             stiffness: ak.finish(),
             damping: None,
             force: vec![0.0; n],
+            dofs_per_node: 1,
         })
     }
 }

@@ -5,3 +5,4 @@
 //! TOML scene files and meshes come with the solid-mesh work.
 
 pub mod bar;
+pub mod solid_bar;

@@ -1,0 +1,134 @@
+//! Built-in structured meshes: boxes of hex8 or tet4 cells, rectangles of quad4 or
+//! tri3 cells, with the six (four) boundary faces as named node sets `x0, x1, y0, y1,
+//! z0, z1`.
+
+use super::solid::{CellKind, Mesh};
+
+/// A `lx × ly × lz` box from the origin, `nx × ny × nz` hexahedra, each split into six
+/// tetrahedra (Kuhn triangulation, conforming) when `kind` is [`CellKind::Tet4`].
+pub fn box_mesh(kind: CellKind, n: [usize; 3], l: [f64; 3]) -> Mesh {
+    let [nx, ny, nz] = n;
+    let id = |i: usize, j: usize, k: usize| (k * (ny + 1) + j) * (nx + 1) + i;
+    let mut mesh = Mesh::default();
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                mesh.points.push([
+                    l[0] * i as f64 / nx as f64,
+                    l[1] * j as f64 / ny as f64,
+                    l[2] * k as f64 / nz as f64,
+                ]);
+            }
+        }
+    }
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let h = [
+                    id(i, j, k),
+                    id(i + 1, j, k),
+                    id(i + 1, j + 1, k),
+                    id(i, j + 1, k),
+                    id(i, j, k + 1),
+                    id(i + 1, j, k + 1),
+                    id(i + 1, j + 1, k + 1),
+                    id(i, j + 1, k + 1),
+                ];
+                match kind {
+                    CellKind::Tet4 => {
+                        for t in [
+                            [0, 1, 2, 6],
+                            [0, 2, 3, 6],
+                            [0, 3, 7, 6],
+                            [0, 7, 4, 6],
+                            [0, 4, 5, 6],
+                            [0, 5, 1, 6],
+                        ] {
+                            let mut c: Vec<usize> = t.iter().map(|&a| h[a]).collect();
+                            if signed_volume(&mesh.points, &c) < 0.0 {
+                                c.swap(2, 3);
+                            }
+                            mesh.cells.push((CellKind::Tet4, c));
+                        }
+                    }
+                    _ => mesh.cells.push((CellKind::Hex8, h.to_vec())),
+                }
+            }
+        }
+    }
+    let faces: [(&str, usize, usize); 6] = [
+        ("x0", 0, 0),
+        ("x1", 0, nx),
+        ("y0", 1, 0),
+        ("y1", 1, ny),
+        ("z0", 2, 0),
+        ("z1", 2, nz),
+    ];
+    for (name, axis, at) in faces {
+        let mut set = Vec::new();
+        for k in 0..=nz {
+            for j in 0..=ny {
+                for i in 0..=nx {
+                    if [i, j, k][axis] == at {
+                        set.push(id(i, j, k));
+                    }
+                }
+            }
+        }
+        mesh.node_sets.insert(name.to_string(), set);
+    }
+    mesh
+}
+
+/// A `lx × ly` rectangle, `nx × ny` quadrilaterals, each split into two triangles when
+/// `kind` is [`CellKind::Tri3`].
+pub fn rectangle_mesh(kind: CellKind, n: [usize; 2], l: [f64; 2]) -> Mesh {
+    let [nx, ny] = n;
+    let id = |i: usize, j: usize| j * (nx + 1) + i;
+    let mut mesh = Mesh::default();
+    for j in 0..=ny {
+        for i in 0..=nx {
+            mesh.points.push([
+                l[0] * i as f64 / nx as f64,
+                l[1] * j as f64 / ny as f64,
+                0.0,
+            ]);
+        }
+    }
+    for j in 0..ny {
+        for i in 0..nx {
+            let q = [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)];
+            match kind {
+                CellKind::Tri3 => {
+                    mesh.cells.push((CellKind::Tri3, vec![q[0], q[1], q[2]]));
+                    mesh.cells.push((CellKind::Tri3, vec![q[0], q[2], q[3]]));
+                }
+                _ => mesh.cells.push((CellKind::Quad4, q.to_vec())),
+            }
+        }
+    }
+    let faces: [(&str, usize, usize); 4] =
+        [("x0", 0, 0), ("x1", 0, nx), ("y0", 1, 0), ("y1", 1, ny)];
+    for (name, axis, at) in faces {
+        let set = (0..=ny)
+            .flat_map(|j| (0..=nx).map(move |i| (i, j)))
+            .filter(|&(i, j)| [i, j][axis] == at)
+            .map(|(i, j)| id(i, j))
+            .collect();
+        mesh.node_sets.insert(name.to_string(), set);
+    }
+    mesh
+}
+
+fn signed_volume(p: &[[f64; 3]], c: &[usize]) -> f64 {
+    let d = |a: usize| {
+        [
+            p[c[a]][0] - p[c[0]][0],
+            p[c[a]][1] - p[c[0]][1],
+            p[c[a]][2] - p[c[0]][2],
+        ]
+    };
+    let (a, b, e) = (d(1), d(2), d(3));
+    a[0] * (b[1] * e[2] - b[2] * e[1]) - a[1] * (b[0] * e[2] - b[2] * e[0])
+        + a[2] * (b[0] * e[1] - b[1] * e[0])
+}

@@ -1,0 +1,458 @@
+//! Isotropic linear elastic solids: element kernels (tri3, quad4, tet4, hex8) and their
+//! parallel assembly into the global `M` and `K` of a [`LinearSystem`].
+//!
+//! Kernels use nalgebra fixed-size matrices; quadrilaterals and hexahedra are
+//! integrated with 2×2 (×2) Gauss points, triangles and tetrahedra exactly with their
+//! constant strain. Consistent mass is `∫ ρ Nᵀ N`; lumped mass is its row sum
+//! (positive for these four linear elements). Stress is written in Voigt order
+//! `(xx, yy, zz, yz, xz, xy)` in 3-D and `(xx, yy, xy)` in 2-D, with engineering shear
+//! strains. An element whose Jacobian determinant is not positive at any integration
+//! point is reported as inverted, with its index.
+
+use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
+use rayon::prelude::*;
+
+use super::{LinearSystem, MassKind};
+use crate::assembly::Assembler;
+use crate::error::{Error, require_in, require_positive};
+
+/// Isotropic linear elastic material.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// Young's modulus `E` (Pa).
+    pub young: f64,
+    /// Poisson's ratio `ν`, in [0, 0.5).
+    pub poisson: f64,
+    /// Density `ρ` (kg/m³).
+    pub density: f64,
+}
+
+impl Material {
+    /// Checks the ranges; the error names the field.
+    pub fn validate(&self) -> Result<(), Error> {
+        require_positive("young", self.young)?;
+        require_positive("density", self.density)?;
+        require_in("poisson", self.poisson, 0.0, 0.4999999)?;
+        Ok(())
+    }
+
+    /// Lamé parameters `(λ, μ)`.
+    pub fn lame(&self) -> (f64, f64) {
+        let (e, nu) = (self.young, self.poisson);
+        (
+            e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+            e / (2.0 * (1.0 + nu)),
+        )
+    }
+
+    /// 3-D elasticity matrix (Voigt, engineering shear).
+    pub fn d3(&self) -> SMatrix<f64, 6, 6> {
+        let (l, m) = self.lame();
+        let mut d = SMatrix::<f64, 6, 6>::zeros();
+        for i in 0..3 {
+            for j in 0..3 {
+                d[(i, j)] = l;
+            }
+            d[(i, i)] = l + 2.0 * m;
+            d[(i + 3, i + 3)] = m;
+        }
+        d
+    }
+
+    /// 2-D elasticity matrix for plane strain or plane stress.
+    pub fn d2(&self, f: Formulation) -> Matrix3<f64> {
+        let (e, nu) = (self.young, self.poisson);
+        match f {
+            Formulation::PlaneStress { .. } => {
+                let c = e / (1.0 - nu * nu);
+                Matrix3::new(
+                    c,
+                    c * nu,
+                    0.0,
+                    c * nu,
+                    c,
+                    0.0,
+                    0.0,
+                    0.0,
+                    c * (1.0 - nu) / 2.0,
+                )
+            }
+            _ => {
+                let (l, m) = self.lame();
+                Matrix3::new(l + 2.0 * m, l, 0.0, l, l + 2.0 * m, 0.0, 0.0, 0.0, m)
+            }
+        }
+    }
+}
+
+/// Kinematic assumption of the body.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Formulation {
+    /// 3-D solid (tet4, hex8).
+    Solid,
+    /// 2-D plane strain, unit thickness (tri3, quad4).
+    PlaneStrain,
+    /// 2-D plane stress with a thickness (m).
+    PlaneStress {
+        /// Out-of-plane thickness (m).
+        thickness: f64,
+    },
+}
+
+impl Formulation {
+    /// Space dimension (dofs per node).
+    pub fn dim(self) -> usize {
+        match self {
+            Formulation::Solid => 3,
+            _ => 2,
+        }
+    }
+    fn thickness(self) -> f64 {
+        match self {
+            Formulation::PlaneStress { thickness } => thickness,
+            _ => 1.0,
+        }
+    }
+}
+
+/// Linear cell kinds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CellKind {
+    /// 3-node triangle.
+    Tri3,
+    /// 4-node quadrilateral (counter-clockwise).
+    Quad4,
+    /// 4-node tetrahedron (positive volume ordering).
+    Tet4,
+    /// 8-node hexahedron (VTK / Gmsh ordering).
+    Hex8,
+}
+
+impl CellKind {
+    /// Nodes per cell.
+    pub fn nodes(self) -> usize {
+        match self {
+            CellKind::Tri3 => 3,
+            CellKind::Quad4 | CellKind::Tet4 => 4,
+            CellKind::Hex8 => 8,
+        }
+    }
+    /// Space dimension of the cell.
+    pub fn dim(self) -> usize {
+        match self {
+            CellKind::Tri3 | CellKind::Quad4 => 2,
+            _ => 3,
+        }
+    }
+    /// Name as in meshes and messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            CellKind::Tri3 => "tri3",
+            CellKind::Quad4 => "quad4",
+            CellKind::Tet4 => "tet4",
+            CellKind::Hex8 => "hex8",
+        }
+    }
+}
+
+/// A mesh of one cell kind: points (always 3 coordinates; z = 0 in 2-D) and cells.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Node coordinates (m).
+    pub points: Vec<[f64; 3]>,
+    /// Cells: kind and node indices.
+    pub cells: Vec<(CellKind, Vec<usize>)>,
+    /// Named node sets (physical groups, point-data flags).
+    pub node_sets: std::collections::BTreeMap<String, Vec<usize>>,
+}
+
+/// Element matrices of one cell, dense, `nodes·dim` square.
+pub struct ElementMatrices {
+    /// Stiffness.
+    pub k: DMatrix<f64>,
+    /// Consistent mass.
+    pub m: DMatrix<f64>,
+    /// Volume (3-D) or area times thickness (2-D) (m³).
+    pub volume: f64,
+}
+
+const G2: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_625_8];
+
+/// Computes the element matrices of cell `id`; errors name the cell.
+pub fn element_matrices(
+    id: usize,
+    kind: CellKind,
+    x: &[[f64; 3]],
+    mat: &Material,
+    f: Formulation,
+) -> Result<ElementMatrices, Error> {
+    let inverted = |det: f64| {
+        Error::invalid(
+            &format!("cell {id} ({})", kind.name()),
+            format!("Jacobian determinant {det:e}"),
+            "is inverted or degenerate: its nodes must be ordered with positive orientation",
+        )
+    };
+    let rho = mat.density;
+    match kind {
+        CellKind::Tri3 | CellKind::Quad4 => {
+            let t = f.thickness();
+            let d = mat.d2(f);
+            let nn = kind.nodes();
+            let mut k = DMatrix::zeros(2 * nn, 2 * nn);
+            let mut m = DMatrix::zeros(2 * nn, 2 * nn);
+            let mut vol = 0.0;
+            // (shape values, reference gradients, weight) at each point
+            let pts: Vec<(Vec<f64>, Vec<[f64; 2]>, f64)> = if kind == CellKind::Tri3 {
+                // exact: constant strain; mass with the 3-point rule at edge midpoints
+                let grads = vec![[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
+                [[0.5, 0.0], [0.5, 0.5], [0.0, 0.5]]
+                    .iter()
+                    .map(|&[r, s]| (vec![1.0 - r - s, r, s], grads.clone(), 1.0 / 6.0))
+                    .collect()
+            } else {
+                let mut v = Vec::new();
+                for &r in &G2 {
+                    for &s in &G2 {
+                        let n = vec![
+                            0.25 * (1.0 - r) * (1.0 - s),
+                            0.25 * (1.0 + r) * (1.0 - s),
+                            0.25 * (1.0 + r) * (1.0 + s),
+                            0.25 * (1.0 - r) * (1.0 + s),
+                        ];
+                        let g = vec![
+                            [-0.25 * (1.0 - s), -0.25 * (1.0 - r)],
+                            [0.25 * (1.0 - s), -0.25 * (1.0 + r)],
+                            [0.25 * (1.0 + s), 0.25 * (1.0 + r)],
+                            [-0.25 * (1.0 + s), 0.25 * (1.0 - r)],
+                        ];
+                        v.push((n, g, 1.0));
+                    }
+                }
+                v
+            };
+            for (n, g, w) in &pts {
+                let mut jac = nalgebra::Matrix2::zeros();
+                for a in 0..nn {
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            jac[(i, j)] += x[a][i] * g[a][j];
+                        }
+                    }
+                }
+                let det: f64 = jac.determinant();
+                if det.is_nan() || det <= 0.0 {
+                    return Err(inverted(det));
+                }
+                let jinv = jac.try_inverse().ok_or_else(|| inverted(det))?;
+                let dv = det * w * t;
+                vol += dv;
+                let mut b = DMatrix::zeros(3, 2 * nn);
+                for a in 0..nn {
+                    // ∇N_a = J⁻ᵀ ∇_ref N_a
+                    let gx = jinv[(0, 0)] * g[a][0] + jinv[(1, 0)] * g[a][1];
+                    let gy = jinv[(0, 1)] * g[a][0] + jinv[(1, 1)] * g[a][1];
+                    b[(0, 2 * a)] = gx;
+                    b[(1, 2 * a + 1)] = gy;
+                    b[(2, 2 * a)] = gy;
+                    b[(2, 2 * a + 1)] = gx;
+                }
+                let db = d * &b;
+                k += b.transpose() * db * dv;
+                for a in 0..nn {
+                    for c in 0..nn {
+                        let v = rho * n[a] * n[c] * dv;
+                        m[(2 * a, 2 * c)] += v;
+                        m[(2 * a + 1, 2 * c + 1)] += v;
+                    }
+                }
+            }
+            Ok(ElementMatrices { k, m, volume: vol })
+        }
+        CellKind::Tet4 | CellKind::Hex8 => {
+            let d = mat.d3();
+            let nn = kind.nodes();
+            let mut k = DMatrix::zeros(3 * nn, 3 * nn);
+            let mut m = DMatrix::zeros(3 * nn, 3 * nn);
+            let mut vol = 0.0;
+            let pts: Vec<(Vec<f64>, Vec<[f64; 3]>, f64)> = if kind == CellKind::Tet4 {
+                let grads = vec![
+                    [-1.0, -1.0, -1.0],
+                    [1.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0],
+                    [0.0, 0.0, 1.0],
+                ];
+                // 4-point rule of degree 2 (exact for the consistent mass)
+                let (a, b) = (0.585_410_196_624_968_5, 0.138_196_601_125_010_5);
+                [[b, b, b], [a, b, b], [b, a, b], [b, b, a]]
+                    .iter()
+                    .map(|&[r, s, u]| (vec![1.0 - r - s - u, r, s, u], grads.clone(), 1.0 / 24.0))
+                    .collect()
+            } else {
+                let sgn = [
+                    [-1.0, -1.0, -1.0],
+                    [1.0, -1.0, -1.0],
+                    [1.0, 1.0, -1.0],
+                    [-1.0, 1.0, -1.0],
+                    [-1.0, -1.0, 1.0],
+                    [1.0, -1.0, 1.0],
+                    [1.0, 1.0, 1.0],
+                    [-1.0, 1.0, 1.0],
+                ];
+                let mut v = Vec::new();
+                for &r in &G2 {
+                    for &s in &G2 {
+                        for &u in &G2 {
+                            let n: Vec<f64> = sgn
+                                .iter()
+                                .map(|c| {
+                                    0.125 * (1.0 + c[0] * r) * (1.0 + c[1] * s) * (1.0 + c[2] * u)
+                                })
+                                .collect();
+                            let g: Vec<[f64; 3]> = sgn
+                                .iter()
+                                .map(|c| {
+                                    [
+                                        0.125 * c[0] * (1.0 + c[1] * s) * (1.0 + c[2] * u),
+                                        0.125 * c[1] * (1.0 + c[0] * r) * (1.0 + c[2] * u),
+                                        0.125 * c[2] * (1.0 + c[0] * r) * (1.0 + c[1] * s),
+                                    ]
+                                })
+                                .collect();
+                            v.push((n, g, 1.0));
+                        }
+                    }
+                }
+                v
+            };
+            for (n, g, w) in &pts {
+                let mut jac = Matrix3::zeros();
+                for a in 0..nn {
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            jac[(i, j)] += x[a][i] * g[a][j];
+                        }
+                    }
+                }
+                let det: f64 = jac.determinant();
+                if det.is_nan() || det <= 0.0 {
+                    return Err(inverted(det));
+                }
+                let jinv = jac.try_inverse().ok_or_else(|| inverted(det))?;
+                let dv = det * w;
+                vol += dv;
+                let mut b = DMatrix::zeros(6, 3 * nn);
+                for a in 0..nn {
+                    let gr = Vector3::new(g[a][0], g[a][1], g[a][2]);
+                    let gx = jinv.transpose() * gr;
+                    let c = 3 * a;
+                    b[(0, c)] = gx[0];
+                    b[(1, c + 1)] = gx[1];
+                    b[(2, c + 2)] = gx[2];
+                    b[(3, c + 1)] = gx[2];
+                    b[(3, c + 2)] = gx[1];
+                    b[(4, c)] = gx[2];
+                    b[(4, c + 2)] = gx[0];
+                    b[(5, c)] = gx[1];
+                    b[(5, c + 1)] = gx[0];
+                }
+                let db = d * &b;
+                k += b.transpose() * db * dv;
+                for a in 0..nn {
+                    for c in 0..nn {
+                        let v = rho * n[a] * n[c] * dv;
+                        for i in 0..3 {
+                            m[(3 * a + i, 3 * c + i)] += v;
+                        }
+                    }
+                }
+            }
+            Ok(ElementMatrices { k, m, volume: vol })
+        }
+    }
+}
+
+/// Assembles `M` and `K` of a mesh in parallel (rayon over cells; the triplets are then
+/// summed by nalgebra-sparse). `lumped_nodes` with [`MassKind::Lumped`] lumps by row sum.
+pub fn assemble(
+    mesh: &Mesh,
+    mat: &Material,
+    f: Formulation,
+    mass: MassKind,
+) -> Result<LinearSystem, Error> {
+    mat.validate()?;
+    if let Formulation::PlaneStress { thickness } = f {
+        require_positive("thickness", thickness)?;
+    }
+    let dim = f.dim();
+    let n = mesh.points.len() * dim;
+    for (i, p) in mesh.points.iter().enumerate() {
+        if p.iter().any(|c| !c.is_finite()) {
+            return Err(Error::invalid(
+                &format!("node {i}"),
+                format!("{p:?}"),
+                "coordinates must be finite",
+            ));
+        }
+    }
+    for (id, (kind, nodes)) in mesh.cells.iter().enumerate() {
+        if kind.dim() != dim {
+            return Err(Error::invalid(
+                &format!("cell {id}"),
+                kind.name(),
+                &format!("does not fit a {dim}-D formulation"),
+            ));
+        }
+        if nodes.len() != kind.nodes() {
+            return Err(Error::invalid(
+                &format!("cell {id}"),
+                format!("{} nodes", nodes.len()),
+                &format!("{} needs {}", kind.name(), kind.nodes()),
+            ));
+        }
+        if let Some(&bad) = nodes.iter().find(|&&v| v >= mesh.points.len()) {
+            return Err(Error::invalid(
+                &format!("cell {id}"),
+                format!("node {bad}"),
+                &format!("mesh has {} nodes", mesh.points.len()),
+            ));
+        }
+    }
+    let elems: Vec<ElementMatrices> = mesh
+        .cells
+        .par_iter()
+        .enumerate()
+        .map(|(id, (kind, nodes))| {
+            let x: Vec<[f64; 3]> = nodes.iter().map(|&v| mesh.points[v]).collect();
+            element_matrices(id, *kind, &x, mat, f)
+        })
+        .collect::<Result<_, _>>()?;
+    let nnz: usize = elems.iter().map(|e| e.k.len()).sum();
+    let mut ak = Assembler::new(n, nnz);
+    let mut am = Assembler::new(n, nnz);
+    for ((_, nodes), e) in mesh.cells.iter().zip(&elems) {
+        let dofs: Vec<usize> = nodes
+            .iter()
+            .flat_map(|&v| (0..dim).map(move |i| v * dim + i))
+            .collect();
+        ak.add_element(&dofs, |a, b| e.k[(a, b)]);
+        match mass {
+            MassKind::Consistent => am.add_element(&dofs, |a, b| e.m[(a, b)]),
+            MassKind::Lumped => {
+                for (a, &i) in dofs.iter().enumerate() {
+                    am.add(i, i, e.m.row(a).sum());
+                }
+            }
+        }
+    }
+    Ok(LinearSystem {
+        mass: am.finish(),
+        stiffness: ak.finish(),
+        damping: None,
+        force: vec![0.0; n],
+        dofs_per_node: dim,
+    })
+}
