@@ -82,8 +82,10 @@ pub struct ContactSummary {
 pub struct Summary {
     /// Scheme name.
     pub scheme: String,
-    /// Number of elements.
+    /// Number of elements (cells).
     pub elements: usize,
+    /// Degrees of freedom integrated.
+    pub dofs: usize,
     /// Time step (s).
     pub dt: f64,
     /// θ.
@@ -191,6 +193,34 @@ pub fn run_bar(
     )
 }
 
+/// Runs a scene file; writes into `out_dir` if given.
+pub fn run_scene(
+    scene: &crate::scene::file::Scene,
+    out_dir: Option<&Path>,
+    progress: &mut dyn Progress,
+) -> Result<RunResult, Error> {
+    let (model, report) = scene.build()?;
+    let mut integ = integrators::build(
+        &scene.scheme,
+        model.system,
+        model.contacts,
+        &model.q0,
+        &model.v0,
+        scene.time.dt,
+    )?;
+    let parameters = serde_json::to_value(scene).expect("scene serializes");
+    run(
+        integ.as_mut(),
+        scene.steps(),
+        report.cells,
+        scene.scheme.theta,
+        scene.reference.map(|r| r.impacting_bar),
+        parameters,
+        out_dir,
+        progress,
+    )
+}
+
 /// Steps `integ` `steps` times, streaming the history and measuring the contact.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
@@ -252,6 +282,7 @@ pub fn run(
     let summary = Summary {
         scheme: integ.name().to_string(),
         elements,
+        dofs: s.q.len(),
         dt: h,
         theta,
         steps,

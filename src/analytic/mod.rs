@@ -6,7 +6,8 @@
 //! `−v0` (all its momentum reversed), so the total impulse is `2 ρ S L |v0|`.
 
 /// The analytic impacting bar.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ImpactingBar {
     /// Length `L` (m).
     pub length: f64,

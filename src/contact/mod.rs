@@ -112,6 +112,57 @@ impl ContactJacobian {
     }
 }
 
+/// Several contact sets seen as one (columns concatenated in order).
+pub struct Composite {
+    sets: Vec<Box<dyn ContactSet>>,
+    e: Vec<f64>,
+    /// Scratch Jacobians, one per set, so each set writes its own pattern.
+    jacs: std::sync::Mutex<Vec<ContactJacobian>>,
+}
+
+impl Composite {
+    /// Joins `sets`.
+    pub fn new(sets: Vec<Box<dyn ContactSet>>) -> Self {
+        let e = sets.iter().flat_map(|s| s.restitution().to_vec()).collect();
+        let jacs = sets
+            .iter()
+            .map(|s| ContactJacobian::for_set(s.as_ref()))
+            .collect();
+        Composite {
+            sets,
+            e,
+            jacs: std::sync::Mutex::new(jacs),
+        }
+    }
+}
+
+impl ContactSet for Composite {
+    fn len(&self) -> usize {
+        self.sets.iter().map(|s| s.len()).sum()
+    }
+    fn is_linear(&self) -> bool {
+        self.sets.iter().all(|s| s.is_linear())
+    }
+    fn pattern(&self) -> Vec<Vec<usize>> {
+        self.sets.iter().flat_map(|s| s.pattern()).collect()
+    }
+    fn evaluate(&self, q: &[f64], gap: &mut [f64], jac: &mut ContactJacobian) {
+        let mut jacs = self.jacs.lock().expect("contact scratch poisoned");
+        let mut off = 0;
+        for (s, j) in self.sets.iter().zip(jacs.iter_mut()) {
+            let m = s.len();
+            s.evaluate(q, &mut gap[off..off + m], j);
+            for a in 0..m {
+                jac.col_values_mut(off + a).copy_from_slice(j.col(a).1);
+            }
+            off += m;
+        }
+    }
+    fn restitution(&self) -> &[f64] {
+        &self.e
+    }
+}
+
 /// Checks a restitution coefficient (must lie in `[0, 1]`).
 pub fn check_restitution(field: &str, e: f64) -> Result<f64, crate::error::Error> {
     crate::error::require_in(field, e, 0.0, 1.0)

@@ -175,6 +175,7 @@ impl Metric {
 
 /// Newton loop controls shared by every scheme.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct NewtonParams {
     /// Relative tolerance of the Newton / fixed-point loop (default 1e-10): the loop
     /// stops when the last update changes the contact velocities and gaps by less than
@@ -196,6 +197,7 @@ impl Default for NewtonParams {
 
 /// Every knob of every scheme, with the defaults of the reference runs.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct SchemeParams {
     /// Which scheme.
     pub kind: SchemeKind,

@@ -12,7 +12,8 @@
 //! iterate). For `e = 0` the position constraint holds at every step; the impact law
 //! is only met over two or three steps.
 //!
-//! Start: `q_{−1} = q_0 − h v_0 + ½h² a_0` with `a_0 = M⁻¹(f − K q_0 − C v_0)`.
+//! Start: `q_{−1} = q_0 − h v_0 + ½h² a_0` with `a_0 = M⁻¹(f − K q_0 − C v_0)` (`a_0 = 0`
+//! when `M` is singular, as with the redistributed mass).
 //! The reported impulse is `P/h` (N·s), comparable with the velocity-level schemes.
 
 use super::core::{Workspace, check_vector, grow_solve};
@@ -81,7 +82,11 @@ impl SchatzmanPaoli {
         if let Some(c) = &sys.damping {
             spmv_add(c.as_ref(), -1.0, v0, &mut a0);
         }
-        SpdFactor::new(sys.mass.as_ref(), "mass matrix")?.solve_in_place(&mut a0);
+        // A redistributed mass is singular (massless contact nodes): start with a0 = 0.
+        match SpdFactor::new(sys.mass.as_ref(), "mass matrix") {
+            Ok(mut m) => m.solve_in_place(&mut a0),
+            Err(_) => a0.iter_mut().for_each(|x| *x = 0.0),
+        }
         let q_prev: Vec<f64> = (0..n)
             .map(|i| q0[i] - h * v0[i] + 0.5 * h * h * a0[i])
             .collect();

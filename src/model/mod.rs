@@ -24,6 +24,12 @@ pub enum MassKind {
     Consistent,
     /// Row-sum lumped mass (diagonal).
     Lumped,
+    /// No mass on the contact nodes (Khenous–Laborde–Renard's idea, as GetFEM offers
+    /// it): in each element touching a contact node, the contact nodes' rows and
+    /// columns are removed from the consistent mass and their row sums are added
+    /// equally to the diagonal of the element's other nodes, so element masses (and the
+    /// total mass) are kept. Removes the impact of the contact node's own inertia.
+    Redistributed,
 }
 
 impl MassKind {
@@ -32,6 +38,7 @@ impl MassKind {
         match s {
             "consistent" => Some(MassKind::Consistent),
             "lumped" => Some(MassKind::Lumped),
+            "redistributed" => Some(MassKind::Redistributed),
             _ => None,
         }
     }
@@ -40,6 +47,7 @@ impl MassKind {
         match self {
             MassKind::Consistent => "consistent",
             MassKind::Lumped => "lumped",
+            MassKind::Redistributed => "redistributed",
         }
     }
 }
@@ -55,12 +63,178 @@ pub struct LinearSystem {
     pub damping: Option<SparseMatrix>,
     /// Constant external force `f` (N); zero for the free bar.
     pub force: Vec<f64>,
-    /// Displacement components per node (1 for rods, 2 or 3 for solids); dof `i`
-    /// is component `i % dofs_per_node` of node `i / dofs_per_node`.
+    /// Displacement components per node (1 for rods, 2 or 3 for solids).
     pub dofs_per_node: usize,
+    /// The displacement component (0 = x, 1 = y, 2 = z) of each dof.
+    pub component: Vec<u8>,
+}
+
+/// Adds the element mass `me` (dense, `dofs.len()` square) to `asm` as `kind` asks;
+/// `is_contact[a]` marks the element's local dofs that belong to contact nodes.
+pub(crate) fn add_element_mass(
+    asm: &mut crate::assembly::Assembler,
+    kind: MassKind,
+    dofs: &[usize],
+    me: impl Fn(usize, usize) -> f64,
+    is_contact: impl Fn(usize) -> bool,
+) {
+    let n = dofs.len();
+    let row_sum = |a: usize| (0..n).map(|b| me(a, b)).sum::<f64>();
+    match kind {
+        MassKind::Consistent => asm.add_element(dofs, me),
+        MassKind::Lumped => {
+            for (a, &i) in dofs.iter().enumerate() {
+                asm.add(i, i, row_sum(a));
+            }
+        }
+        MassKind::Redistributed => {
+            let keep: Vec<usize> = (0..n).filter(|&a| !is_contact(a)).collect();
+            if keep.len() == n {
+                return asm.add_element(dofs, me);
+            }
+            if keep.is_empty() {
+                // every node is a contact node: nothing to move the mass to; lump it
+                for (a, &i) in dofs.iter().enumerate() {
+                    asm.add(i, i, row_sum(a));
+                }
+                return;
+            }
+            // mass of the removed rows, per displacement component (dofs interleave
+            // components, so the component of local dof a is a % d where d is the
+            // number of components: recovered from the pattern of non-zeros)
+            let removed: f64 = (0..n).filter(|&a| is_contact(a)).map(row_sum).sum();
+            let kept_total: f64 = keep.iter().map(|&a| row_sum(a)).sum();
+            for &a in &keep {
+                for &b in &keep {
+                    asm.add(dofs[a], dofs[b], me(a, b));
+                }
+                // proportional to each kept row's own mass, so each displacement
+                // component receives exactly the mass removed from it
+                asm.add(dofs[a], dofs[a], removed * row_sum(a) / kept_total);
+            }
+        }
+    }
+}
+
+/// Component of each of `n` interleaved dofs with `d` components per node.
+pub fn interleaved_components(n: usize, d: usize) -> Vec<u8> {
+    (0..n).map(|i| (i % d) as u8).collect()
 }
 
 impl LinearSystem {
+    /// Joins independent systems into one block-diagonal system (dofs concatenated).
+    pub fn block_diagonal(parts: Vec<LinearSystem>) -> Result<LinearSystem, crate::error::Error> {
+        let d = parts[0].dofs_per_node;
+        if parts.iter().any(|p| p.dofs_per_node != d) {
+            return Err(crate::error::Error::invalid(
+                "bodies",
+                "mixed dimensions",
+                "every body must have the same number of displacement components",
+            ));
+        }
+        if parts.len() == 1 {
+            return Ok(parts.into_iter().next().expect("one part"));
+        }
+        let n: usize = parts.iter().map(|p| p.ndof()).sum();
+        let any_damping = parts.iter().any(|p| p.damping.is_some());
+        let join = |pick: &dyn Fn(&LinearSystem) -> Option<&SparseMatrix>| {
+            let mut asm = crate::assembly::Assembler::new(n, 0);
+            let mut off = 0;
+            for p in &parts {
+                if let Some(m) = pick(p) {
+                    let m = m.as_ref();
+                    for j in 0..m.ncols() {
+                        for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
+                            asm.add(off + m.row_idx()[k], off + j, m.val()[k]);
+                        }
+                    }
+                }
+                off += p.ndof();
+            }
+            asm.finish()
+        };
+        Ok(LinearSystem {
+            mass: join(&|p| Some(&p.mass)),
+            stiffness: join(&|p| Some(&p.stiffness)),
+            damping: any_damping.then(|| join(&|p| p.damping.as_ref())),
+            force: parts.iter().flat_map(|p| p.force.iter().copied()).collect(),
+            dofs_per_node: d,
+            component: parts
+                .iter()
+                .flat_map(|p| p.component.iter().copied())
+                .collect(),
+        })
+    }
+
+    /// Removes the dofs marked `fixed` (homogeneous Dirichlet conditions, u = 0).
+    /// Returns the reduced system and, for each old dof, its new index.
+    pub fn restrict(&self, fixed: &[bool]) -> (LinearSystem, Vec<Option<usize>>) {
+        let mut map = vec![None; self.ndof()];
+        let mut next = 0;
+        for (i, f) in fixed.iter().enumerate() {
+            if !f {
+                map[i] = Some(next);
+                next += 1;
+            }
+        }
+        let sub = |m: &SparseMatrix| {
+            let m = m.as_ref();
+            let mut asm = crate::assembly::Assembler::new(next, m.compute_nnz());
+            for j in 0..m.ncols() {
+                for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
+                    if let (Some(a), Some(b)) = (map[m.row_idx()[k]], map[j]) {
+                        asm.add(a, b, m.val()[k]);
+                    }
+                }
+            }
+            asm.finish()
+        };
+        let sys = LinearSystem {
+            mass: sub(&self.mass),
+            stiffness: sub(&self.stiffness),
+            damping: self.damping.as_ref().map(sub),
+            force: (0..self.ndof())
+                .filter(|&i| map[i].is_some())
+                .map(|i| self.force[i])
+                .collect(),
+            dofs_per_node: self.dofs_per_node,
+            component: (0..self.ndof())
+                .filter(|&i| map[i].is_some())
+                .map(|i| self.component[i])
+                .collect(),
+        };
+        (sys, map)
+    }
+
+    /// Adds Rayleigh damping `C = αM + βK`.
+    pub fn with_rayleigh(mut self, alpha: f64, beta: f64) -> Result<Self, crate::error::Error> {
+        crate::error::require_in("damping.alpha", alpha, 0.0, f64::MAX)?;
+        crate::error::require_in("damping.beta", beta, 0.0, f64::MAX)?;
+        if alpha > 0.0 || beta > 0.0 {
+            self.damping = Some(crate::assembly::linear_combination(&[
+                (alpha, &self.mass),
+                (beta, &self.stiffness),
+            ]));
+        }
+        Ok(self)
+    }
+
+    /// Adds the body force of a uniform acceleration field `g` (m/s²): `f += M g`,
+    /// exact for consistent and lumped mass since the shape functions sum to one.
+    pub fn add_gravity(&mut self, g: &[f64]) -> Result<(), crate::error::Error> {
+        let d = self.dofs_per_node;
+        if g.len() != d || g.iter().any(|x| !x.is_finite()) {
+            return Err(crate::error::Error::invalid(
+                "gravity",
+                format!("{g:?}"),
+                &format!("needs {d} finite components"),
+            ));
+        }
+        let gv: Vec<f64> = self.component.iter().map(|&c| g[c as usize]).collect();
+        crate::linalg::spmv_add(self.mass.as_ref(), 1.0, &gv, &mut self.force);
+        Ok(())
+    }
+
     /// Number of degrees of freedom.
     pub fn ndof(&self) -> usize {
         self.mass.nrows()
@@ -82,11 +256,10 @@ impl LinearSystem {
     /// every x-component dof.
     pub fn momentum(&self, v: &[f64]) -> f64 {
         let m = self.mass.as_ref();
-        let d = self.dofs_per_node;
         let mut s = 0.0;
         for (j, &vj) in v.iter().enumerate() {
             for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
-                if m.row_idx()[k] % d == 0 {
+                if self.component[m.row_idx()[k]] == 0 {
                     s += m.val()[k] * vj;
                 }
             }
@@ -97,11 +270,10 @@ impl LinearSystem {
     /// Total mass `e_xᵀ M e_x` (kg).
     pub fn total_mass(&self) -> f64 {
         let m = self.mass.as_ref();
-        let d = self.dofs_per_node;
         let mut s = 0.0;
-        for j in (0..m.ncols()).step_by(d) {
+        for j in (0..m.ncols()).filter(|&j| self.component[j] == 0) {
             for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
-                if m.row_idx()[k] % d == 0 {
+                if self.component[m.row_idx()[k]] == 0 {
                     s += m.val()[k];
                 }
             }

@@ -26,5 +26,6 @@ pub fn point_mass(dim: usize, mass: f64, force: &[f64]) -> Result<LinearSystem, 
         damping: None,
         force: force.to_vec(),
         dofs_per_node: dim,
+        component: super::interleaved_components(dim, dim),
     })
 }

@@ -55,13 +55,10 @@ impl Rod {
         (self.young / self.density).sqrt()
     }
 
-    /// Element mass matrix (eq. 71, or its row-sum lumping).
+    /// Consistent element mass matrix (eq. 71).
     pub fn element_mass(&self) -> Matrix2<f64> {
         let m = self.density * self.area * self.element_length();
-        match self.mass {
-            MassKind::Consistent => Matrix2::new(2.0, 1.0, 1.0, 2.0) * (m / 6.0),
-            MassKind::Lumped => Matrix2::identity() * (m / 2.0),
-        }
+        Matrix2::new(2.0, 1.0, 1.0, 2.0) * (m / 6.0)
     }
 
     /// Element stiffness matrix (eq. 71).
@@ -79,7 +76,14 @@ impl Rod {
         let mut ak = Assembler::new(n, 4 * self.elements);
         for e in 0..self.elements {
             let dofs = [e, e + 1];
-            am.add_element(&dofs, |a, b| me[(a, b)]);
+            // node 0 is the contact node of the bar scene (redistributed mass)
+            super::add_element_mass(
+                &mut am,
+                self.mass,
+                &dofs,
+                |a, b| me[(a, b)],
+                |a| dofs[a] == 0,
+            );
             ak.add_element(&dofs, |a, b| ke[(a, b)]);
         }
         Ok(LinearSystem {
@@ -88,6 +92,7 @@ impl Rod {
             damping: None,
             force: vec![0.0; n],
             dofs_per_node: 1,
+            component: super::interleaved_components(n, 1),
         })
     }
 }
@@ -108,8 +113,12 @@ mod tests {
     }
 
     #[test]
-    fn total_mass_is_rho_s_l_for_both_mass_kinds() {
-        for kind in [MassKind::Consistent, MassKind::Lumped] {
+    fn total_mass_is_rho_s_l_for_every_mass_kind() {
+        for kind in [
+            MassKind::Consistent,
+            MassKind::Lumped,
+            MassKind::Redistributed,
+        ] {
             let s = rod(kind).assemble().unwrap();
             // ρ S L = 4 · 0.5 · 2 = 4 kg; sums of a few doubles are exact to rounding.
             assert!((s.total_mass() - 4.0).abs() < 1e-13);

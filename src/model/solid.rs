@@ -376,13 +376,31 @@ pub fn element_matrices(
 }
 
 /// Assembles `M` and `K` of a mesh in parallel (rayon over cells; the triplets are then
-/// summed by nalgebra-sparse). `lumped_nodes` with [`MassKind::Lumped`] lumps by row sum.
+/// summed by nalgebra-sparse). `contact_nodes` matter only for
+/// [`MassKind::Redistributed`].
 pub fn assemble(
     mesh: &Mesh,
     mat: &Material,
     f: Formulation,
     mass: MassKind,
 ) -> Result<LinearSystem, Error> {
+    assemble_with_contacts(mesh, mat, f, mass, &[])
+}
+
+/// [`assemble`] with the contact nodes named (for the redistributed mass).
+pub fn assemble_with_contacts(
+    mesh: &Mesh,
+    mat: &Material,
+    f: Formulation,
+    mass: MassKind,
+    contact_nodes: &[usize],
+) -> Result<LinearSystem, Error> {
+    let mut is_contact_node = vec![false; mesh.points.len()];
+    for &v in contact_nodes {
+        if v < is_contact_node.len() {
+            is_contact_node[v] = true;
+        }
+    }
     mat.validate()?;
     if let Formulation::PlaneStress { thickness } = f {
         require_positive("thickness", thickness)?;
@@ -439,14 +457,13 @@ pub fn assemble(
             .flat_map(|&v| (0..dim).map(move |i| v * dim + i))
             .collect();
         ak.add_element(&dofs, |a, b| e.k[(a, b)]);
-        match mass {
-            MassKind::Consistent => am.add_element(&dofs, |a, b| e.m[(a, b)]),
-            MassKind::Lumped => {
-                for (a, &i) in dofs.iter().enumerate() {
-                    am.add(i, i, e.m.row(a).sum());
-                }
-            }
-        }
+        super::add_element_mass(
+            &mut am,
+            mass,
+            &dofs,
+            |a, b| e.m[(a, b)],
+            |a| is_contact_node[dofs[a] / dim],
+        );
     }
     Ok(LinearSystem {
         mass: am.finish(),
@@ -454,5 +471,6 @@ pub fn assemble(
         damping: None,
         force: vec![0.0; n],
         dofs_per_node: dim,
+        component: super::interleaved_components(n, dim),
     })
 }

@@ -5,4 +5,5 @@
 //! TOML scene files and meshes come with the solid-mesh work.
 
 pub mod bar;
+pub mod file;
 pub mod solid_bar;

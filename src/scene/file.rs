@@ -1,0 +1,732 @@
+//! Scene files (TOML): bodies, obstacles, contacts, loads, initial conditions, scheme,
+//! time and output, validated with the path of any unknown or bad key.
+//!
+//! ```toml
+//! [time]
+//! dt = 1e-6
+//! t_end = 1e-3
+//!
+//! [scheme]                     # every field optional (SchemeParams defaults)
+//! kind = "combined-projection"
+//!
+//! [[bodies]]
+//! name = "bar"
+//! mesh = { generator = "box", cell = "hex8", cells = [100, 1, 1], size = [1.0, 0.0177, 0.0177] }
+//! material = { young = 210e9, poisson = 0.0, density = 7800.0 }
+//! velocity = [-0.1, 0.0, 0.0]
+//!
+//! [[obstacles]]
+//! name = "wall"
+//! type = "plane"
+//! point = [0.0, 0.0, 0.0]
+//! normal = [1.0, 0.0, 0.0]
+//!
+//! [[contacts]]
+//! body = "bar"
+//! nodes = "x0"                 # a node set of the body's mesh
+//! obstacle = "wall"
+//! restitution = 0.0
+//! ```
+//!
+//! Mesh generators: `box` (hex8 or tet4), `rectangle` (quad4 or tri3), `rod` (the
+//! 1-D bar of eq. 71; node set `x0` is node 0). Meshes read from files come with the
+//! mesh readers.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::contact::plane::NodesOnPlane;
+use crate::contact::sphere::{RoundObstacle, Side};
+use crate::contact::{Composite, ContactSet};
+use crate::error::{Error, require_positive};
+use crate::integrators::SchemeParams;
+use crate::model::generate::{box_mesh, rectangle_mesh};
+use crate::model::rod::Rod;
+use crate::model::solid::{CellKind, Formulation, Material, Mesh, assemble_with_contacts};
+use crate::model::{LinearSystem, MassKind};
+use crate::scene::bar::BarModel;
+
+/// A whole scene.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Time stepping.
+    pub time: TimeSpec,
+    /// Scheme and its parameters.
+    #[serde(default)]
+    pub scheme: SchemeParams,
+    /// Deformable bodies.
+    pub bodies: Vec<BodySpec>,
+    /// Rigid obstacles.
+    #[serde(default)]
+    pub obstacles: Vec<ObstacleSpec>,
+    /// Node-set-versus-obstacle contacts.
+    #[serde(default)]
+    pub contacts: Vec<ContactSpec>,
+    /// Body forces.
+    #[serde(default)]
+    pub loads: Loads,
+    /// Output options.
+    #[serde(default)]
+    pub output: OutputSpec,
+    /// Analytic reference to compare with (the impacting bar).
+    #[serde(default)]
+    pub reference: Option<Reference>,
+}
+
+/// `[reference]`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Reference {
+    /// The impacting bar of sec. 6.2: contact force summed over all contacts.
+    pub impacting_bar: crate::analytic::ImpactingBar,
+}
+
+/// `[time]`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// Time step (s).
+    pub dt: f64,
+    /// End time (s).
+    pub t_end: f64,
+}
+
+/// `[[bodies]]`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    /// Name used by contacts.
+    pub name: String,
+    /// Mesh source.
+    pub mesh: MeshSpec,
+    /// Solid (3-D), plane strain or plane stress; ignored by `rod`.
+    #[serde(default = "default_formulation")]
+    pub formulation: Formulation,
+    /// Material.
+    pub material: Material,
+    /// Mass matrix kind.
+    #[serde(default = "default_mass")]
+    pub mass: MassKind,
+    /// Rayleigh damping `C = αM + βK`.
+    #[serde(default)]
+    pub damping: Option<Rayleigh>,
+    /// Uniform initial velocity (one value per component).
+    #[serde(default)]
+    pub velocity: Option<Vec<f64>>,
+    /// Node sets held fixed (u = 0).
+    #[serde(default)]
+    pub fixed: Vec<String>,
+}
+
+fn default_formulation() -> Formulation {
+    Formulation::Solid
+}
+fn default_mass() -> MassKind {
+    MassKind::Consistent
+}
+
+/// Rayleigh coefficients.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rayleigh {
+    /// Mass-proportional coefficient α (1/s).
+    pub alpha: f64,
+    /// Stiffness-proportional coefficient β (s).
+    pub beta: f64,
+}
+
+/// Where a body's mesh comes from.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "generator", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum MeshSpec {
+    /// A box of hex8 or tet4 cells.
+    Box {
+        /// hex8 or tet4.
+        cell: CellKind,
+        /// Cells along x, y, z.
+        cells: [usize; 3],
+        /// Side lengths (m).
+        size: [f64; 3],
+        /// Lower corner (m).
+        #[serde(default)]
+        origin: [f64; 3],
+    },
+    /// A rectangle of quad4 or tri3 cells.
+    Rectangle {
+        /// quad4 or tri3.
+        cell: CellKind,
+        /// Cells along x, y.
+        cells: [usize; 2],
+        /// Side lengths (m).
+        size: [f64; 2],
+        /// Lower corner (m).
+        #[serde(default)]
+        origin: [f64; 2],
+    },
+    /// The P1 rod of eq. 71 along x from the origin, with cross-section `area`.
+    Rod {
+        /// Elements.
+        elements: usize,
+        /// Length (m).
+        length: f64,
+        /// Cross-section (m²).
+        area: f64,
+    },
+}
+
+/// `[[obstacles]]`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum ObstacleSpec {
+    /// The half-space `n·(x − p) ≥ 0`.
+    Plane {
+        /// Name used by contacts.
+        name: String,
+        /// A point of the plane.
+        point: Vec<f64>,
+        /// Normal towards the admissible side.
+        normal: Vec<f64>,
+    },
+    /// A sphere (circle in 2-D).
+    Sphere {
+        /// Name used by contacts.
+        name: String,
+        /// Centre.
+        center: Vec<f64>,
+        /// Radius (m).
+        radius: f64,
+        /// `outside` (an obstacle, default) or `inside` (a container).
+        #[serde(default = "outside")]
+        side: Side,
+    },
+    /// An infinite cylinder (3-D).
+    Cylinder {
+        /// Name used by contacts.
+        name: String,
+        /// A point of the axis.
+        point: Vec<f64>,
+        /// Axis direction.
+        axis: Vec<f64>,
+        /// Radius (m).
+        radius: f64,
+        /// `outside` (default) or `inside`.
+        #[serde(default = "outside")]
+        side: Side,
+    },
+}
+
+fn outside() -> Side {
+    Side::Outside
+}
+
+impl ObstacleSpec {
+    fn name(&self) -> &str {
+        match self {
+            ObstacleSpec::Plane { name, .. }
+            | ObstacleSpec::Sphere { name, .. }
+            | ObstacleSpec::Cylinder { name, .. } => name,
+        }
+    }
+}
+
+/// `[[contacts]]`: candidate nodes of a body against an obstacle.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Body name.
+    pub body: String,
+    /// Obstacle name.
+    pub obstacle: String,
+    /// A node set of the body's mesh; or `"all"` with `within`.
+    pub nodes: String,
+    /// With `nodes = "all"`: keep the nodes whose initial gap is below this (m).
+    #[serde(default)]
+    pub within: Option<f64>,
+    /// Newton restitution coefficient.
+    #[serde(default)]
+    pub restitution: f64,
+}
+
+/// `[loads]`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Loads {
+    /// Uniform acceleration field (m/s²), e.g. `[0, 0, -9.81]`.
+    #[serde(default)]
+    pub gravity: Option<Vec<f64>>,
+}
+
+/// `[output]`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Output directory (the CLI's `--out` overrides it).
+    #[serde(default)]
+    pub dir: Option<PathBuf>,
+}
+
+/// What [`Scene::build`] reports about the model, for `signorini check`.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModelReport {
+    /// Degrees of freedom after Dirichlet elimination.
+    pub dofs: usize,
+    /// Cells over all bodies.
+    pub cells: usize,
+    /// Candidate contacts.
+    pub contacts: usize,
+    /// Whether every gap is linear in q (G constant).
+    pub linear_contacts: bool,
+    /// Whether Rayleigh damping is present.
+    pub damping: bool,
+    /// Whether a body force is applied.
+    pub gravity: bool,
+    /// Dofs removed by `fixed` node sets.
+    pub fixed_dofs: usize,
+}
+
+impl Scene {
+    /// Reads and validates a scene file; errors name the file and the key path.
+    pub fn from_file(path: &Path) -> Result<Scene, Error> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::from_toml(&text).map_err(|e| match e {
+            Error::InvalidParameter {
+                field,
+                value,
+                reason,
+            } => Error::InvalidParameter {
+                field: format!("{}: {field}", path.display()),
+                value,
+                reason,
+            },
+            other => other,
+        })
+    }
+
+    /// Parses and validates scene text.
+    pub fn from_toml(text: &str) -> Result<Scene, Error> {
+        let de = toml::Deserializer::parse(text)
+            .map_err(|e| Error::invalid("scene", "TOML", &e.to_string()))?;
+        let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            Error::invalid(
+                &path,
+                "(key)",
+                &e.into_inner().to_string().replace('\n', " "),
+            )
+        })?;
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    /// Range checks that serde cannot express.
+    pub fn validate(&self) -> Result<(), Error> {
+        require_positive("time.dt", self.time.dt)?;
+        require_positive("time.t_end", self.time.t_end)?;
+        if self.time.t_end / self.time.dt < 1.0 {
+            return Err(Error::invalid(
+                "time.t_end",
+                self.time.t_end,
+                "must be at least one step",
+            ));
+        }
+        self.scheme.validate()?;
+        if self.bodies.is_empty() {
+            return Err(Error::invalid(
+                "bodies",
+                "[]",
+                "a scene needs at least one body",
+            ));
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            b.material
+                .validate()
+                .map_err(|e| prefix(&format!("bodies[{i}].material"), e))?;
+        }
+        for (i, c) in self.contacts.iter().enumerate() {
+            if !self.bodies.iter().any(|b| b.name == c.body) {
+                return Err(Error::invalid(
+                    &format!("contacts[{i}].body"),
+                    &c.body,
+                    "names no body",
+                ));
+            }
+            if !self.obstacles.iter().any(|o| o.name() == c.obstacle) {
+                return Err(Error::invalid(
+                    &format!("contacts[{i}].obstacle"),
+                    &c.obstacle,
+                    "names no obstacle",
+                ));
+            }
+            crate::contact::check_restitution(
+                &format!("contacts[{i}].restitution"),
+                c.restitution,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Number of steps.
+    pub fn steps(&self) -> usize {
+        (self.time.t_end / self.time.dt).round() as usize
+    }
+
+    /// Meshes and assembles every body, eliminates fixed dofs, and builds the contacts.
+    pub fn build(&self) -> Result<(BarModel, ModelReport), Error> {
+        let mut systems = Vec::new();
+        let mut meshes = Vec::new();
+        let mut v0 = Vec::new();
+        let mut fixed = Vec::new();
+        let mut cells = 0;
+        let dim = self.bodies[0].dim();
+        for (bi, b) in self.bodies.iter().enumerate() {
+            let at = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
+            if b.dim() != dim {
+                return Err(at(Error::invalid(
+                    "formulation",
+                    b.dim(),
+                    "all bodies need one dimension",
+                )));
+            }
+            let mesh = b.mesh().map_err(at)?;
+            cells += mesh.cells.len().max(match b.mesh {
+                MeshSpec::Rod { elements, .. } => elements,
+                _ => 0,
+            });
+            // contact nodes of this body (for the redistributed mass)
+            let mut contact_nodes = Vec::new();
+            for c in self.contacts.iter().filter(|c| c.body == b.name) {
+                if let Some(set) = mesh.node_sets.get(&c.nodes) {
+                    contact_nodes.extend_from_slice(set);
+                }
+            }
+            let mut sys = match &b.mesh {
+                MeshSpec::Rod {
+                    elements,
+                    length,
+                    area,
+                } => Rod {
+                    length: *length,
+                    area: *area,
+                    young: b.material.young,
+                    density: b.material.density,
+                    elements: *elements,
+                    mass: b.mass,
+                }
+                .assemble()
+                .map_err(at)?,
+                _ => assemble_with_contacts(
+                    &mesh,
+                    &b.material,
+                    b.formulation,
+                    b.mass,
+                    &contact_nodes,
+                )
+                .map_err(at)?,
+            };
+            if let Some(r) = b.damping {
+                sys = sys.with_rayleigh(r.alpha, r.beta).map_err(at)?;
+            }
+            if let Some(g) = &self.loads.gravity {
+                sys.add_gravity(g).map_err(|e| prefix("loads", e))?;
+            }
+            let n = sys.ndof();
+            let vel = b.velocity.clone().unwrap_or_else(|| vec![0.0; dim]);
+            if vel.len() != dim || vel.iter().any(|x| !x.is_finite()) {
+                return Err(at(Error::invalid(
+                    "velocity",
+                    format!("{vel:?}"),
+                    &format!("needs {dim} finite values"),
+                )));
+            }
+            v0.extend((0..n).map(|i| vel[i % dim]));
+            let mut fx = vec![false; n];
+            for name in &b.fixed {
+                let set = mesh.node_sets.get(name).ok_or_else(|| {
+                    at(Error::invalid(
+                        "fixed",
+                        name,
+                        &format!(
+                            "no such node set; the mesh has {:?}",
+                            mesh.node_sets.keys().collect::<Vec<_>>()
+                        ),
+                    ))
+                })?;
+                for &v in set {
+                    for i in 0..dim {
+                        fx[v * dim + i] = true;
+                    }
+                }
+            }
+            fixed.extend(fx);
+            systems.push(sys);
+            meshes.push(mesh);
+        }
+        let offsets: Vec<usize> = systems
+            .iter()
+            .scan(0, |acc, s| {
+                let o = *acc;
+                *acc += s.ndof();
+                Some(o)
+            })
+            .collect();
+        let full = LinearSystem::block_diagonal(systems)?;
+        let fixed_dofs = fixed.iter().filter(|&&f| f).count();
+        let (system, map) = full.restrict(&fixed);
+        let v0: Vec<f64> = v0
+            .iter()
+            .zip(&map)
+            .filter(|(_, m)| m.is_some())
+            .map(|(v, _)| *v)
+            .collect();
+        // contacts
+        let mut sets: Vec<Box<dyn ContactSet>> = Vec::new();
+        for (ci, c) in self.contacts.iter().enumerate() {
+            let at = |e: Error| prefix(&format!("contacts[{ci}]"), e);
+            let bi = self
+                .bodies
+                .iter()
+                .position(|b| b.name == c.body)
+                .expect("validated");
+            let mesh = &meshes[bi];
+            let obstacle = self
+                .obstacles
+                .iter()
+                .find(|o| o.name() == c.obstacle)
+                .expect("validated");
+            let nodes: Vec<usize> = if c.nodes == "all" {
+                (0..mesh.points.len()).collect()
+            } else {
+                mesh.node_sets.get(&c.nodes).cloned().ok_or_else(|| {
+                    at(Error::invalid(
+                        "nodes",
+                        &c.nodes,
+                        &format!(
+                            "no such node set; the mesh has {:?}",
+                            mesh.node_sets.keys().collect::<Vec<_>>()
+                        ),
+                    ))
+                })?
+            };
+            if nodes.is_empty() {
+                return Err(at(Error::invalid(
+                    "nodes",
+                    &c.nodes,
+                    "the node set is empty",
+                )));
+            }
+            let mut dofs = Vec::new();
+            let mut refs = Vec::new();
+            for &v in &nodes {
+                let d: Option<Vec<usize>> =
+                    (0..dim).map(|i| map[offsets[bi] + v * dim + i]).collect();
+                let Some(d) = d else {
+                    return Err(at(Error::invalid(
+                        "nodes",
+                        format!("node {v}"),
+                        "is fixed and cannot be a contact node",
+                    )));
+                };
+                dofs.push(d);
+                refs.push(mesh.points[v][..dim].to_vec());
+            }
+            let mut set = self
+                .obstacle_set(obstacle, dofs, refs, c.restitution)
+                .map_err(at)?;
+            if let Some(d) = c.within {
+                require_positive("within", d).map_err(at)?;
+                // keep the nodes whose initial gap is below d
+                let mut jac = crate::contact::ContactJacobian::for_set(set.as_ref());
+                let mut gap = vec![0.0; set.len()];
+                let q0 = vec![0.0; system.ndof()];
+                set.evaluate(&q0, &mut gap, &mut jac);
+                let (dofs, refs): (Vec<_>, Vec<_>) = nodes
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| gap[*k] <= d)
+                    .map(|(_, &v)| {
+                        (
+                            (0..dim)
+                                .map(|i| map[offsets[bi] + v * dim + i].unwrap())
+                                .collect::<Vec<_>>(),
+                            mesh.points[v][..dim].to_vec(),
+                        )
+                    })
+                    .unzip();
+                if dofs.is_empty() {
+                    return Err(at(Error::invalid(
+                        "within",
+                        d,
+                        "no node lies that close to the obstacle",
+                    )));
+                }
+                set = self
+                    .obstacle_set(obstacle, dofs, refs, c.restitution)
+                    .map_err(at)?;
+            }
+            sets.push(set);
+        }
+        let contacts: Box<dyn ContactSet> = if sets.len() == 1 {
+            sets.pop().expect("one set")
+        } else {
+            Box::new(Composite::new(sets))
+        };
+        let report = ModelReport {
+            dofs: system.ndof(),
+            cells,
+            contacts: contacts.len(),
+            linear_contacts: contacts.is_linear(),
+            damping: system.damping.is_some(),
+            gravity: self.loads.gravity.is_some(),
+            fixed_dofs,
+        };
+        let n = system.ndof();
+        Ok((
+            BarModel {
+                system,
+                contacts,
+                q0: vec![0.0; n],
+                v0,
+            },
+            report,
+        ))
+    }
+
+    fn obstacle_set(
+        &self,
+        o: &ObstacleSpec,
+        dofs: Vec<Vec<usize>>,
+        refs: Vec<Vec<f64>>,
+        e: f64,
+    ) -> Result<Box<dyn ContactSet>, Error> {
+        Ok(match o {
+            ObstacleSpec::Plane { point, normal, .. } => {
+                let norm = normal.iter().map(|x| x * x).sum::<f64>().sqrt();
+                let offset = point.iter().zip(normal).map(|(p, n)| p * n).sum::<f64>();
+                if point.len() != normal.len() {
+                    return Err(Error::invalid(
+                        "point",
+                        format!("{point:?}"),
+                        "needs as many components as normal",
+                    ));
+                }
+                let _ = norm;
+                Box::new(NodesOnPlane::new(dofs, refs, normal.clone(), offset, e)?)
+            }
+            ObstacleSpec::Sphere {
+                center,
+                radius,
+                side,
+                ..
+            } => Box::new(RoundObstacle::general(
+                dofs,
+                refs,
+                center.clone(),
+                None,
+                *radius,
+                *side,
+                e,
+            )?),
+            ObstacleSpec::Cylinder {
+                point,
+                axis,
+                radius,
+                side,
+                ..
+            } => Box::new(RoundObstacle::general(
+                dofs,
+                refs,
+                point.clone(),
+                Some(axis.clone()),
+                *radius,
+                *side,
+                e,
+            )?),
+        })
+    }
+}
+
+impl BodySpec {
+    fn dim(&self) -> usize {
+        match self.mesh {
+            MeshSpec::Rod { .. } => 1,
+            _ => self.formulation.dim(),
+        }
+    }
+
+    fn mesh(&self) -> Result<Mesh, Error> {
+        match &self.mesh {
+            MeshSpec::Box {
+                cell,
+                cells,
+                size,
+                origin,
+            } => {
+                if cells.contains(&0) || size.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+                    return Err(Error::invalid(
+                        "mesh",
+                        format!("cells {cells:?}, size {size:?}"),
+                        "needs positive counts and sizes",
+                    ));
+                }
+                let mut m = box_mesh(*cell, *cells, *size);
+                for p in &mut m.points {
+                    for i in 0..3 {
+                        p[i] += origin[i];
+                    }
+                }
+                Ok(m)
+            }
+            MeshSpec::Rectangle {
+                cell,
+                cells,
+                size,
+                origin,
+            } => {
+                if cells.contains(&0) || size.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+                    return Err(Error::invalid(
+                        "mesh",
+                        format!("cells {cells:?}, size {size:?}"),
+                        "needs positive counts and sizes",
+                    ));
+                }
+                let mut m = rectangle_mesh(*cell, *cells, *size);
+                for p in &mut m.points {
+                    p[0] += origin[0];
+                    p[1] += origin[1];
+                }
+                Ok(m)
+            }
+            MeshSpec::Rod {
+                elements, length, ..
+            } => {
+                let mut m = Mesh::default();
+                let n = *elements;
+                for i in 0..=n {
+                    m.points
+                        .push([*length * i as f64 / n.max(1) as f64, 0.0, 0.0]);
+                }
+                m.node_sets =
+                    BTreeMap::from([("x0".to_string(), vec![0]), ("x1".to_string(), vec![n])]);
+                Ok(m)
+            }
+        }
+    }
+}
+
+fn prefix(p: &str, e: Error) -> Error {
+    match e {
+        Error::InvalidParameter {
+            field,
+            value,
+            reason,
+        } => Error::InvalidParameter {
+            field: format!("{p}.{field}"),
+            value,
+            reason,
+        },
+        other => other,
+    }
+}

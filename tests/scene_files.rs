@@ -1,0 +1,144 @@
+//! Scene files: every committed scene in `meshes/` builds and runs to its reference,
+//! and bad scenes are rejected with the key path.
+
+use std::path::Path;
+
+use signorini::run::{Quiet, run_bar, run_scene};
+use signorini::scene::bar::BarScene;
+use signorini::scene::file::Scene;
+
+fn load(name: &str) -> Scene {
+    Scene::from_file(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("meshes")
+            .join(name),
+    )
+    .unwrap()
+}
+
+#[test]
+fn committed_scenes_build_with_the_expected_sizes() {
+    for (file, dofs, contacts, linear) in [
+        ("bar.toml", 1001, 1, true),
+        ("hex_bar.toml", 201 * 4 * 3, 4, true),
+        ("block_on_cylinder.toml", 21 * 6 * 2, 21, false),
+    ] {
+        let (_, report) = load(file).build().unwrap();
+        assert_eq!(report.dofs, dofs, "{file}");
+        assert_eq!(report.contacts, contacts, "{file}");
+        assert_eq!(report.linear_contacts, linear, "{file}");
+    }
+}
+
+#[test]
+fn bar_scene_file_reproduces_the_built_in_bar() {
+    let from_file = run_scene(&load("bar.toml"), None, &mut Quiet).unwrap();
+    let built_in = run_bar(
+        &BarScene {
+            dt: 5e-7,
+            ..BarScene::default()
+        },
+        None,
+        &mut Quiet,
+    )
+    .unwrap();
+    // Same model, same scheme: bit-identical force history.
+    assert_eq!(from_file.force, built_in.force);
+}
+
+#[test]
+fn hex_bar_scene_matches_the_rod_plateau() {
+    let r = run_scene(&load("hex_bar.toml"), None, &mut Quiet).unwrap();
+    let c = r.summary.contact.unwrap();
+    // Issue 3's tolerances: 1 % on the force, 2 % on the duration (measured 2e-6, 0.3 %).
+    assert!((c.plateau_force / c.analytic_force - 1.0).abs() < 0.01);
+    assert!((c.duration / c.analytic_duration - 1.0).abs() < 0.02);
+    assert!(r.summary.max_violation <= 1e-14);
+}
+
+#[test]
+fn block_on_a_curved_obstacle_never_penetrates() {
+    let mut s = load("block_on_cylinder.toml");
+    s.time.t_end = 0.1; // first impact at about t = 0.045 s
+    let r = run_scene(&s, None, &mut Quiet).unwrap();
+    // Algorithm 2 with Newton on the curved gap: penetration at rounding level.
+    assert!(
+        r.summary.max_violation <= 1e-12,
+        "{:e}",
+        r.summary.max_violation
+    );
+    assert!(
+        r.summary.iterations.newton.max > 2,
+        "Newton must iterate on the cylinder"
+    );
+    assert_eq!(r.summary.caps_hit, 0);
+    assert!(
+        r.force.iter().any(|&f| f > 0.0),
+        "the block must hit the cylinder"
+    );
+}
+
+fn bad(text: &str) -> String {
+    Scene::from_toml(text)
+        .and_then(|s| s.build().map(|_| ()))
+        .unwrap_err()
+        .to_string()
+}
+
+const GOOD: &str = r#"
+[time]
+dt = 1e-6
+t_end = 1e-4
+[[bodies]]
+name = "b"
+mesh = { generator = "box", cell = "hex8", cells = [4, 1, 1], size = [1.0, 0.1, 0.1] }
+material = { young = 1e9, poisson = 0.3, density = 1000.0 }
+[[obstacles]]
+name = "wall"
+type = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [1.0, 0.0, 0.0]
+[[contacts]]
+body = "b"
+nodes = "x0"
+obstacle = "wall"
+"#;
+
+#[test]
+fn bad_scenes_name_the_key() {
+    assert!(Scene::from_toml(GOOD).unwrap().build().is_ok());
+    let cases = [
+        (GOOD.replace("dt = 1e-6", "dt = 1e-6\ndtt = 2"), "time"),
+        (GOOD.replace("dt = 1e-6", "dt = -1e-6"), "time.dt"),
+        (GOOD.replace("young = 1e9", "young = -1e9"), "young"),
+        (GOOD.replace("poisson = 0.3", "poisson = 0.7"), "poisson"),
+        (
+            GOOD.replace(r#"nodes = "x0""#, r#"nodes = "front""#),
+            "front",
+        ),
+        (
+            GOOD.replace(r#"obstacle = "wall""#, r#"obstacle = "floor""#),
+            "contacts[0].obstacle",
+        ),
+        (
+            GOOD.replace(r#"type = "plane""#, r#"type = "cone""#),
+            "obstacles",
+        ),
+        (
+            GOOD.replace(r#"cell = "hex8""#, r#"cell = "hex27""#),
+            "bodies",
+        ),
+        (
+            GOOD.replace("[[contacts]]", "[scheme]\ntheta = 2.0\n[[contacts]]"),
+            "theta",
+        ),
+        (
+            GOOD.replace(r#"material = {"#, "fixed = [\"x0\"]\nmaterial = {"),
+            "fixed and cannot be a contact node",
+        ),
+    ];
+    for (text, needle) in cases {
+        let e = bad(&text);
+        assert!(e.contains(needle), "expected {needle:?} in: {e}");
+    }
+}
