@@ -4,7 +4,9 @@
 use signorini::linalg::{SpdFactor, spmv};
 use signorini::model::MassKind;
 use signorini::model::generate::{box_mesh, rectangle_mesh};
-use signorini::model::solid::{CellKind, Formulation, Material, Mesh, assemble};
+use signorini::model::solid::{
+    CellKind, Formulation, Material, Mesh, assemble, assemble_with_contacts,
+};
 
 const STEEL: Material = Material {
     young: 210e9,
@@ -111,8 +113,26 @@ fn total_mass_is_rho_v_for_every_element_and_mass_kind() {
             Formulation::PlaneStress { thickness } => thickness,
             _ => 1.0,
         };
-        for mass in [MassKind::Consistent, MassKind::Lumped] {
-            let sys = assemble(&mesh, &STEEL, f, mass).unwrap();
+        for mass in [
+            MassKind::Consistent,
+            MassKind::Lumped,
+            MassKind::Redistributed,
+        ] {
+            // redistributed: the x0 face carries no mass, the total is unchanged
+            let contact = &mesh.node_sets["x0"];
+            let sys = assemble_with_contacts(&mesh, &STEEL, f, mass, contact).unwrap();
+            if mass == MassKind::Redistributed {
+                let d = sys.mass.to_dense();
+                let dim = f.dim();
+                for &v in contact {
+                    for i in 0..dim {
+                        assert!(
+                            d.row(v * dim + i).iter().all(|&x| x == 0.0),
+                            "{kind:?}: node {v} keeps mass"
+                        );
+                    }
+                }
+            }
             // unit square or cube (distortion keeps the boundary): V = t·1
             let expected = STEEL.density * t;
             let rel = sys.total_mass() / expected - 1.0;

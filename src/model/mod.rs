@@ -99,18 +99,26 @@ pub(crate) fn add_element_mass(
                 }
                 return;
             }
-            // mass of the removed rows, per displacement component (dofs interleave
-            // components, so the component of local dof a is a % d where d is the
-            // number of components: recovered from the pattern of non-zeros)
-            let removed: f64 = (0..n).filter(|&a| is_contact(a)).map(row_sum).sum();
-            let kept_total: f64 = keep.iter().map(|&a| row_sum(a)).sum();
+            // Keep the block of the non-contact dofs and put the rest of the element
+            // mass on their diagonal, in proportion to their full row sums, so the
+            // element mass is unchanged (for solids each displacement component keeps
+            // its share, as the consistent mass is I ⊗ m).
+            let total: f64 = (0..n).map(row_sum).sum();
+            let kept_block: f64 = keep
+                .iter()
+                .flat_map(|&a| keep.iter().map(move |&b| (a, b)))
+                .map(|(a, b)| me(a, b))
+                .sum();
+            let kept_rows: f64 = keep.iter().map(|&a| row_sum(a)).sum();
             for &a in &keep {
                 for &b in &keep {
                     asm.add(dofs[a], dofs[b], me(a, b));
                 }
-                // proportional to each kept row's own mass, so each displacement
-                // component receives exactly the mass removed from it
-                asm.add(dofs[a], dofs[a], removed * row_sum(a) / kept_total);
+                asm.add(
+                    dofs[a],
+                    dofs[a],
+                    (total - kept_block) * row_sum(a) / kept_rows,
+                );
             }
         }
     }
