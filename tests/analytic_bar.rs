@@ -125,11 +125,23 @@ fn position_level_schemes_keep_the_constraint_with_e_zero() {
 }
 
 #[test]
-fn lumped_mass_bar_also_matches() {
+fn lumped_and_redistributed_mass_bars_also_match() {
+    use signorini::model::MassKind;
+    for mass in [MassKind::Lumped, MassKind::Redistributed] {
+        let mut s = bar(SchemeKind::CombinedProjection, 5e-7);
+        s.mass = mass;
+        let c = run(&s).summary.contact.unwrap();
+        // The mass kind changes the dispersion, not the plateau: 0.1 % as above.
+        assert!(
+            (c.plateau_force / c.analytic_force - 1.0).abs() < 1e-3,
+            "{mass:?}"
+        );
+        assert!((c.release_velocity / 0.1 - 1.0).abs() < 0.01, "{mass:?}");
+    }
+    // With no mass on the tip there is no impact on the tip's own inertia: the force
+    // is flat from the first step (measured std 5e-4 N against 0.05 N consistent).
     let mut s = bar(SchemeKind::CombinedProjection, 5e-7);
-    s.mass = signorini::model::MassKind::Lumped;
+    s.mass = MassKind::Redistributed;
     let c = run(&s).summary.contact.unwrap();
-    // Lumped mass changes the dispersion, not the plateau: 0.1 % as above.
-    assert!((c.plateau_force / c.analytic_force - 1.0).abs() < 1e-3);
-    assert!((c.release_velocity / 0.1 - 1.0).abs() < 0.01);
+    assert!(c.plateau_std < 0.01, "{}", c.plateau_std);
 }

@@ -78,6 +78,58 @@ fn block_on_a_curved_obstacle_never_penetrates() {
     );
 }
 
+#[test]
+fn elastic_ball_from_gmsh_drops_and_rebounds_without_penetrating() {
+    let s = load("ball_drop.toml");
+    let (_, report) = s.build().unwrap();
+    // "surface" nodes within 2 cm of the floor (1 cm below the ball)
+    assert_eq!(report.contacts, 18);
+    let dir = std::env::temp_dir().join(format!("signorini-ball-{}", std::process::id()));
+    let r = run_scene(&s, Some(&dir), &mut Quiet).unwrap();
+    assert!(
+        r.summary.max_violation <= 1e-12,
+        "{:e}",
+        r.summary.max_violation
+    );
+    // impact at about 0.045 s (free fall of 1 cm), then the ball leaves the floor
+    let first = r.force.iter().position(|&f| f > 0.0).unwrap() as f64 * s.time.dt;
+    assert!(
+        (first - (2.0 * 0.01 / 9.81f64).sqrt()).abs() < 5e-3,
+        "first contact {first}"
+    );
+    let last = r.force.iter().rposition(|&f| f > 0.0).unwrap();
+    assert!(last + 100 < r.force.len(), "the ball must rebound");
+    // energy history is written: kinetic + potential stays within 1 % of the drop
+    // energy m g h (θ = 1/2 conserves; e = 0 contacts dissipate a little)
+    let csv = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let e0 = rows[0][2] + rows[0][3];
+    let drop = rows.iter().map(|r| r[2]).fold(0.0, f64::max);
+    for r in &rows {
+        assert!(
+            (r[2] + r[3] - e0).abs() < 0.01 * drop,
+            "energy drift at t = {}",
+            r[1]
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn boundary_nodes_are_found_from_the_cells() {
+    use signorini::model::generate::box_mesh;
+    use signorini::model::solid::CellKind;
+    for kind in [CellKind::Hex8, CellKind::Tet4] {
+        let m = box_mesh(kind, [3, 3, 3], [1.0, 1.0, 1.0]);
+        // 4³ nodes, 2³ interior
+        assert_eq!(m.boundary_nodes().len(), 64 - 8, "{kind:?}");
+    }
+}
+
 fn bad(text: &str) -> String {
     Scene::from_toml(text)
         .and_then(|s| s.build().map(|_| ()))

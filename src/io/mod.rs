@@ -5,6 +5,8 @@
 //! and renamed into place when complete, so a killed run never leaves a truncated file
 //! under the final name and keeps every flushed row in the `.part` file.
 
+pub mod mesh;
+
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};

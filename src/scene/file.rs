@@ -71,6 +71,9 @@ pub struct Scene {
     /// Output options.
     #[serde(default)]
     pub output: OutputSpec,
+    /// Directory that relative mesh paths start from (the scene file's directory).
+    #[serde(skip)]
+    pub base_dir: PathBuf,
     /// Analytic reference to compare with (the impacting bar).
     #[serde(default)]
     pub reference: Option<Reference>,
@@ -166,6 +169,11 @@ pub enum MeshSpec {
         #[serde(default)]
         origin: [f64; 2],
     },
+    /// A mesh file (`.msh` 4.1/2.2, `.vtu`, legacy `.vtk`), relative to the scene file.
+    File {
+        /// The path.
+        path: PathBuf,
+    },
     /// The P1 rod of eq. 71 along x from the origin, with cross-section `area`.
     Rod {
         /// Elements.
@@ -240,9 +248,10 @@ pub struct ContactSpec {
     pub body: String,
     /// Obstacle name.
     pub obstacle: String,
-    /// A node set of the body's mesh; or `"all"` with `within`.
+    /// A node set of the body's mesh; `"boundary"` (computed from the cells when the
+    /// mesh has no set of that name); or `"all"`. Combine with `within`.
     pub nodes: String,
-    /// With `nodes = "all"`: keep the nodes whose initial gap is below this (m).
+    /// Keep only the nodes whose initial gap to the obstacle is at most this (m).
     #[serde(default)]
     pub within: Option<f64>,
     /// Newton restitution coefficient.
@@ -291,7 +300,7 @@ impl Scene {
     /// Reads and validates a scene file; errors name the file and the key path.
     pub fn from_file(path: &Path) -> Result<Scene, Error> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Self::from_toml(&text).map_err(|e| match e {
+        let mut scene = Self::from_toml(&text).map_err(|e| match e {
             Error::InvalidParameter {
                 field,
                 value,
@@ -302,7 +311,9 @@ impl Scene {
                 reason,
             },
             other => other,
-        })
+        })?;
+        scene.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Ok(scene)
     }
 
     /// Parses and validates scene text.
@@ -390,7 +401,7 @@ impl Scene {
                     "all bodies need one dimension",
                 )));
             }
-            let mesh = b.mesh().map_err(at)?;
+            let mesh = b.mesh(&self.base_dir).map_err(at)?;
             cells += mesh.cells.len().max(match b.mesh {
                 MeshSpec::Rod { elements, .. } => elements,
                 _ => 0,
@@ -498,6 +509,8 @@ impl Scene {
                 .expect("validated");
             let nodes: Vec<usize> = if c.nodes == "all" {
                 (0..mesh.points.len()).collect()
+            } else if c.nodes == "boundary" && !mesh.node_sets.contains_key("boundary") {
+                mesh.boundary_nodes()
             } else {
                 mesh.node_sets.get(&c.nodes).cloned().ok_or_else(|| {
                     at(Error::invalid(
@@ -656,8 +669,9 @@ impl BodySpec {
         }
     }
 
-    fn mesh(&self) -> Result<Mesh, Error> {
+    fn mesh(&self, base: &Path) -> Result<Mesh, Error> {
         match &self.mesh {
+            MeshSpec::File { path } => crate::io::mesh::read_mesh(&base.join(path)),
             MeshSpec::Box {
                 cell,
                 cells,

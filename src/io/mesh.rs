@@ -1,0 +1,687 @@
+//! Mesh input: Gmsh `.msh` (4.1 ASCII and binary through mshio; 2.2 ASCII and the
+//! `$PhysicalNames` section, which mshio skips, by our own small parsers), VTK XML
+//! `.vtu` (through vtkio 0.7.0-rc2, which reads meshio's default binary + zlib files)
+//! and legacy `.vtk` (our parser: vtkio reads neither meshio's default legacy 5.1
+//! binary files nor their OFFSETS/CONNECTIVITY layout; DESIGN.md §6).
+//!
+//! The cells of the highest dimension present (tet4/hex8, else tri3/quad4) become the
+//! mesh; lower-dimensional elements only define node sets. Node sets: Gmsh physical
+//! groups by name (or `physical_<tag>`), VTK integer point-data arrays as flags (node
+//! in the set where non-zero). Nodes used by no cell are dropped (they would carry no
+//! mass). Every error names the file and what is wrong.
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+use crate::error::Error;
+use crate::model::solid::{CellKind, Mesh};
+
+fn bad(path: &Path, what: impl std::fmt::Display) -> Error {
+    Error::invalid(&path.display().to_string(), "mesh", &what.to_string())
+}
+
+/// Reads a mesh, choosing the format by extension (`.msh`, `.vtu`, `.vtk`).
+pub fn read_mesh(path: &Path) -> Result<Mesh, Error> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let raw = match ext.as_str() {
+        "msh" => read_msh(path, &bytes)?,
+        "vtu" => read_vtu(path)?,
+        "vtk" => read_legacy_vtk(path, &bytes)?,
+        _ => {
+            return Err(bad(
+                path,
+                format!("unknown mesh extension `.{ext}` (expected .msh, .vtu or .vtk)"),
+            ));
+        }
+    };
+    raw.finish(path)
+}
+
+/// A mesh as read, before keeping the top-dimension cells and compacting the nodes.
+#[derive(Default)]
+struct RawMesh {
+    points: Vec<[f64; 3]>,
+    /// (dimension, kind or unsupported name, nodes)
+    cells: Vec<(usize, Result<CellKind, String>, Vec<usize>)>,
+    /// node sets by name (indices into `points`)
+    sets: BTreeMap<String, Vec<usize>>,
+}
+
+impl RawMesh {
+    fn finish(self, path: &Path) -> Result<Mesh, Error> {
+        for (i, p) in self.points.iter().enumerate() {
+            if p.iter().any(|x| !x.is_finite()) {
+                return Err(bad(
+                    path,
+                    format!("node {i} has non-finite coordinates {p:?}"),
+                ));
+            }
+        }
+        let dim = self
+            .cells
+            .iter()
+            .map(|c| c.0)
+            .max()
+            .ok_or_else(|| bad(path, "no cells"))?;
+        if dim < 2 {
+            return Err(bad(path, "no 2-D or 3-D cells (only points or lines)"));
+        }
+        let mut used = vec![usize::MAX; self.points.len()];
+        let mut mesh = Mesh::default();
+        for (id, (d, kind, nodes)) in self.cells.iter().enumerate() {
+            if *d != dim {
+                continue;
+            }
+            let kind = kind.clone().map_err(|name| {
+                bad(path, format!("cell {id}: unsupported element type {name} (signorini reads tri3, quad4, tet4, hex8)"))
+            })?;
+            let mut c = Vec::with_capacity(nodes.len());
+            for &v in nodes {
+                if v >= self.points.len() {
+                    return Err(bad(
+                        path,
+                        format!(
+                            "cell {id} refers to node {v}, but the file defines {} nodes",
+                            self.points.len()
+                        ),
+                    ));
+                }
+                if used[v] == usize::MAX {
+                    used[v] = mesh.points.len();
+                    mesh.points.push(self.points[v]);
+                }
+                c.push(used[v]);
+            }
+            mesh.cells.push((kind, c));
+        }
+        for (name, set) in self.sets {
+            let mut s: Vec<usize> = set
+                .iter()
+                .filter(|&&v| v < used.len() && used[v] != usize::MAX)
+                .map(|&v| used[v])
+                .collect();
+            s.sort_unstable();
+            s.dedup();
+            mesh.node_sets.insert(name, s);
+        }
+        Ok(mesh)
+    }
+}
+
+fn gmsh_kind(t: usize) -> (usize, Result<CellKind, String>) {
+    match t {
+        2 => (2, Ok(CellKind::Tri3)),
+        3 => (2, Ok(CellKind::Quad4)),
+        4 => (3, Ok(CellKind::Tet4)),
+        5 => (3, Ok(CellKind::Hex8)),
+        1 | 8 | 26 | 27 | 28 => (1, Err(format!("gmsh type {t} (line)"))),
+        15 => (0, Err("gmsh type 15 (point)".into())),
+        9 | 10 | 16 | 20 | 21 | 22 | 23 | 24 | 25 => {
+            (2, Err(format!("gmsh type {t} (higher-order surface)")))
+        }
+        11 | 12 | 17 | 18 | 19 | 29 | 30 | 31 | 92 | 93 => (
+            3,
+            Err(format!(
+                "gmsh type {t} (higher-order or prism/pyramid volume)"
+            )),
+        ),
+        6 | 7 => (3, Err(format!("gmsh type {t} (prism/pyramid)"))),
+        _ => (0, Err(format!("gmsh type {t} (unknown)"))),
+    }
+}
+
+/// `$PhysicalNames`: (dim, tag) → name. Present as text in ASCII and binary files.
+fn physical_names(text: &[u8]) -> HashMap<(usize, i64), String> {
+    let mut out = HashMap::new();
+    let Some(start) = find(text, b"$PhysicalNames") else {
+        return out;
+    };
+    let Some(end) = find(&text[start..], b"$EndPhysicalNames") else {
+        return out;
+    };
+    let body = String::from_utf8_lossy(&text[start + 14..start + end]);
+    for line in body.lines().skip(2) {
+        let mut it = line.splitn(3, char::is_whitespace);
+        if let (Some(d), Some(t), Some(n)) = (it.next(), it.next(), it.next())
+            && let (Ok(d), Ok(t)) = (d.parse(), t.parse())
+        {
+            out.insert((d, t), n.trim().trim_matches('"').to_string());
+        }
+    }
+    out
+}
+
+fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    hay.windows(needle.len()).position(|w| w == needle)
+}
+
+fn read_msh(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
+    let fmt = find(bytes, b"$MeshFormat")
+        .ok_or_else(|| bad(path, "no $MeshFormat section: not a Gmsh file"))?;
+    let version: String = String::from_utf8_lossy(&bytes[fmt + 11..(fmt + 40).min(bytes.len())])
+        .split_whitespace()
+        .next()
+        .unwrap_or("")
+        .to_string();
+    let names = physical_names(bytes);
+    match version.as_str() {
+        "4.1" => read_msh41(path, bytes, &names),
+        "2.2" => read_msh22(path, bytes, &names),
+        v => Err(bad(
+            path,
+            format!("Gmsh format version {v} (signorini reads 4.1 and 2.2)"),
+        )),
+    }
+}
+
+fn read_msh41(
+    path: &Path,
+    bytes: &[u8],
+    names: &HashMap<(usize, i64), String>,
+) -> Result<RawMesh, Error> {
+    let f = mshio::parse_msh_bytes(bytes)
+        .map_err(|e| bad(path, format!("Gmsh 4.1 parse error: {e}")))?;
+    let nodes = f.data.nodes.ok_or_else(|| bad(path, "no $Nodes section"))?;
+    let elements = f
+        .data
+        .elements
+        .ok_or_else(|| bad(path, "no $Elements section"))?;
+    let mut raw = RawMesh::default();
+    // node tag → index
+    let mut index: HashMap<u64, usize> = HashMap::new();
+    let dense = nodes.node_blocks.iter().all(|b| b.node_tags.is_none());
+    for b in &nodes.node_blocks {
+        match &b.node_tags {
+            Some(tags) => {
+                let base = raw.points.len();
+                for (tag, &k) in tags {
+                    index.insert(*tag, base + k);
+                }
+            }
+            None if dense => {}
+            None => {
+                return Err(bad(
+                    path,
+                    "mixed sparse and dense node tags are not supported",
+                ));
+            }
+        }
+        raw.points.extend(b.nodes.iter().map(|n| [n.x, n.y, n.z]));
+    }
+    let min_tag = nodes.min_node_tag;
+    let node_index = |t: u64| -> Result<usize, Error> {
+        if dense {
+            Ok((t - min_tag) as usize)
+        } else {
+            index.get(&t).copied().ok_or_else(|| {
+                bad(
+                    path,
+                    format!("element refers to node tag {t}, which is not defined"),
+                )
+            })
+        }
+    };
+    // entity (dim, tag) → physical tags
+    let mut phys: HashMap<(usize, i32), Vec<i32>> = HashMap::new();
+    if let Some(ent) = &f.data.entities {
+        for p in &ent.points {
+            phys.insert((0, p.tag), p.physical_tags.clone());
+        }
+        for c in &ent.curves {
+            phys.insert((1, c.tag), c.physical_tags.clone());
+        }
+        for s in &ent.surfaces {
+            phys.insert((2, s.tag), s.physical_tags.clone());
+        }
+        for v in &ent.volumes {
+            phys.insert((3, v.tag), v.physical_tags.clone());
+        }
+    }
+    for b in &elements.element_blocks {
+        let (d, kind) = gmsh_kind(b.element_type as usize);
+        let edim = b.entity_dim as usize;
+        let groups = phys.get(&(edim, b.entity_tag)).cloned().unwrap_or_default();
+        for e in &b.elements {
+            let ns: Vec<usize> = e
+                .nodes
+                .iter()
+                .map(|&t| node_index(t))
+                .collect::<Result<_, _>>()?;
+            for g in &groups {
+                let name = names
+                    .get(&(edim, *g as i64))
+                    .cloned()
+                    .unwrap_or_else(|| format!("physical_{g}"));
+                raw.sets.entry(name).or_default().extend_from_slice(&ns);
+            }
+            raw.cells.push((d, kind.clone(), ns));
+        }
+    }
+    Ok(raw)
+}
+
+fn read_msh22(
+    path: &Path,
+    bytes: &[u8],
+    names: &HashMap<(usize, i64), String>,
+) -> Result<RawMesh, Error> {
+    let text = std::str::from_utf8(bytes).map_err(|_| {
+        bad(
+            path,
+            "Gmsh 2.2 binary files are not supported (write ASCII)",
+        )
+    })?;
+    let section = |name: &str| -> Result<Vec<&str>, Error> {
+        let start = text
+            .find(&format!("${name}"))
+            .ok_or_else(|| bad(path, format!("no ${name} section")))?;
+        let end = text[start..]
+            .find(&format!("$End{name}"))
+            .ok_or_else(|| bad(path, format!("${name} is not closed")))?;
+        Ok(text[start..start + end]
+            .lines()
+            .skip(2)
+            .filter(|l| !l.trim().is_empty())
+            .collect())
+    };
+    let mut raw = RawMesh::default();
+    let mut index = HashMap::new();
+    for (i, line) in section("Nodes")?.iter().enumerate() {
+        let v: Vec<&str> = line.split_whitespace().collect();
+        let num = |k: usize| -> Result<f64, Error> {
+            v.get(k)
+                .and_then(|s| s.parse().ok())
+                .ok_or_else(|| bad(path, format!("$Nodes line {}: `{line}`", i + 1)))
+        };
+        let tag = v
+            .first()
+            .and_then(|s| s.parse::<u64>().ok())
+            .ok_or_else(|| bad(path, format!("$Nodes line {}: `{line}`", i + 1)))?;
+        index.insert(tag, raw.points.len());
+        raw.points.push([num(1)?, num(2)?, num(3)?]);
+    }
+    // elementary-entity dimension of each physical tag comes from the element type
+    for (i, line) in section("Elements")?.iter().enumerate() {
+        let v: Vec<u64> = line
+            .split_whitespace()
+            .map(|s| s.parse())
+            .collect::<Result<_, _>>()
+            .map_err(|_| bad(path, format!("$Elements line {}: `{line}`", i + 1)))?;
+        if v.len() < 3 {
+            return Err(bad(path, format!("$Elements line {}: `{line}`", i + 1)));
+        }
+        let (d, kind) = gmsh_kind(v[1] as usize);
+        let ntags = v[2] as usize;
+        let phys = if ntags > 0 { v.get(3).copied() } else { None };
+        let ns: Vec<usize> = v
+            .iter()
+            .skip(3 + ntags)
+            .map(|t| {
+                index.get(t).copied().ok_or_else(|| {
+                    bad(
+                        path,
+                        format!(
+                            "element {} refers to node tag {t}, which is not defined",
+                            v[0]
+                        ),
+                    )
+                })
+            })
+            .collect::<Result<_, _>>()?;
+        if let Some(p) = phys {
+            let name = names
+                .get(&(d, p as i64))
+                .cloned()
+                .unwrap_or_else(|| format!("physical_{p}"));
+            raw.sets.entry(name).or_default().extend_from_slice(&ns);
+        }
+        raw.cells.push((d, kind, ns));
+    }
+    Ok(raw)
+}
+
+fn vtk_kind(t: u8) -> (usize, Result<CellKind, String>) {
+    match t {
+        5 => (2, Ok(CellKind::Tri3)),
+        9 => (2, Ok(CellKind::Quad4)),
+        10 => (3, Ok(CellKind::Tet4)),
+        12 => (3, Ok(CellKind::Hex8)),
+        1 | 2 => (0, Err(format!("VTK type {t} (vertex)"))),
+        3 | 4 => (1, Err(format!("VTK type {t} (line)"))),
+        6..=8 => (2, Err(format!("VTK type {t} (polygon/pixel)"))),
+        11 | 13 | 14 => (3, Err(format!("VTK type {t} (voxel/wedge/pyramid)"))),
+        _ => (3, Err(format!("VTK type {t} (quadratic or unknown)"))),
+    }
+}
+
+fn read_vtu(path: &Path) -> Result<RawMesh, Error> {
+    use vtkio::model::{Attribute, DataSet, VertexNumbers};
+    let vtk =
+        vtkio::Vtk::import(path).map_err(|e| bad(path, format!("VTK XML read error: {e}")))?;
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+        return Err(bad(path, "not an UnstructuredGrid"));
+    };
+    let mut raw = RawMesh::default();
+    for piece in pieces {
+        let p = piece
+            .into_loaded_piece_data(Some(path))
+            .map_err(|e| bad(path, format!("piece: {e}")))?;
+        let base = raw.points.len();
+        let xyz: Vec<f64> = p
+            .points
+            .cast_into()
+            .ok_or_else(|| bad(path, "points are not numeric"))?;
+        raw.points.extend(xyz.chunks(3).map(|c| [c[0], c[1], c[2]]));
+        let (conn, offsets): (Vec<u64>, Vec<u64>) = match p.cells.cell_verts {
+            VertexNumbers::XML {
+                connectivity,
+                offsets,
+            } => (connectivity, offsets),
+            legacy => legacy.into_xml(),
+        };
+        let mut start = 0usize;
+        let offs: Vec<u64> = if offsets.first() == Some(&0) {
+            offsets[1..].to_vec()
+        } else {
+            offsets
+        };
+        for (t, &end) in p.cells.types.iter().zip(&offs) {
+            let (d, kind) = vtk_kind(*t as u8);
+            let ns = conn[start..end as usize]
+                .iter()
+                .map(|&v| base + v as usize)
+                .collect();
+            raw.cells.push((d, kind, ns));
+            start = end as usize;
+        }
+        for a in p.data.point {
+            if let Attribute::DataArray(da) = a
+                && let Some(vals) = da.data.cast_into::<f64>()
+                && vals.len() == xyz.len() / 3
+            {
+                let set = vals
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, v)| **v != 0.0)
+                    .map(|(i, _)| base + i);
+                raw.sets.entry(da.name.clone()).or_default().extend(set);
+            }
+        }
+    }
+    Ok(raw)
+}
+
+/// Legacy `.vtk`, ASCII or BINARY (big-endian), versions up to 5.1 (meshio's default):
+/// POINTS, CELLS (classic list or OFFSETS/CONNECTIVITY), CELL_TYPES, and POINT_DATA
+/// SCALARS or FIELD arrays (read as node-set flags).
+fn read_legacy_vtk(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
+    let mut r = Reader {
+        b: bytes,
+        pos: 0,
+        binary: false,
+        path,
+    };
+    let header = r.line()?;
+    if !header.starts_with("# vtk DataFile") {
+        return Err(bad(path, "not a legacy VTK file (first line)"));
+    }
+    r.line()?; // title
+    r.binary = match r.line()?.trim() {
+        "BINARY" => true,
+        "ASCII" => false,
+        other => {
+            return Err(bad(
+                path,
+                format!("expected ASCII or BINARY, found `{other}`"),
+            ));
+        }
+    };
+    let ds = r.line()?;
+    if ds.trim() != "DATASET UNSTRUCTURED_GRID" {
+        return Err(bad(
+            path,
+            format!("only UNSTRUCTURED_GRID is supported, found `{}`", ds.trim()),
+        ));
+    }
+    let mut raw = RawMesh::default();
+    let mut conn: Vec<u64> = Vec::new();
+    let mut offsets: Vec<u64> = Vec::new();
+    let mut types: Vec<u8> = Vec::new();
+    let mut npoints = 0usize;
+    while let Some(line) = r.next_keyword_line()? {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        match w[0] {
+            "POINTS" => {
+                npoints = r.count(&w, 1)?;
+                let v = r.values(npoints * 3, w.get(2).copied().unwrap_or("float"))?;
+                raw.points = v.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
+            }
+            "CELLS" => {
+                let n = r.count(&w, 1)?;
+                let size = r.count(&w, 2)?;
+                // version 5: OFFSETS <type> (n values) then CONNECTIVITY <type> (size values)
+                let save = r.pos;
+                let next = r.next_keyword_line()?.unwrap_or_default();
+                if next.starts_with("OFFSETS") {
+                    let t = next
+                        .split_whitespace()
+                        .nth(1)
+                        .unwrap_or("vtktypeint64")
+                        .to_string();
+                    offsets = r.values(n, &t)?.iter().map(|&x| x as u64).collect();
+                    let c = r.next_keyword_line()?.unwrap_or_default();
+                    if !c.starts_with("CONNECTIVITY") {
+                        return Err(bad(path, "OFFSETS not followed by CONNECTIVITY"));
+                    }
+                    let t = c
+                        .split_whitespace()
+                        .nth(1)
+                        .unwrap_or("vtktypeint64")
+                        .to_string();
+                    conn = r.values(size, &t)?.iter().map(|&x| x as u64).collect();
+                } else {
+                    r.pos = save;
+                    let list = r.values(size, "int")?;
+                    let mut k = 0;
+                    offsets.push(0);
+                    for _ in 0..n {
+                        let m = list[k] as usize;
+                        conn.extend(list[k + 1..k + 1 + m].iter().map(|&x| x as u64));
+                        offsets.push(conn.len() as u64);
+                        k += 1 + m;
+                    }
+                }
+            }
+            "CELL_TYPES" => {
+                let n = r.count(&w, 1)?;
+                types = r.values(n, "int")?.iter().map(|&x| x as u8).collect();
+            }
+            "POINT_DATA" | "CELL_DATA" => {
+                let on_points = w[0] == "POINT_DATA";
+                let n = r.count(&w, 1)?;
+                loop {
+                    let save = r.pos;
+                    let Some(l) = r.next_keyword_line()? else {
+                        break;
+                    };
+                    let v: Vec<&str> = l.split_whitespace().collect();
+                    match v[0] {
+                        "SCALARS" => {
+                            let ncomp = v.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
+                            let lt = r.next_keyword_line()?.unwrap_or_default();
+                            if !lt.starts_with("LOOKUP_TABLE") {
+                                return Err(bad(path, "SCALARS without LOOKUP_TABLE"));
+                            }
+                            let vals = r.values(n * ncomp, v.get(2).copied().unwrap_or("float"))?;
+                            if on_points && ncomp == 1 {
+                                add_flag_set(&mut raw, v[1], &vals);
+                            }
+                        }
+                        "FIELD" => {
+                            let arrays = r.count(&v, 2)?;
+                            for _ in 0..arrays {
+                                let a = r.next_keyword_line()?.unwrap_or_default();
+                                let f: Vec<&str> = a.split_whitespace().collect();
+                                let (ncomp, ntup) = (r.count(&f, 1)?, r.count(&f, 2)?);
+                                let vals =
+                                    r.values(ncomp * ntup, f.get(3).copied().unwrap_or("float"))?;
+                                if on_points && ncomp == 1 && ntup == n {
+                                    add_flag_set(&mut raw, f[0], &vals);
+                                }
+                            }
+                        }
+                        "VECTORS" | "NORMALS" => {
+                            r.values(n * 3, v.get(2).copied().unwrap_or("float"))?;
+                        }
+                        _ => {
+                            r.pos = save;
+                            break;
+                        }
+                    }
+                }
+            }
+            "METADATA" => {
+                // skip until a blank line
+                while let Ok(l) = r.line() {
+                    if l.trim().is_empty() {
+                        break;
+                    }
+                }
+            }
+            other => return Err(bad(path, format!("unexpected section `{other}`"))),
+        }
+    }
+    if raw.points.len() != npoints || npoints == 0 {
+        return Err(bad(path, "no POINTS"));
+    }
+    let offs: Vec<u64> = if offsets.first() == Some(&0) {
+        offsets[1..].to_vec()
+    } else {
+        offsets
+    };
+    if offs.len() != types.len() {
+        return Err(bad(
+            path,
+            format!("{} cells but {} CELL_TYPES", offs.len(), types.len()),
+        ));
+    }
+    let mut start = 0usize;
+    for (&t, &end) in types.iter().zip(&offs) {
+        let end = end as usize;
+        if end > conn.len() || end < start {
+            return Err(bad(path, "cell offsets exceed the connectivity"));
+        }
+        let (d, kind) = vtk_kind(t);
+        raw.cells.push((
+            d,
+            kind,
+            conn[start..end].iter().map(|&v| v as usize).collect(),
+        ));
+        start = end;
+    }
+    Ok(raw)
+}
+
+fn add_flag_set(raw: &mut RawMesh, name: &str, vals: &[f64]) {
+    let set = vals
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| **v != 0.0)
+        .map(|(i, _)| i);
+    raw.sets.entry(name.to_string()).or_default().extend(set);
+}
+
+struct Reader<'a> {
+    b: &'a [u8],
+    pos: usize,
+    binary: bool,
+    path: &'a Path,
+}
+
+impl Reader<'_> {
+    fn line(&mut self) -> Result<String, Error> {
+        if self.pos >= self.b.len() {
+            return Err(bad(self.path, "unexpected end of file"));
+        }
+        let end = self.b[self.pos..]
+            .iter()
+            .position(|&c| c == b'\n')
+            .map_or(self.b.len(), |e| self.pos + e);
+        let s = String::from_utf8_lossy(&self.b[self.pos..end]).into_owned();
+        self.pos = (end + 1).min(self.b.len());
+        Ok(s)
+    }
+
+    /// Next non-blank line, or None at the end of the file.
+    fn next_keyword_line(&mut self) -> Result<Option<String>, Error> {
+        while self.pos < self.b.len() {
+            let l = self.line()?;
+            if !l.trim().is_empty() {
+                return Ok(Some(l.trim().to_string()));
+            }
+        }
+        Ok(None)
+    }
+
+    fn count(&self, w: &[&str], k: usize) -> Result<usize, Error> {
+        w.get(k)
+            .and_then(|s| s.parse().ok())
+            .ok_or_else(|| bad(self.path, format!("bad count in `{}`", w.join(" "))))
+    }
+
+    fn values(&mut self, n: usize, ty: &str) -> Result<Vec<f64>, Error> {
+        if !self.binary {
+            let mut out = Vec::with_capacity(n);
+            while out.len() < n {
+                let l = self.line()?;
+                for t in l.split_whitespace() {
+                    out.push(
+                        t.parse::<f64>()
+                            .map_err(|_| bad(self.path, format!("bad number `{t}`")))?,
+                    );
+                }
+            }
+            out.truncate(n);
+            return Ok(out);
+        }
+        let size = match ty {
+            "double" | "vtktypeint64" | "long" | "vtktypeuint64" | "unsigned_long" => 8,
+            "float" | "int" | "vtktypeint32" | "unsigned_int" | "vtktypeuint32" => 4,
+            "short" | "unsigned_short" => 2,
+            "char" | "unsigned_char" | "bit" => 1,
+            other => return Err(bad(self.path, format!("unsupported data type `{other}`"))),
+        };
+        let end = self.pos + n * size;
+        if end > self.b.len() {
+            return Err(bad(self.path, "binary data runs past the end of the file"));
+        }
+        let out = self.b[self.pos..end]
+            .chunks(size)
+            .map(|c| match (ty, size) {
+                ("double", _) => f64::from_be_bytes(c.try_into().expect("8 bytes")),
+                ("float", _) => f32::from_be_bytes(c.try_into().expect("4 bytes")) as f64,
+                (t, 8) if t.contains("uint") || t.starts_with("unsigned") => {
+                    u64::from_be_bytes(c.try_into().expect("8")) as f64
+                }
+                (_, 8) => i64::from_be_bytes(c.try_into().expect("8 bytes")) as f64,
+                (t, 4) if t.contains("uint") || t.starts_with("unsigned") => {
+                    u32::from_be_bytes(c.try_into().expect("4")) as f64
+                }
+                (_, 4) => i32::from_be_bytes(c.try_into().expect("4 bytes")) as f64,
+                (t, 2) if t.starts_with("unsigned") => {
+                    u16::from_be_bytes(c.try_into().expect("2")) as f64
+                }
+                (_, 2) => i16::from_be_bytes(c.try_into().expect("2 bytes")) as f64,
+                (t, _) if t.starts_with("unsigned") || t == "bit" => c[0] as f64,
+                _ => c[0] as i8 as f64,
+            })
+            .collect();
+        self.pos = end;
+        Ok(out)
+    }
+}

@@ -1,0 +1,179 @@
+//! Reading the committed meshes, written by the real tools (`meshes/make_meshes.py`:
+//! gmsh 4.15.2 and meshio 5.3.5). The expected counts are what meshio reports for the
+//! same files; every bad-mesh class gets a clear error.
+
+use std::path::{Path, PathBuf};
+
+use signorini::io::mesh::read_mesh;
+use signorini::model::MassKind;
+use signorini::model::solid::{CellKind, Formulation, Material, assemble};
+
+fn mesh_path(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("meshes")
+        .join(name)
+}
+
+#[test]
+fn committed_meshes_have_the_counts_meshio_reports() {
+    for (file, points, kind, cells, sets) in [
+        (
+            "ball.msh",
+            208,
+            CellKind::Tet4,
+            672,
+            vec![("ball", 208), ("surface", 167)],
+        ),
+        (
+            "ball_binary.msh",
+            208,
+            CellKind::Tet4,
+            672,
+            vec![("ball", 208), ("surface", 167)],
+        ),
+        (
+            "disk.msh",
+            123,
+            CellKind::Tri3,
+            212,
+            vec![("disk", 123), ("rim", 32)],
+        ),
+        ("plate.vtu", 27, CellKind::Quad4, 16, vec![("bottom", 9)]),
+        ("plate.vtk", 27, CellKind::Quad4, 16, vec![("bottom", 9)]),
+    ] {
+        let m = read_mesh(&mesh_path(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert_eq!(m.points.len(), points, "{file}");
+        assert_eq!(m.cells.len(), cells, "{file}");
+        assert!(m.cells.iter().all(|(k, _)| *k == kind), "{file}");
+        for (name, n) in sets {
+            assert_eq!(m.node_sets[name].len(), n, "{file}: set {name}");
+        }
+    }
+    // the binary file holds the same mesh as the ASCII one (whose coordinates are
+    // printed with 16 significant digits: equal to 1e-15 relative)
+    for (x, y) in [("ball.msh", "ball_binary.msh"), ("plate.vtu", "plate.vtk")] {
+        let a = read_mesh(&mesh_path(x)).unwrap();
+        let b = read_mesh(&mesh_path(y)).unwrap();
+        assert!(
+            a.cells == b.cells && a.node_sets == b.node_sets,
+            "{x} vs {y}: topology differs"
+        );
+        let d = a
+            .points
+            .iter()
+            .zip(&b.points)
+            .flat_map(|(p, q)| p.iter().zip(q).map(|(u, v)| (u - v).abs()))
+            .fold(0.0, f64::max);
+        assert!(d <= 1e-15, "{x} vs {y}: coordinates differ by {d}");
+    }
+}
+
+#[test]
+fn ball_mesh_has_the_mass_of_its_polyhedron() {
+    let m = read_mesh(&mesh_path("ball.msh")).unwrap();
+    let mat = Material {
+        young: 1e7,
+        poisson: 0.3,
+        density: 1000.0,
+    };
+    let sys = assemble(&m, &mat, Formulation::Solid, MassKind::Lumped).unwrap();
+    // Every tet has positive orientation (assembly checks it); the inscribed
+    // polyhedron of a 0.025 m mesh on R = 0.05 m holds 90–100 % of (4/3)πR³.
+    let sphere = 1000.0 * 4.0 / 3.0 * std::f64::consts::PI * 0.05f64.powi(3);
+    let ratio = sys.total_mass() / sphere;
+    assert!(ratio > 0.9 && ratio <= 1.0, "{ratio}");
+}
+
+fn write(name: &str, text: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("signorini-badmesh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const HEAD: &str = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n";
+
+#[test]
+fn bad_meshes_are_rejected_with_what_is_wrong() {
+    let nodes = "$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n";
+    let cases = [
+        (
+            "missing_node.msh",
+            format!("{HEAD}{nodes}$Elements\n1\n1 4 2 1 1 1 2 3 9\n$EndElements\n"),
+            "node tag 9",
+        ),
+        (
+            "tet10.msh",
+            format!("{HEAD}{nodes}$Elements\n1\n1 11 2 1 1 1 2 3 4 1 2 3 4 1 2\n$EndElements\n"),
+            "unsupported element type",
+        ),
+        (
+            "nan.msh",
+            format!(
+                "{HEAD}$Nodes\n4\n1 0 0 0\n2 nan 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n$Elements\n1\n1 4 2 1 1 1 2 3 4\n$EndElements\n"
+            ),
+            "non-finite",
+        ),
+        (
+            "empty.msh",
+            format!("{HEAD}{nodes}$Elements\n0\n$EndElements\n"),
+            "no cells",
+        ),
+        (
+            "version.msh",
+            "$MeshFormat\n3.0 0 8\n$EndMeshFormat\n".to_string(),
+            "3.0",
+        ),
+        (
+            "mesh.stl",
+            "solid x\n".to_string(),
+            "unknown mesh extension",
+        ),
+    ];
+    for (name, text, needle) in cases {
+        let p = write(name, &text);
+        let e = read_mesh(&p).unwrap_err().to_string();
+        assert!(e.contains(needle), "{name}: expected {needle:?} in {e}");
+        assert!(
+            e.contains(name),
+            "{name}: the message must name the file: {e}"
+        );
+    }
+    // an inverted tet (nodes 1, 3, 2, 4) reads, and assembly names the cell
+    let p = write(
+        "inverted.msh",
+        &format!("{HEAD}{nodes}$Elements\n1\n1 4 2 1 1 1 3 2 4\n$EndElements\n"),
+    );
+    let m = read_mesh(&p).unwrap();
+    let mat = Material {
+        young: 1e7,
+        poisson: 0.3,
+        density: 1000.0,
+    };
+    let e = assemble(&m, &mat, Formulation::Solid, MassKind::Consistent)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("cell 0") && e.contains("inverted"), "{e}");
+    // an empty node set (a physical group on a point no cell uses) is refused by scenes
+    let p = write(
+        "orphan.msh",
+        &format!(
+            "{HEAD}$PhysicalNames\n1\n0 7 \"tip\"\n$EndPhysicalNames\n$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 5 5 5\n$EndNodes\n$Elements\n2\n1 4 2 1 1 1 2 3 4\n2 15 2 7 2 5\n$EndElements\n"
+        ),
+    );
+    let m = read_mesh(&p).unwrap();
+    assert_eq!(m.points.len(), 4, "the orphan node is dropped");
+    assert!(m.node_sets["tip"].is_empty());
+    let scene = format!(
+        "[time]\ndt = 1e-6\nt_end = 1e-5\n[[bodies]]\nname = \"b\"\nmesh = {{ generator = \"file\", path = \"{}\" }}\nmaterial = {{ young = 1e7, poisson = 0.3, density = 1000.0 }}\n[[obstacles]]\nname = \"w\"\ntype = \"plane\"\npoint = [0.0, 0.0, -1.0]\nnormal = [0.0, 0.0, 1.0]\n[[contacts]]\nbody = \"b\"\nnodes = \"tip\"\nobstacle = \"w\"\n",
+        p.display()
+    );
+    let e = signorini::scene::file::Scene::from_toml(&scene)
+        .unwrap()
+        .build()
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("empty"), "{e}");
+}
