@@ -9,8 +9,8 @@
 //! `project_all_active = true` projects every active contact, as Siconos does (its
 //! `P > 0` test is commented out), so the two rules can be compared.
 
-use super::core::{PositionRule, ThetaCore, VelocityLaw};
-use super::{Integrator, SchemeParams, State, StepStats};
+use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};
+use super::{Integrator, SchemeParams, StepStats};
 use crate::contact::ContactSet;
 use crate::error::Error;
 use crate::model::LinearSystem;
@@ -74,16 +74,5 @@ impl Integrator for CombinedProjection {
         c.commit(&mut st);
         Ok(st)
     }
-    fn state(&self) -> &State {
-        &self.core.state
-    }
-    fn system(&self) -> &LinearSystem {
-        &self.core.sys
-    }
-    fn dt(&self) -> f64 {
-        self.core.h
-    }
-    fn path(&self) -> String {
-        self.core.path()
-    }
+    delegate_to_core!();
 }

@@ -144,6 +144,72 @@ impl Workspace {
     }
 }
 
+/// Checks the scheme parameters, `h` and the initial state, then forms and factors
+/// `M + a·K + b·C` (the step matrix of a scheme), naming it `what` in errors.
+pub(crate) fn factor_step_matrix(
+    params: &SchemeParams,
+    sys: &LinearSystem,
+    q0: &[f64],
+    v0: &[f64],
+    h: f64,
+    (a, b): (f64, f64),
+    what: &str,
+) -> Result<SpdFactor, Error> {
+    params.validate()?;
+    crate::error::require_positive("dt", h)?;
+    let n = sys.ndof();
+    check_vector("initial displacement", q0, n)?;
+    check_vector("initial velocity", v0, n)?;
+    let mut terms = vec![(1.0, &sys.mass), (a, &sys.stiffness)];
+    if let Some(c) = &sys.damping {
+        terms.push((b, c));
+    }
+    SpdFactor::new(linear_combination(&terms).as_ref(), what)
+}
+
+/// `C = A⁻¹ G` (dense `n × m`, column-major) and `W = Gᵀ C` (dense `m × m`): the
+/// condensed Delassus operator of DESIGN.md §4, `m` solves with the one factorization.
+pub(crate) fn condense_delassus(
+    factor: &mut SpdFactor,
+    jac: &ContactJacobian,
+    n: usize,
+    cg: &mut [f64],
+    w: &mut [f64],
+) {
+    let m = jac.ncols();
+    for a in 0..m {
+        let col = &mut cg[a * n..(a + 1) * n];
+        col.iter_mut().for_each(|x| *x = 0.0);
+        jac.axpy(a, 1.0, col);
+        factor.solve_in_place(col);
+    }
+    for b in 0..m {
+        for a in 0..m {
+            w[a + b * m] = jac.dot(a, &cg[b * n..(b + 1) * n]);
+        }
+    }
+}
+
+/// The [`Integrator`](super::Integrator) accessors of a scheme built on a `core:
+/// ThetaCore` field.
+macro_rules! delegate_to_core {
+    () => {
+        fn state(&self) -> &$crate::integrators::State {
+            &self.core.state
+        }
+        fn system(&self) -> &$crate::model::LinearSystem {
+            &self.core.sys
+        }
+        fn dt(&self) -> f64 {
+            self.core.h
+        }
+        fn path(&self) -> String {
+            self.core.path()
+        }
+    };
+}
+pub(crate) use delegate_to_core;
+
 /// Shared θ-method data and buffers (see the module doc).
 pub struct ThetaCore {
     pub(crate) sys: LinearSystem,
@@ -209,19 +275,18 @@ impl ThetaCore {
         h: f64,
         with_projection: bool,
     ) -> Result<Self, Error> {
-        params.validate()?;
-        crate::error::require_positive("dt", h)?;
-        let n = sys.ndof();
-        check_vector("initial displacement", q0, n)?;
-        check_vector("initial velocity", v0, n)?;
-        let m = contacts.len();
         let theta = params.theta;
-        let mut terms = vec![(1.0, &sys.mass), (h * h * theta * theta, &sys.stiffness)];
-        if let Some(c) = &sys.damping {
-            terms.push((h * theta, c));
-        }
-        let mhat = linear_combination(&terms);
-        let factor = SpdFactor::new(mhat.as_ref(), "iteration matrix M + hθC + h²θ²K")?;
+        let factor = factor_step_matrix(
+            params,
+            &sys,
+            q0,
+            v0,
+            h,
+            (h * h * theta * theta, h * theta),
+            "iteration matrix M + hθC + h²θ²K",
+        )?;
+        let n = sys.ndof();
+        let m = contacts.len();
         let jac = ContactJacobian::for_set(contacts.as_ref());
         let e = contacts.restitution().to_vec();
         let linear = contacts.is_linear();
@@ -322,17 +387,7 @@ impl ThetaCore {
     /// current `G` (`m` or `2m` sparse solves).
     fn condense(&mut self) {
         let (n, m) = (self.n, self.m);
-        for a in 0..m {
-            let col = &mut self.cg[a * n..(a + 1) * n];
-            col.iter_mut().for_each(|x| *x = 0.0);
-            self.jac.axpy(a, 1.0, col);
-            self.factor.solve_in_place(col);
-        }
-        for b in 0..m {
-            for a in 0..m {
-                self.w[a + b * m] = self.jac.dot(a, &self.cg[b * n..(b + 1) * n]);
-            }
-        }
+        condense_delassus(&mut self.factor, &self.jac, n, &mut self.cg, &mut self.w);
         if !self.with_projection {
             return;
         }

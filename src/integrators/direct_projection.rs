@@ -7,8 +7,8 @@
 //! constraints hold in discrete time; after an accumulation of impacts the scheme can
 //! chatter (sec. 4.5, Fig. 4).
 
-use super::core::{PositionRule, ThetaCore, VelocityLaw};
-use super::{Forecast, Integrator, SchemeParams, State, StepStats};
+use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};
+use super::{Forecast, Integrator, SchemeParams, StepStats};
 use crate::contact::ContactSet;
 use crate::error::Error;
 use crate::model::LinearSystem;
@@ -52,16 +52,5 @@ impl Integrator for DirectProjection {
         self.core.commit(&mut st);
         Ok(st)
     }
-    fn state(&self) -> &State {
-        &self.core.state
-    }
-    fn system(&self) -> &LinearSystem {
-        &self.core.sys
-    }
-    fn dt(&self) -> f64 {
-        self.core.h
-    }
-    fn path(&self) -> String {
-        self.core.path()
-    }
+    delegate_to_core!();
 }

@@ -3,8 +3,8 @@
 //! activated by the forecast `ḡ_{k+1} ≤ 0` (eq. 61 or 62). Positions drift by
 //! `O(h)`: on the impacting bar the penetration is `|v0|(1−θ)h`.
 
-use super::core::{PositionRule, ThetaCore, VelocityLaw};
-use super::{Forecast, Integrator, SchemeParams, State, StepStats};
+use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};
+use super::{Forecast, Integrator, SchemeParams, StepStats};
 use crate::contact::ContactSet;
 use crate::error::Error;
 use crate::model::LinearSystem;
@@ -45,16 +45,5 @@ impl Integrator for MoreauJean {
         self.core.commit(&mut st);
         Ok(st)
     }
-    fn state(&self) -> &State {
-        &self.core.state
-    }
-    fn system(&self) -> &LinearSystem {
-        &self.core.sys
-    }
-    fn dt(&self) -> f64 {
-        self.core.h
-    }
-    fn path(&self) -> String {
-        self.core.path()
-    }
+    delegate_to_core!();
 }

@@ -16,9 +16,8 @@
 //! when `M` is singular, as with the redistributed mass).
 //! The reported impulse is `P/h` (N·s), comparable with the velocity-level schemes.
 
-use super::core::{Workspace, check_vector, grow_solve};
+use super::core::{Workspace, condense_delassus, factor_step_matrix, grow_solve};
 use super::{Integrator, NewtonParams, SchemeParams, State, StepStats};
-use crate::assembly::linear_combination;
 use crate::contact::{ContactJacobian, ContactSet};
 use crate::error::Error;
 use crate::linalg::{SpdFactor, spmv_add};
@@ -63,19 +62,18 @@ impl SchatzmanPaoli {
         v0: &[f64],
         h: f64,
     ) -> Result<Self, Error> {
-        params.validate()?;
-        crate::error::require_positive("dt", h)?;
-        let n = sys.ndof();
-        check_vector("initial displacement", q0, n)?;
-        check_vector("initial velocity", v0, n)?;
-        let m = contacts.len();
         let theta = params.theta;
-        let mut terms = vec![(1.0, &sys.mass), (h * h * theta, &sys.stiffness)];
-        if let Some(c) = &sys.damping {
-            terms.push((0.5 * h * theta, c));
-        }
-        let msp = linear_combination(&terms);
-        let factor = SpdFactor::new(msp.as_ref(), "Schatzman–Paoli matrix M + h²θK + (hθ/2)C")?;
+        let factor = factor_step_matrix(
+            params,
+            &sys,
+            q0,
+            v0,
+            h,
+            (h * h * theta, 0.5 * h * theta),
+            "Schatzman–Paoli matrix M + h²θK + (hθ/2)C",
+        )?;
+        let n = sys.ndof();
+        let m = contacts.len();
         // start-up: a0 = M⁻¹ (f − K q0 − C v0)
         let mut a0 = sys.force.clone();
         spmv_add(sys.stiffness.as_ref(), -1.0, q0, &mut a0);
@@ -140,18 +138,13 @@ impl SchatzmanPaoli {
     }
 
     fn condense(&mut self) {
-        let (n, m) = (self.n, self.m);
-        for a in 0..m {
-            let col = &mut self.cg[a * n..(a + 1) * n];
-            col.iter_mut().for_each(|x| *x = 0.0);
-            self.jac.axpy(a, 1.0, col);
-            self.factor.solve_in_place(col);
-        }
-        for b in 0..m {
-            for a in 0..m {
-                self.w[a + b * m] = self.jac.dot(a, &self.cg[b * n..(b + 1) * n]);
-            }
-        }
+        condense_delassus(
+            &mut self.factor,
+            &self.jac,
+            self.n,
+            &mut self.cg,
+            &mut self.w,
+        );
     }
 }
 

@@ -4,8 +4,8 @@
 //! Keeps the position constraint exactly, but as an index-3 formulation it makes the
 //! contact velocity and force oscillate step to step (the paper's Fig. 11).
 
-use super::core::{PositionRule, ThetaCore, VelocityLaw};
-use super::{Integrator, SchemeParams, State, StepStats};
+use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};
+use super::{Integrator, SchemeParams, StepStats};
 use crate::contact::ContactSet;
 use crate::error::Error;
 use crate::model::LinearSystem;
@@ -43,16 +43,5 @@ impl Integrator for TrapezoidPosition {
         self.core.commit(&mut st);
         Ok(st)
     }
-    fn state(&self) -> &State {
-        &self.core.state
-    }
-    fn system(&self) -> &LinearSystem {
-        &self.core.sys
-    }
-    fn dt(&self) -> f64 {
-        self.core.h
-    }
-    fn path(&self) -> String {
-        self.core.path()
-    }
+    delegate_to_core!();
 }
