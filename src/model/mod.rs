@@ -72,7 +72,7 @@ pub struct LinearSystem {
 /// Adds the element mass `me` (dense, `dofs.len()` square) to `asm` as `kind` asks;
 /// `is_contact[a]` marks the element's local dofs that belong to contact nodes.
 pub(crate) fn add_element_mass(
-    asm: &mut crate::assembly::Assembler,
+    asm: &mut impl crate::assembly::Accumulate,
     kind: MassKind,
     dofs: &[usize],
     me: impl Fn(usize, usize) -> f64,
@@ -128,6 +128,8 @@ pub(crate) fn add_element_mass(
 pub fn interleaved_components(n: usize, d: usize) -> Vec<u8> {
     (0..n).map(|i| (i % d) as u8).collect()
 }
+
+use crate::assembly::Accumulate;
 
 impl LinearSystem {
     /// Joins independent systems into one block-diagonal system (dofs concatenated).

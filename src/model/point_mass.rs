@@ -2,7 +2,7 @@
 //! (the bouncing ball of eq. 7 for `d = 1`; the particle in a circle for `d = 2`).
 
 use super::LinearSystem;
-use crate::assembly::Assembler;
+use crate::assembly::{Accumulate, Assembler};
 use crate::error::{Error, require_positive};
 
 /// Builds the linear system of a free point mass.

@@ -7,7 +7,7 @@
 use nalgebra::Matrix2;
 
 use super::{LinearSystem, MassKind};
-use crate::assembly::Assembler;
+use crate::assembly::{Accumulate, Assembler};
 use crate::error::{Error, require_positive};
 
 /// A uniform elastic rod.

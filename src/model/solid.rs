@@ -13,7 +13,7 @@ use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
 use rayon::prelude::*;
 
 use super::{LinearSystem, MassKind};
-use crate::assembly::Assembler;
+use crate::assembly::{Accumulate, PatternAssembler};
 use crate::error::{Error, require_in, require_positive};
 
 /// Isotropic linear elastic material.
@@ -484,9 +484,9 @@ pub fn assemble_with_contacts(
             element_matrices(id, *kind, &x, mat, f)
         })
         .collect::<Result<_, _>>()?;
-    let nnz: usize = elems.iter().map(|e| e.k.len()).sum();
-    let mut ak = Assembler::new(n, nnz);
-    let mut am = Assembler::new(n, nnz);
+    let cell_nodes: Vec<&[usize]> = mesh.cells.iter().map(|(_, c)| c.as_slice()).collect();
+    let mut ak = PatternAssembler::new(mesh.points.len(), dim, &cell_nodes);
+    let mut am = ak.zeroed_like();
     for ((_, nodes), e) in mesh.cells.iter().zip(&elems) {
         let dofs: Vec<usize> = nodes
             .iter()
