@@ -10,7 +10,7 @@
 use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use signorini::integrators::{self, Integrator, SchemeKind};
+use signorini::integrators::{Integrator, SchemeKind};
 use signorini::scene::bar::BarScene;
 
 fn build(kind: SchemeKind, n: usize) -> Box<dyn Integrator> {
@@ -21,7 +21,7 @@ fn build(kind: SchemeKind, n: usize) -> Box<dyn Integrator> {
     s.dt = s.length / (n as f64 * (s.young / s.density).sqrt());
     s.scheme.kind = kind;
     let m = s.build().unwrap();
-    integrators::build(&s.scheme, m.system, m.contacts, &m.q0, &m.v0, s.dt).unwrap()
+    m.into_integrator(&s.scheme, s.dt).unwrap()
 }
 
 fn bench_steps(c: &mut Criterion) {

@@ -320,14 +320,7 @@ fn run_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
 fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     let scene = Scene::from_file(&args.scene)?;
     let (model, report) = scene.build()?;
-    let integ = signorini::integrators::build(
-        &scene.scheme,
-        model.system,
-        model.contacts,
-        &model.q0,
-        &model.v0,
-        scene.time.dt,
-    )?;
+    let integ = model.into_integrator(&scene.scheme, scene.time.dt)?;
     println!("scene               {} (valid)", args.scene.display());
     println!(
         "model               {} bodies, {} cells, {} dofs ({} fixed dofs removed), {} candidate contacts",

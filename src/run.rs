@@ -11,7 +11,7 @@ use serde::Serialize;
 
 use crate::analytic::ImpactingBar;
 use crate::error::Error;
-use crate::integrators::{self, Forecast, Integrator, StepStats};
+use crate::integrators::{Forecast, Integrator, StepStats};
 use crate::io::{HistoryWriter, write_atomic};
 use crate::scene::bar::BarScene;
 
@@ -171,15 +171,7 @@ pub fn run_bar(
     out_dir: Option<&Path>,
     progress: &mut dyn Progress,
 ) -> Result<RunResult, Error> {
-    let model = scene.build()?;
-    let mut integ = integrators::build(
-        &scene.scheme,
-        model.system,
-        model.contacts,
-        &model.q0,
-        &model.v0,
-        scene.dt,
-    )?;
+    let mut integ = scene.build()?.into_integrator(&scene.scheme, scene.dt)?;
     let parameters = serde_json::to_value(scene).expect("scene serializes");
     run(
         integ.as_mut(),
@@ -200,14 +192,7 @@ pub fn run_scene(
     progress: &mut dyn Progress,
 ) -> Result<RunResult, Error> {
     let (model, report) = scene.build()?;
-    let mut integ = integrators::build(
-        &scene.scheme,
-        model.system,
-        model.contacts,
-        &model.q0,
-        &model.v0,
-        scene.time.dt,
-    )?;
+    let mut integ = model.into_integrator(&scene.scheme, scene.time.dt)?;
     let parameters = serde_json::to_value(scene).expect("scene serializes");
     run(
         integ.as_mut(),

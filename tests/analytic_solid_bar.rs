@@ -1,7 +1,7 @@
 //! The 3-D hex8 bar (square section, ν = 0) hitting a rigid wall: the contact force
 //! summed over the end face against the 1-D analytic plateau E S |v0| / c0.
 
-use signorini::integrators::{self, SchemeKind};
+use signorini::integrators::SchemeKind;
 use signorini::run::{Quiet, run};
 use signorini::scene::solid_bar::SolidBarScene;
 
@@ -15,8 +15,7 @@ fn hex_bar_end_face_force_matches_the_rod_solution() {
         };
         s.scheme.kind = kind;
         let m = s.build().unwrap();
-        let mut integ =
-            integrators::build(&s.scheme, m.system, m.contacts, &m.q0, &m.v0, s.dt).unwrap();
+        let mut integ = m.into_integrator(&s.scheme, s.dt).unwrap();
         let params = serde_json::to_value(&s).unwrap();
         let r = run(
             integ.as_mut(),

@@ -58,8 +58,7 @@ fn bar_steps_do_not_allocate() {
             s.scheme.kind = kind;
             s.scheme.metric = metric;
             let m = s.build().unwrap();
-            let mut integ =
-                integrators::build(&s.scheme, m.system, m.contacts, &m.q0, &m.v0, s.dt).unwrap();
+            let mut integ = m.into_integrator(&s.scheme, s.dt).unwrap();
             // 500 steps: contact (≈ 200 steps at this mesh and step), release, flight.
             let n = count_steps(integ.as_mut(), 500);
             assert_eq!(n, 0, "{} {:?} allocated {n} times", kind.name(), metric);

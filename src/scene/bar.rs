@@ -8,12 +8,13 @@
 use serde::{Deserialize, Serialize};
 
 use crate::analytic::ImpactingBar;
+use crate::contact::check_restitution;
 use crate::contact::plane::NodesOnPlane;
-use crate::contact::{ContactSet, check_restitution};
 use crate::error::{Error, require_finite, require_in, require_positive};
 use crate::integrators::SchemeParams;
+use crate::model::MassKind;
 use crate::model::rod::Rod;
-use crate::model::{LinearSystem, MassKind};
+use crate::scene::Model;
 
 /// Every parameter of the bar scene, defaulting to the reference run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -64,18 +65,6 @@ impl Default for BarScene {
     }
 }
 
-/// What [`BarScene::build`] returns.
-pub struct BarModel {
-    /// The assembled structure.
-    pub system: LinearSystem,
-    /// The tip contact with the wall.
-    pub contacts: Box<dyn ContactSet>,
-    /// Initial displacement (zero).
-    pub q0: Vec<f64>,
-    /// Initial velocity (uniform).
-    pub v0: Vec<f64>,
-}
-
 impl BarScene {
     /// The rod of this scene.
     pub fn rod(&self) -> Rod {
@@ -122,7 +111,7 @@ impl BarScene {
     }
 
     /// Assembles the rod and the tip contact.
-    pub fn build(&self) -> Result<BarModel, Error> {
+    pub fn build(&self) -> Result<Model, Error> {
         self.validate()?;
         let system = self.rod().assemble()?;
         let n = system.ndof();
@@ -133,7 +122,7 @@ impl BarScene {
             -self.gap,
             self.restitution,
         )?;
-        Ok(BarModel {
+        Ok(Model {
             system,
             contacts: Box::new(contacts),
             q0: vec![0.0; n],

@@ -46,7 +46,7 @@ use crate::model::generate::{box_mesh, rectangle_mesh};
 use crate::model::rod::Rod;
 use crate::model::solid::{CellKind, Formulation, Material, Mesh, assemble_with_contacts};
 use crate::model::{LinearSystem, MassKind};
-use crate::scene::bar::BarModel;
+use crate::scene::Model;
 
 /// A whole scene.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -385,7 +385,7 @@ impl Scene {
     }
 
     /// Meshes and assembles every body, eliminates fixed dofs, and builds the contacts.
-    pub fn build(&self) -> Result<(BarModel, ModelReport), Error> {
+    pub fn build(&self) -> Result<(Model, ModelReport), Error> {
         let mut systems = Vec::new();
         let mut meshes = Vec::new();
         let mut v0 = Vec::new();
@@ -597,7 +597,7 @@ impl Scene {
         };
         let n = system.ndof();
         Ok((
-            BarModel {
+            Model {
                 system,
                 contacts,
                 q0: vec![0.0; n],

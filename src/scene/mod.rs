@@ -7,3 +7,31 @@
 pub mod bar;
 pub mod file;
 pub mod solid_bar;
+
+use crate::contact::ContactSet;
+use crate::error::Error;
+use crate::integrators::{self, Integrator, SchemeParams};
+use crate::model::LinearSystem;
+
+/// A built scene: the assembled structure, its contacts and its initial state.
+pub struct Model {
+    /// The assembled structure (after Dirichlet elimination).
+    pub system: LinearSystem,
+    /// The candidate contacts.
+    pub contacts: Box<dyn ContactSet>,
+    /// Initial displacement.
+    pub q0: Vec<f64>,
+    /// Initial velocity.
+    pub v0: Vec<f64>,
+}
+
+impl Model {
+    /// Builds the integrator of `params` with step `dt` for this model.
+    pub fn into_integrator(
+        self,
+        params: &SchemeParams,
+        dt: f64,
+    ) -> Result<Box<dyn Integrator>, Error> {
+        integrators::build(params, self.system, self.contacts, &self.q0, &self.v0, dt)
+    }
+}

@@ -12,7 +12,7 @@ use crate::integrators::SchemeParams;
 use crate::model::MassKind;
 use crate::model::generate::box_mesh;
 use crate::model::solid::{CellKind, Formulation, Material, assemble};
-use crate::scene::bar::BarModel;
+use crate::scene::Model;
 
 /// Parameters of the 3-D bar.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -103,7 +103,7 @@ impl SolidBarScene {
     }
 
     /// Meshes and assembles the bar, with its `x0` face nodes as contacts.
-    pub fn build(&self) -> Result<BarModel, Error> {
+    pub fn build(&self) -> Result<Model, Error> {
         self.validate()?;
         let a = self.area.sqrt();
         let mesh = box_mesh(
@@ -127,7 +127,7 @@ impl SolidBarScene {
         for v in v0.iter_mut().step_by(3) {
             *v = self.velocity;
         }
-        Ok(BarModel {
+        Ok(Model {
             system,
             contacts: Box::new(contacts),
             q0: vec![0.0; n],
