@@ -8,6 +8,7 @@ use signorini::integrators::{self, SchemeParams};
 use signorini::model::MassKind;
 use signorini::model::generate::box_mesh;
 use signorini::model::solid::{CellKind, Formulation, Material, assemble};
+use signorini::solvers::LcpKind;
 
 const MAT: Material = Material {
     young: 210e9,
@@ -65,18 +66,24 @@ fn steps(c: &mut Criterion) {
         for v in v0.iter_mut().skip(2).step_by(3) {
             *v = -0.1;
         }
-        let mut integ = integrators::build(
-            &SchemeParams::default(),
-            sys,
-            Box::new(contacts),
-            &vec![0.0; dofs],
-            &v0,
-            1e-6,
-        )
-        .unwrap();
-        g.bench_function(BenchmarkId::new("combined_projection", dofs), |b| {
-            b.iter(|| integ.step().unwrap())
-        });
+        for (label, lcp) in [("lemke", LcpKind::Lemke), ("auto", LcpKind::Auto)] {
+            let params = SchemeParams {
+                lcp,
+                ..SchemeParams::default()
+            };
+            let mut integ = integrators::build(
+                &params,
+                sys.clone(),
+                Box::new(contacts.clone()),
+                &vec![0.0; dofs],
+                &v0,
+                1e-6,
+            )
+            .unwrap();
+            g.bench_function(BenchmarkId::new(label, dofs), |b| {
+                b.iter(|| integ.step().unwrap())
+            });
+        }
     }
     g.finish();
 }

@@ -77,7 +77,9 @@ enum MassArg {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum LcpArg {
+    Auto,
     Lemke,
+    BlockPivoting,
     Pgs,
 }
 
@@ -147,8 +149,9 @@ struct BarArgs {
     /// Stop projecting below this violation (m); 0 projects to machine accuracy.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     projection_tolerance: f64,
-    /// One-step LCP solver: exact pivoting or projected Gauss–Seidel.
-    #[arg(long, value_enum, default_value = "lemke")]
+    /// One-step LCP solver: auto (Lemke up to 16 unknowns, block pivoting above), Lemke,
+    /// block pivoting (both exact), or projected Gauss–Seidel.
+    #[arg(long, value_enum, default_value = "auto")]
     lcp: LcpArg,
     /// PGS tolerance on the complementarity residual, relative to max(1, |q|).
     #[arg(long, default_value_t = 1e-12, allow_hyphen_values = true)]
@@ -211,7 +214,9 @@ impl BarArgs {
         p.projection_feedback = !self.no_projection_feedback;
         p.projection_tolerance = self.projection_tolerance;
         p.lcp = match self.lcp {
+            LcpArg::Auto => LcpKind::Auto,
             LcpArg::Lemke => LcpKind::Lemke,
+            LcpArg::BlockPivoting => LcpKind::BlockPivoting,
             LcpArg::Pgs => LcpKind::Pgs {
                 tol: self.lcp_tol,
                 max_sweeps: self.lcp_max_sweeps,

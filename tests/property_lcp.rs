@@ -3,7 +3,7 @@
 //! nonsymmetric matrices): feasibility and complementarity to 1e-10.
 
 use proptest::prelude::*;
-use signorini::solvers::lcp::{LcpSolver, Lemke, Pgs};
+use signorini::solvers::lcp::{BlockPivoting, LcpSolver, Lemke, Pgs};
 use signorini::solvers::mlcp::Mlcp;
 
 /// Column-major k×k SPD matrix AᵀA + 0.1 I from entries in [-1, 1].
@@ -57,6 +57,18 @@ proptest! {
         let info = l.solve(&m, k, &q[..k], &mut z, &mut w).unwrap();
         check(&m, k, &q[..k], &z, 1e-10);
         prop_assert!(info.residual <= 1e-10 * (1.0 + q.iter().fold(0.0_f64, |a, x| a.max(x.abs()))));
+    }
+
+    #[test]
+    fn block_pivoting_solves_spd_lcps_from_any_warm_start(k in 1usize..12,
+            a in prop::collection::vec(-1.0f64..1.0, 144),
+            q in prop::collection::vec(-10.0f64..10.0, 12),
+            warm in prop::collection::vec(-1.0f64..1.0, 12)) {
+        let m = spd(k, &a);
+        let mut b = BlockPivoting::with_capacity(12);
+        let (mut z, mut w) = (warm[..k].to_vec(), vec![0.0; k]);
+        b.solve(&m, k, &q[..k], &mut z, &mut w).unwrap();
+        check(&m, k, &q[..k], &z, 1e-10);
     }
 
     #[test]

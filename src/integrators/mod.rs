@@ -219,7 +219,7 @@ pub struct SchemeParams {
     /// Stop projecting when the violation is below this (m). 0 (default): project to
     /// machine accuracy.
     pub projection_tolerance: f64,
-    /// LCP algorithm (default Lemke).
+    /// LCP algorithm (default: Lemke up to 16 unknowns, block pivoting above).
     pub lcp: LcpKind,
     /// Newton loop controls.
     pub newton: NewtonParams,
@@ -235,7 +235,7 @@ impl Default for SchemeParams {
             project_all_active: false,
             projection_feedback: true,
             projection_tolerance: 0.0,
-            lcp: LcpKind::Lemke,
+            lcp: LcpKind::Auto,
             newton: NewtonParams::default(),
         }
     }

@@ -4,6 +4,8 @@
 //! - [`lcp::Lemke`]: complementary pivoting, exact up to rounding (finite termination for
 //!   P-matrices such as the Delassus blocks `W_αα` of eq. 57 and `GᵀNG` of eq. 58/60).
 //! - [`lcp::Pgs`]: projected Gauss–Seidel with tolerance, iteration cap and warm start.
+//! - [`lcp::BlockPivoting`]: block principal pivoting for SPD matrices (one dense
+//!   Cholesky per guess of the active set, warm-started), falling back to Lemke.
 //! - [`mlcp::Mlcp`]: the projection problem of Algorithm 2 (eq. 65, 68), with equality
 //!   rows (`g^α = 0`, free `τ^α`, for contacts with a positive impulse) and
 //!   complementarity rows (`0 ≤ g ⊥ τ ≥ 0`), reduced to an LCP by a Schur complement.
@@ -49,8 +51,14 @@ pub enum SolveError {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum LcpKind {
-    /// Lemke's complementary pivoting (exact; default).
+    /// Lemke for problems of up to 16 unknowns, block pivoting above (both exact;
+    /// default).
+    Auto,
+    /// Lemke's complementary pivoting (exact).
     Lemke,
+    /// Block principal pivoting with warm start, Lemke fallback (exact; for the
+    /// symmetric Delassus blocks with many active contacts).
+    BlockPivoting,
     /// Projected Gauss–Seidel with the given tolerance and cap.
     Pgs {
         /// Stop when the complementarity residual is below `tol · max(1, |q|∞)`.
