@@ -290,16 +290,7 @@ impl ThetaCore {
         let jac = ContactJacobian::for_set(contacts.as_ref());
         let e = contacts.restitution().to_vec();
         let linear = contacts.is_linear();
-        let state = State {
-            step: 0,
-            time: 0.0,
-            q: q0.to_vec(),
-            v: v0.to_vec(),
-            gap: vec![0.0; m],
-            local_velocity: vec![0.0; m],
-            impulse: vec![0.0; m],
-            projection: vec![0.0; m],
-        };
+        let state = State::initial(q0, v0, m);
         let nm = if with_projection { n * m } else { 0 };
         let mm = if with_projection { m * m } else { 0 };
         let mut core = ThetaCore {

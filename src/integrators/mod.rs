@@ -59,6 +59,23 @@ pub struct State {
     pub projection: Vec<f64>,
 }
 
+impl State {
+    /// The state at `t = 0` with `m` contacts (contact quantities zero until the
+    /// integrator evaluates them).
+    pub fn initial(q0: &[f64], v0: &[f64], m: usize) -> Self {
+        State {
+            step: 0,
+            time: 0.0,
+            q: q0.to_vec(),
+            v: v0.to_vec(),
+            gap: vec![0.0; m],
+            local_velocity: vec![0.0; m],
+            impulse: vec![0.0; m],
+            projection: vec![0.0; m],
+        }
+    }
+}
+
 /// Statistics of one step, as the paper's Table 3 reports them.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct StepStats {
