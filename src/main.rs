@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use signorini::integrators::delassus::DelassusKind;
 use signorini::integrators::{Forecast, Metric, SchemeKind};
 use signorini::model::MassKind;
 use signorini::run::{self, Progress};
@@ -84,6 +85,13 @@ enum LcpArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum DelassusArg {
+    Auto,
+    Dense,
+    Columns,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum MetricArg {
     Euclidean,
     Mass,
@@ -159,6 +167,13 @@ struct BarArgs {
     /// PGS sweep cap.
     #[arg(long, default_value_t = 10_000)]
     lcp_max_sweeps: usize,
+    /// Delassus storage: dense n×m blocks, per-active-column, or auto (dense up to 64
+    /// contacts).
+    #[arg(long, value_enum, default_value = "auto")]
+    delassus: DelassusArg,
+    /// Columns of the per-active-column pool (0: as many as fit in 2 GiB).
+    #[arg(long, default_value_t = 0)]
+    delassus_pool: usize,
     /// Newton / fixed-point tolerance (relative).
     #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
     newton_tol: f64,
@@ -222,6 +237,12 @@ impl BarArgs {
                 max_sweeps: self.lcp_max_sweeps,
             },
         };
+        p.delassus = match self.delassus {
+            DelassusArg::Auto => DelassusKind::Auto,
+            DelassusArg::Dense => DelassusKind::Dense,
+            DelassusArg::Columns => DelassusKind::Columns,
+        };
+        p.delassus_pool = self.delassus_pool;
         p.newton.tol = self.newton_tol;
         p.newton.max_iterations = self.newton_max_iterations;
         s

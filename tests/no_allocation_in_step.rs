@@ -1,11 +1,13 @@
 //! `Integrator::step` does not allocate: a counting global allocator watches every
 //! scheme through impact, contact, release and free flight, for linear and nonlinear
-//! contacts.
+//! contacts, on both Delassus paths (dense, and per-active-column whose columns are
+//! computed inside the step when a contact first activates).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use signorini::contact::sphere::InsideSphere;
+use signorini::integrators::delassus::DelassusKind;
 use signorini::integrators::{self, Metric, SchemeKind, SchemeParams};
 use signorini::model::point_mass::point_mass;
 use signorini::scene::bar::BarScene;
@@ -50,25 +52,38 @@ fn count_steps(integ: &mut dyn integrators::Integrator, steps: usize) -> usize {
 fn bar_steps_do_not_allocate() {
     for kind in SchemeKind::ALL {
         for metric in [Metric::Mass, Metric::Euclidean] {
-            let mut s = BarScene {
-                elements: 100,
-                dt: 2e-6,
-                ..BarScene::default()
-            };
-            s.scheme.kind = kind;
-            s.scheme.metric = metric;
-            let m = s.build().unwrap();
-            let mut integ = m.into_integrator(&s.scheme, s.dt).unwrap();
-            // 500 steps: contact (≈ 200 steps at this mesh and step), release, flight.
-            let n = count_steps(integ.as_mut(), 500);
-            assert_eq!(n, 0, "{} {:?} allocated {n} times", kind.name(), metric);
+            for delassus in [DelassusKind::Dense, DelassusKind::Columns] {
+                let mut s = BarScene {
+                    elements: 100,
+                    dt: 2e-6,
+                    ..BarScene::default()
+                };
+                s.scheme.kind = kind;
+                s.scheme.metric = metric;
+                s.scheme.delassus = delassus;
+                let m = s.build().unwrap();
+                let mut integ = m.into_integrator(&s.scheme, s.dt).unwrap();
+                // 500 steps: contact (≈ 200 steps at this mesh and step), release, flight.
+                let n = count_steps(integ.as_mut(), 500);
+                assert_eq!(
+                    n,
+                    0,
+                    "{} {:?} {:?} allocated {n} times",
+                    kind.name(),
+                    metric,
+                    delassus
+                );
+            }
         }
     }
 }
 
 #[test]
 fn nonlinear_contact_steps_do_not_allocate() {
-    for kind in SchemeKind::ALL {
+    for (kind, delassus) in SchemeKind::ALL
+        .into_iter()
+        .flat_map(|k| [(k, DelassusKind::Dense), (k, DelassusKind::Columns)])
+    {
         let sys = point_mass(2, 1.0, &[0.0, 0.0]).unwrap();
         let c = InsideSphere::new(
             vec![vec![0, 1]],
@@ -80,11 +95,12 @@ fn nonlinear_contact_steps_do_not_allocate() {
         .unwrap();
         let p = SchemeParams {
             kind,
+            delassus,
             ..SchemeParams::default()
         };
         let mut integ =
             integrators::build(&p, sys, Box::new(c), &[0.0, 0.5], &[1.0, 0.37], 1e-2).unwrap();
         let n = count_steps(integ.as_mut(), 1000);
-        assert_eq!(n, 0, "{} allocated {n} times", kind.name());
+        assert_eq!(n, 0, "{} {delassus:?} allocated {n} times", kind.name());
     }
 }

@@ -21,15 +21,17 @@
 //! formed once per step. For nonlinear contacts `G(qⁿ)` and the operators are
 //! recomputed every Newton iteration (`m` extra solves).
 //!
-//! The dense `n × m` blocks `M̂⁻¹G` and `M̂⁻¹K N G` suit the tens of contacts of the
-//! bar and the academic examples; scenes with thousands of candidates will take the
-//! per-active-column path of DESIGN.md §4.
+//! The operators live in [`Delassus`]: dense `n × m` blocks for the tens of contacts of
+//! the bar and the academic examples, per-active-column storage (columns computed when
+//! a contact first activates, corrections by one sparse solve) for thousands of
+//! candidates (DESIGN.md §4).
 
-use super::{Forecast, Metric, NewtonParams, SchemeParams, State, StepStats};
+use super::delassus::{Delassus, Op};
+use super::{Forecast, NewtonParams, SchemeParams, State, StepStats};
 use crate::assembly::linear_combination;
 use crate::contact::{ContactJacobian, ContactSet};
 use crate::error::Error;
-use crate::linalg::{SpdFactor, spmv, sym_spmv_add};
+use crate::linalg::{SparseMatrix, SpdFactor, sym_spmv_add};
 use crate::model::LinearSystem;
 use crate::solvers::lcp::LcpSolver;
 use crate::solvers::mlcp::Mlcp;
@@ -71,6 +73,8 @@ pub(crate) struct Workspace {
     z: Vec<f64>,
     w: Vec<f64>,
     eq: Vec<bool>,
+    member: Vec<bool>,
+    res: Vec<f64>,
     pub lcp: LcpSolver,
     mlcp: Mlcp,
 }
@@ -84,17 +88,19 @@ impl Workspace {
             z: vec![0.0; m],
             w: vec![0.0; m],
             eq: vec![false; m],
+            member: vec![false; m],
+            res: vec![0.0; m],
             lcp: LcpSolver::new(params.lcp, m),
             mlcp: Mlcp::with_capacity(m),
         }
     }
 
-    /// Gathers `mat[idx, idx]` (scaled by `scale`), `rhs[idx]`, the warm start and the
-    /// equality flags.
+    /// Gathers `op[idx, idx]` (scaled by `scale`), `rhs[idx]`, the warm start and the
+    /// equality flags; the columns of `idx` must be available in `del`.
     pub fn gather(
         &mut self,
-        mat: &[f64],
-        m: usize,
+        del: &Delassus,
+        op: Op,
         scale: f64,
         rhs: &[f64],
         warm: &[f64],
@@ -103,7 +109,7 @@ impl Workspace {
         let k = self.idx.len();
         for (b, &j) in self.idx.iter().enumerate() {
             for (a, &i) in self.idx.iter().enumerate() {
-                self.sub[a + b * k] = scale * mat[i + j * m];
+                self.sub[a + b * k] = scale * del.entry(op, i, j);
             }
             self.q[b] = rhs[j];
             self.z[b] = warm[j];
@@ -167,29 +173,6 @@ pub(crate) fn factor_step_matrix(
     SpdFactor::new(linear_combination(&terms).as_ref(), what)
 }
 
-/// `C = A⁻¹ G` (dense `n × m`, column-major) and `W = Gᵀ C` (dense `m × m`): the
-/// condensed Delassus operator of DESIGN.md §4, `m` solves with the one factorization.
-pub(crate) fn condense_delassus(
-    factor: &mut SpdFactor,
-    jac: &ContactJacobian,
-    n: usize,
-    cg: &mut [f64],
-    w: &mut [f64],
-) {
-    let m = jac.ncols();
-    for a in 0..m {
-        let col = &mut cg[a * n..(a + 1) * n];
-        col.iter_mut().for_each(|x| *x = 0.0);
-        jac.axpy(a, 1.0, col);
-        factor.solve_in_place(col);
-    }
-    for b in 0..m {
-        for a in 0..m {
-            w[a + b * m] = jac.dot(a, &cg[b * n..(b + 1) * n]);
-        }
-    }
-}
-
 /// The [`Integrator`](super::Integrator) accessors of a scheme built on a `core:
 /// ThetaCore` field.
 macro_rules! delegate_to_core {
@@ -218,22 +201,15 @@ pub struct ThetaCore {
     pub(crate) theta: f64,
     pub(crate) n: usize,
     pub(crate) m: usize,
-    factor: SpdFactor,
-    pub(crate) jac: ContactJacobian,
+    /// `M̂` factored, `G` and the condensed operators.
+    pub(crate) del: Delassus,
     pub(crate) e: Vec<f64>,
-    metric: Metric,
     with_projection: bool,
     feedback: bool,
     pub(crate) linear: bool,
     jac_at_qk: bool,
     pub(crate) newton: NewtonParams,
     pub(crate) projection_tolerance: f64,
-    // contact-space operators at the current linearization point
-    pub(crate) cg: Vec<f64>,
-    pub(crate) w: Vec<f64>,
-    d: Vec<f64>,
-    wd: Vec<f64>,
-    wn: Vec<f64>,
     pub(crate) state: State,
     // n-vectors
     pub(crate) v_free: Vec<f64>,
@@ -246,6 +222,8 @@ pub struct ThetaCore {
     pub(crate) u_k: Vec<f64>,
     pub(crate) u_free: Vec<f64>,
     u_new: Vec<f64>,
+    wp: Vec<f64>,
+    wt: Vec<f64>,
     coupling: Vec<f64>,
     a: Vec<f64>,
     pub(crate) b: Vec<f64>,
@@ -291,8 +269,14 @@ impl ThetaCore {
         let e = contacts.restitution().to_vec();
         let linear = contacts.is_linear();
         let state = State::initial(q0, v0, m);
-        let nm = if with_projection { n * m } else { 0 };
-        let mm = if with_projection { m * m } else { 0 };
+        let del = Delassus::new(
+            factor,
+            jac,
+            n,
+            (params.delassus, params.delassus_pool),
+            with_projection,
+            params.metric,
+        );
         let mut core = ThetaCore {
             sys,
             contacts,
@@ -300,21 +284,14 @@ impl ThetaCore {
             theta,
             n,
             m,
-            factor,
-            jac,
+            del,
             e,
-            metric: params.metric,
             with_projection,
             feedback: params.projection_feedback,
             linear,
             jac_at_qk: true,
             newton: params.newton,
             projection_tolerance: params.projection_tolerance,
-            cg: vec![0.0; n * m],
-            w: vec![0.0; m * m],
-            d: vec![0.0; nm],
-            wd: vec![0.0; mm],
-            wn: vec![0.0; mm],
             state,
             v_free: vec![0.0; n],
             work: vec![0.0; n],
@@ -325,6 +302,8 @@ impl ThetaCore {
             u_k: vec![0.0; m],
             u_free: vec![0.0; m],
             u_new: vec![0.0; m],
+            wp: vec![0.0; m],
+            wt: vec![0.0; m],
             coupling: vec![0.0; m],
             a: vec![0.0; m],
             b: vec![0.0; m],
@@ -339,23 +318,20 @@ impl ThetaCore {
             pos_mask: vec![false; m],
             ws: Workspace::new(m, params),
         };
-        let q = std::mem::take(&mut core.state.q);
         core.contacts
-            .evaluate(&q, &mut core.state.gap, &mut core.jac);
-        core.state.q = q;
-        core.condense();
-        let v = std::mem::take(&mut core.state.v);
-        core.jac.transpose_mul(&v, &mut core.state.local_velocity);
-        core.state.v = v;
+            .evaluate(&core.state.q, &mut core.state.gap, &mut core.del.jac);
+        core.del.refresh(&core.sys.stiffness);
+        core.del
+            .jac
+            .transpose_mul(&core.state.v, &mut core.state.local_velocity);
         Ok(core)
     }
 
     /// A description of the linear-algebra path, for summaries.
     pub fn path(&self) -> String {
         format!(
-            "M̂ = M + hθC + h²θ²K factored once ({}, n = {}); {} contact(s), {}; \
-             Delassus W = GᵀM̂⁻¹G dense {}×{}{}",
-            self.factor.backend_name(),
+            "M̂ = M + hθC + h²θ²K factored once ({}, n = {}); {} contact(s), {}; {}{}",
+            self.del.factor.backend_name(),
             self.n,
             self.m,
             if self.linear {
@@ -364,46 +340,13 @@ impl ThetaCore {
             } else {
                 "nonlinear gap: G(q) re-linearized every Newton iteration"
             },
-            self.m,
-            self.m,
+            self.del.describe(),
             if self.with_projection {
-                format!("; projection metric {}", self.metric.name())
+                format!("; projection metric {}", self.del.metric().name())
             } else {
                 String::new()
             }
         )
-    }
-
-    /// Recomputes `M̂⁻¹G`, `W` and (with projection) `M̂⁻¹K N G`, `W_D`, `W_N` for the
-    /// current `G` (`m` or `2m` sparse solves).
-    fn condense(&mut self) {
-        let (n, m) = (self.n, self.m);
-        condense_delassus(&mut self.factor, &self.jac, n, &mut self.cg, &mut self.w);
-        if !self.with_projection {
-            return;
-        }
-        for a in 0..m {
-            // work = N G_α
-            match self.metric {
-                Metric::Euclidean => {
-                    self.work.iter_mut().for_each(|x| *x = 0.0);
-                    self.jac.axpy(a, 1.0, &mut self.work);
-                }
-                Metric::Mass => self.work.copy_from_slice(&self.cg[a * n..(a + 1) * n]),
-            }
-            let col = &mut self.d[a * n..(a + 1) * n];
-            spmv(self.sys.stiffness.as_ref(), &self.work, col);
-            self.factor.solve_in_place(col);
-        }
-        for b in 0..m {
-            for a in 0..m {
-                self.wd[a + b * m] = self.jac.dot(a, &self.d[b * n..(b + 1) * n]);
-                self.wn[a + b * m] = match self.metric {
-                    Metric::Euclidean => self.jac.col_dot_col(a, b),
-                    Metric::Mass => self.w[a + b * m],
-                };
-            }
-        }
     }
 
     /// Free velocity and the contact-space data at the start of a step.
@@ -429,12 +372,13 @@ impl ThetaCore {
         if let Some(c) = &self.sys.damping {
             sym_spmv_add(c.as_ref(), -h, &s.v, &mut self.work);
         }
-        self.factor.solve_in_place(&mut self.work);
+        self.del.factor.solve_in_place(&mut self.work);
         for ((vf, v), w) in self.v_free.iter_mut().zip(&s.v).zip(&self.work) {
             *vf = v + w;
         }
         self.u_k.copy_from_slice(&s.local_velocity);
-        self.jac.transpose_mul(&self.v_free, &mut self.u_free);
+        self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
+        self.del.next_epoch();
         self.q_lin.copy_from_slice(&self.state.q);
         self.g_at_lin.copy_from_slice(&self.state.gap);
     }
@@ -463,12 +407,10 @@ impl ThetaCore {
     ) -> Result<(), Error> {
         let (h, th, m) = (self.h, self.theta, self.m);
         if !self.linear && !self.jac_at_qk {
-            let q = std::mem::take(&mut self.state.q);
             self.contacts
-                .evaluate(&q, &mut self.g_at_lin, &mut self.jac);
-            self.state.q = q;
-            self.condense();
-            self.jac.transpose_mul(&self.v_free, &mut self.u_free);
+                .evaluate(&self.state.q, &mut self.g_at_lin, &mut self.del.jac);
+            self.del.refresh(&self.sys.stiffness);
+            self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
             self.jac_at_qk = true;
         }
         self.tau_prev.iter_mut().for_each(|x| *x = 0.0);
@@ -482,26 +424,23 @@ impl ThetaCore {
             it += 1;
             stats.newton_iterations += 1;
             if !self.linear && it > 1 {
-                let q = std::mem::take(&mut self.q_lin);
                 self.contacts
-                    .evaluate(&q, &mut self.g_at_lin, &mut self.jac);
-                self.q_lin = q;
-                self.condense();
-                self.jac.transpose_mul(&self.v_free, &mut self.u_free);
+                    .evaluate(&self.q_lin, &mut self.g_at_lin, &mut self.del.jac);
+                self.del.refresh(&self.sys.stiffness);
+                self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
                 relinearized = true;
                 self.jac_at_qk = false;
             }
             // coupling hθ W_D τⁿ (zero without projection)
-            let any_tau = self.feedback && self.tau_prev.iter().any(|&t| t != 0.0);
+            self.coupling.iter_mut().for_each(|x| *x = 0.0);
+            if self.feedback && self.tau_prev.iter().any(|&t| t != 0.0) {
+                self.del
+                    .ensure_support(&self.tau_prev, &self.sys.stiffness)
+                    .map_err(|e| fail(&self.state, "Delassus columns", e))?;
+                self.del
+                    .mul_add(Op::Wd, h * th, &self.tau_prev, &mut self.coupling);
+            }
             for a in 0..m {
-                self.coupling[a] = if any_tau {
-                    h * th
-                        * (0..m)
-                            .map(|b| self.wd[a + b * m] * self.tau_prev[b])
-                            .sum::<f64>()
-                } else {
-                    0.0
-                };
                 self.a[a] = self.u_free[a] - self.coupling[a] + self.e[a] * self.u_k[a];
             }
             // linearized gaps without contact impulse or projection (eq. 51)
@@ -510,9 +449,9 @@ impl ThetaCore {
                     self.state.gap[a] + h * (1.0 - th) * self.u_k[a]
                 } else {
                     self.g_at_lin[a]
-                        + self.jac.dot(a, &self.state.q)
-                        + h * (1.0 - th) * self.jac.dot(a, &self.state.v)
-                        - self.jac.dot(a, &self.q_lin)
+                        + self.del.jac.dot(a, &self.state.q)
+                        + h * (1.0 - th) * self.del.jac.dot(a, &self.state.v)
+                        - self.del.jac.dot(a, &self.q_lin)
                 };
             }
             match law {
@@ -521,8 +460,15 @@ impl ThetaCore {
                     self.ws.idx.clear();
                     self.ws.idx.extend((0..m).filter(|&a| self.vel_mask[a]));
                     if !self.ws.idx.is_empty() {
-                        self.ws.gather(&self.w, m, 1.0, &self.a, &self.p, |_| false);
-                        let info = self.ws.solve().map_err(|e| self.fail("velocity LCP", e))?;
+                        self.del
+                            .ensure_all(&self.ws.idx, &self.sys.stiffness)
+                            .map_err(|e| fail(&self.state, "Delassus columns", e))?;
+                        self.ws
+                            .gather(&self.del, Op::W, 1.0, &self.a, &self.p, |_| false);
+                        let info = self
+                            .ws
+                            .solve()
+                            .map_err(|e| fail(&self.state, "velocity LCP", e))?;
                         stats.lcp_iterations += info.iterations;
                         stats.lcp_residual = stats.lcp_residual.max(info.residual);
                         self.ws.scatter(&mut self.p);
@@ -538,8 +484,8 @@ impl ThetaCore {
                     self.p_warm.copy_from_slice(&self.p);
                     grow_solve(
                         &mut self.ws,
-                        &self.w,
-                        m,
+                        &mut self.del,
+                        (Op::W, &self.sys.stiffness),
                         h * th,
                         &self.a,
                         &self.p_warm,
@@ -547,12 +493,13 @@ impl ThetaCore {
                         0.0,
                         stats,
                     )
-                    .map_err(|e| self.fail("position-level LCP", e))?;
+                    .map_err(|e| fail(&self.state, "position-level LCP", e))?;
                 }
             }
+            self.wp.iter_mut().for_each(|x| *x = 0.0);
+            self.del.mul_add(Op::W, 1.0, &self.p, &mut self.wp);
             for a in 0..m {
-                let wp: f64 = (0..m).map(|b| self.w[a + b * m] * self.p[b]).sum();
-                self.u_new[a] = self.u_free[a] + wp - self.coupling[a];
+                self.u_new[a] = self.u_free[a] + self.wp[a] - self.coupling[a];
                 self.b[a] = self.g_lin[a] + h * th * self.u_new[a];
             }
             // position problem
@@ -560,13 +507,12 @@ impl ThetaCore {
             if projected {
                 stats.projection_iterations += 1;
             }
+            self.wt.iter_mut().for_each(|x| *x = 0.0);
+            if self.with_projection {
+                self.del.mul_add(Op::Wn, 1.0, &self.tau, &mut self.wt);
+            }
             for a in 0..m {
-                let wt: f64 = if self.with_projection {
-                    (0..m).map(|b| self.wn[a + b * m] * self.tau[b]).sum()
-                } else {
-                    0.0
-                };
-                self.g_lin[a] = self.b[a] + wt;
+                self.g_lin[a] = self.b[a] + self.wt[a];
             }
             self.tau_used.copy_from_slice(&self.tau_prev);
             for a in 0..m {
@@ -575,7 +521,7 @@ impl ThetaCore {
             self.tau_prev.copy_from_slice(&self.tau);
             // convergence
             let r = if self.linear {
-                self.linear_residual()
+                self.linear_residual()?
             } else {
                 self.form();
                 let mut dq: f64 = 0.0;
@@ -602,10 +548,13 @@ impl ThetaCore {
     }
 
     /// Dimensionless change that the last `Δτ` would make to the next iterate (linear `G`).
-    fn linear_residual(&self) -> f64 {
+    fn linear_residual(&mut self) -> Result<f64, Error> {
         if !self.with_projection || !self.feedback || self.dtau.iter().all(|&x| x == 0.0) {
-            return 0.0;
+            return Ok(0.0);
         }
+        self.del
+            .ensure_support(&self.dtau, &self.sys.stiffness)
+            .map_err(|e| fail(&self.state, "Delassus columns", e))?;
         let (h, th, m) = (self.h, self.theta, self.m);
         let mut s_v: f64 = 0.0;
         let mut s_g: f64 = 0.0;
@@ -616,16 +565,15 @@ impl ThetaCore {
                 .max(self.u_new[a].abs());
             s_g = s_g.max(self.b[a].abs());
         }
+        self.wp.iter_mut().for_each(|x| *x = 0.0);
+        self.wt.iter_mut().for_each(|x| *x = 0.0);
+        self.del.mul_add(Op::Wd, 1.0, &self.dtau, &mut self.wp);
+        self.del.mul_add(Op::Wn, 1.0, &self.dtau, &mut self.wt);
         let mut dv: f64 = 0.0;
         let mut dg: f64 = 0.0;
         for a in 0..m {
-            let (mut x, mut y) = (0.0, 0.0);
-            for b in 0..m {
-                x += self.wd[a + b * m] * self.dtau[b];
-                y += self.wn[a + b * m] * self.dtau[b];
-            }
-            dv = dv.max(h * th * x.abs());
-            dg = dg.max(y.abs());
+            dv = dv.max(h * th * self.wp[a].abs());
+            dg = dg.max(self.wt[a].abs());
         }
         // Rounding floor: 8 ulps of the quantities the iterate is built from.
         let fv = 8.0 * f64::EPSILON * s_v;
@@ -640,7 +588,7 @@ impl ThetaCore {
         } else {
             dg / (h * s_v).max(f64::MIN_POSITIVE)
         };
-        rv.max(rg)
+        Ok(rv.max(rg))
     }
 
     /// Solves the position problem for `rule`; returns whether any `τ ≠ 0`.
@@ -656,8 +604,8 @@ impl ThetaCore {
                 // 0 ≤ b + W_N τ ⊥ τ ≥ 0 over all contacts
                 grow_solve(
                     &mut self.ws,
-                    &self.wn,
-                    m,
+                    &mut self.del,
+                    (Op::Wn, &self.sys.stiffness),
                     1.0,
                     &self.b,
                     &self.tau_prev,
@@ -665,7 +613,7 @@ impl ThetaCore {
                     ptol,
                     stats,
                 )
-                .map_err(|e| self.fail("position LCP", e))?;
+                .map_err(|e| fail(&self.state, "position LCP", e))?;
             }
             PositionRule::Combined { project_all } => {
                 // eq. 68: equality where P > 0 (eq. 69/70), complementarity elsewhere
@@ -684,8 +632,15 @@ impl ThetaCore {
                 if self.ws.idx.is_empty() {
                     self.tau.iter_mut().for_each(|x| *x = 0.0);
                 } else {
-                    self.ws.gather(&self.wn, m, 1.0, b, &self.tau_prev, eq);
-                    let info = self.ws.solve().map_err(|e| self.fail("position MLCP", e))?;
+                    self.del
+                        .ensure_all(&self.ws.idx, &self.sys.stiffness)
+                        .map_err(|e| fail(&self.state, "Delassus columns", e))?;
+                    self.ws
+                        .gather(&self.del, Op::Wn, 1.0, b, &self.tau_prev, eq);
+                    let info = self
+                        .ws
+                        .solve()
+                        .map_err(|e| fail(&self.state, "position MLCP", e))?;
                     stats.lcp_iterations += info.iterations;
                     stats.lcp_residual = stats.lcp_residual.max(info.residual);
                     self.ws.scatter(&mut self.tau);
@@ -697,7 +652,7 @@ impl ThetaCore {
 
     /// `v = v_free + M̂⁻¹G P − hθ M̂⁻¹K N G τ_used`, `q = q_k + h(1−θ)v_k + hθ v + N G τ`.
     pub(crate) fn form(&mut self) {
-        let (h, th, n) = (self.h, self.theta, self.n);
+        let (h, th) = (self.h, self.theta);
         if self.linear {
             // called once per step: v_free is not needed afterwards (begin_step
             // rewrites it), so hand its buffer over instead of copying
@@ -705,29 +660,20 @@ impl ThetaCore {
         } else {
             self.v_new.copy_from_slice(&self.v_free);
         }
-        for a in 0..self.m {
-            let p = self.p[a];
-            if p != 0.0 {
-                axpy(p, &self.cg[a * n..(a + 1) * n], &mut self.v_new);
-            }
-            let t = self.tau_used[a];
-            if t != 0.0 && self.feedback {
-                axpy(-h * th * t, &self.d[a * n..(a + 1) * n], &mut self.v_new);
-            }
-        }
+        let kfac = if self.feedback { -h * th } else { 0.0 };
+        self.del.add_velocity_correction(
+            &self.p,
+            kfac,
+            &self.tau_used,
+            &self.tau,
+            &mut self.v_new,
+            &self.sys.stiffness,
+        );
         let s = &self.state;
         for (((qn, q), v), vn) in self.q_new.iter_mut().zip(&s.q).zip(&s.v).zip(&self.v_new) {
             *qn = q + h * ((1.0 - th) * v + th * vn);
         }
-        for a in 0..self.m {
-            let t = self.tau[a];
-            if t != 0.0 {
-                match self.metric {
-                    Metric::Euclidean => self.jac.axpy(a, t, &mut self.q_new),
-                    Metric::Mass => axpy(t, &self.cg[a * n..(a + 1) * n], &mut self.q_new),
-                }
-            }
-        }
+        self.del.add_position_correction(&self.tau, &mut self.q_new);
     }
 
     /// Accepts `v_new`, `q_new`, `P`, `τ` as the state at `t_{k+1}` and evaluates the
@@ -743,36 +689,38 @@ impl ThetaCore {
         self.state.step += 1;
         self.state.time = self.state.step as f64 * self.h;
         self.contacts
-            .evaluate(&self.state.q, &mut self.state.gap, &mut self.jac);
+            .evaluate(&self.state.q, &mut self.state.gap, &mut self.del.jac);
         if !self.linear {
-            self.condense();
+            self.del.refresh(&self.sys.stiffness);
             self.jac_at_qk = true;
         }
-        self.jac
+        self.del
+            .jac
             .transpose_mul(&self.state.v, &mut self.state.local_velocity);
         stats.max_violation = self.state.gap.iter().fold(0.0_f64, |acc, &g| acc.max(-g));
     }
+}
 
-    /// An error for a failed one-step solve, with the step and time.
-    pub(crate) fn fail(&self, what: &str, e: SolveError) -> Error {
-        Error::NotConverged {
-            solver: what.to_string(),
-            step: self.state.step + 1,
-            time: self.state.time,
-            detail: e.to_string(),
-        }
+/// An error for a one-step solve that failed in the step after `state`.
+pub(crate) fn fail(state: &State, what: &str, e: SolveError) -> Error {
+    Error::NotConverged {
+        solver: what.to_string(),
+        step: state.step + 1,
+        time: state.time,
+        detail: e.to_string(),
     }
 }
 
-/// Solves `0 ≤ rhs + scale·mat z ⊥ z ≥ 0` over all `m` rows by solving on the rows
+/// Solves `0 ≤ rhs + scale·op z ⊥ z ≥ 0` over all `m` rows by solving on the rows
 /// violated at `z = 0` (`rhs < −tol`) and adding any row the solution leaves violated,
-/// until none is: the result then solves the full LCP, with work proportional to the
-/// rows that matter. At most `m` growth rounds (a cap counted in `stats`).
+/// until none is: the result then solves the full LCP, with work (and Delassus
+/// columns) proportional to the rows that matter. At most `m` growth rounds (a cap
+/// counted in `stats`).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn grow_solve(
     ws: &mut Workspace,
-    mat: &[f64],
-    m: usize,
+    del: &mut Delassus,
+    (op, stiffness): (Op, &SparseMatrix),
     scale: f64,
     rhs: &[f64],
     warm: &[f64],
@@ -780,24 +728,28 @@ pub(crate) fn grow_solve(
     tol: f64,
     stats: &mut StepStats,
 ) -> Result<(), SolveError> {
+    let m = del.len();
     ws.idx.clear();
     ws.idx.extend((0..m).filter(|&a| rhs[a] < -tol));
     out.iter_mut().for_each(|x| *x = 0.0);
     let mut rounds = 0;
     while !ws.idx.is_empty() {
         rounds += 1;
-        ws.gather(mat, m, scale, rhs, warm, |_| false);
+        del.ensure_all(&ws.idx, stiffness)?;
+        ws.gather(del, op, scale, rhs, warm, |_| false);
         let info = ws.solve()?;
         stats.lcp_iterations += info.iterations;
         stats.lcp_residual = stats.lcp_residual.max(info.residual);
         ws.scatter(out);
         let before = ws.idx.len();
+        ws.member.iter_mut().for_each(|x| *x = false);
+        for &a in &ws.idx {
+            ws.member[a] = true;
+        }
+        ws.res.copy_from_slice(rhs);
+        del.mul_add(op, scale, out, &mut ws.res);
         for a in 0..m {
-            if ws.idx.contains(&a) {
-                continue;
-            }
-            let g: f64 = rhs[a] + scale * (0..m).map(|b| mat[a + b * m] * out[b]).sum::<f64>();
-            if g < -tol {
+            if !ws.member[a] && ws.res[a] < -tol {
                 ws.idx.push(a);
             }
         }
@@ -810,12 +762,6 @@ pub(crate) fn grow_solve(
         }
     }
     Ok(())
-}
-
-fn axpy(s: f64, x: &[f64], y: &mut [f64]) {
-    for (yi, xi) in y.iter_mut().zip(x) {
-        *yi += s * xi;
-    }
 }
 
 /// Checks a user-given vector: length and finiteness.

@@ -25,6 +25,7 @@
 
 pub mod combined_projection;
 pub mod core;
+pub mod delassus;
 pub mod direct_projection;
 pub mod moreau_jean;
 pub mod schatzman_paoli;
@@ -240,6 +241,14 @@ pub struct SchemeParams {
     pub lcp: LcpKind,
     /// Newton loop controls.
     pub newton: NewtonParams,
+    /// Delassus storage (default: dense up to 64 contacts, per-active-column above;
+    /// see [`delassus`]).
+    pub delassus: delassus::DelassusKind,
+    /// Columns the per-active-column Delassus pool holds (0, default: as many as fit
+    /// in 2 GiB, capped at the contact count). When full, the column of the contact
+    /// inactive for longest is recomputed on demand; more contacts active in one step
+    /// than the pool holds is an error.
+    pub delassus_pool: usize,
 }
 
 impl Default for SchemeParams {
@@ -254,6 +263,8 @@ impl Default for SchemeParams {
             projection_tolerance: 0.0,
             lcp: LcpKind::Auto,
             newton: NewtonParams::default(),
+            delassus: delassus::DelassusKind::Auto,
+            delassus_pool: 0,
         }
     }
 }

@@ -16,8 +16,9 @@
 //! when `M` is singular, as with the redistributed mass).
 //! The reported impulse is `P/h` (N·s), comparable with the velocity-level schemes.
 
-use super::core::{Workspace, condense_delassus, factor_step_matrix, grow_solve};
-use super::{Integrator, NewtonParams, SchemeParams, State, StepStats};
+use super::core::{Workspace, factor_step_matrix, fail, grow_solve};
+use super::delassus::{Delassus, Op};
+use super::{Integrator, Metric, NewtonParams, SchemeParams, State, StepStats};
 use crate::contact::{ContactJacobian, ContactSet};
 use crate::error::Error;
 use crate::linalg::{SpdFactor, spmv_add};
@@ -31,13 +32,11 @@ pub struct SchatzmanPaoli {
     theta: f64,
     n: usize,
     m: usize,
-    factor: SpdFactor,
-    jac: ContactJacobian,
+    /// `M_SP` factored, `G` and `W_SP = GᵀM_SP⁻¹G`.
+    del: Delassus,
     e: Vec<f64>,
     linear: bool,
     newton: NewtonParams,
-    cg: Vec<f64>,
-    w: Vec<f64>,
     state: State,
     q_prev: Vec<f64>,
     q_free: Vec<f64>,
@@ -91,6 +90,14 @@ impl SchatzmanPaoli {
         let jac = ContactJacobian::for_set(contacts.as_ref());
         let e = contacts.restitution().to_vec();
         let linear = contacts.is_linear();
+        let del = Delassus::new(
+            factor,
+            jac,
+            n,
+            (params.delassus, params.delassus_pool),
+            false,
+            Metric::Mass,
+        );
         let mut sp = SchatzmanPaoli {
             sys,
             contacts,
@@ -98,13 +105,10 @@ impl SchatzmanPaoli {
             theta,
             n,
             m,
-            factor,
-            jac,
+            del,
             e,
             linear,
             newton: params.newton,
-            cg: vec![0.0; n * m],
-            w: vec![0.0; m * m],
             state: State::initial(q0, v0, m),
             q_prev,
             q_free: vec![0.0; n],
@@ -119,23 +123,14 @@ impl SchatzmanPaoli {
             ws: Workspace::new(m, params),
         };
         sp.contacts
-            .evaluate(&sp.q_prev, &mut sp.g_prev, &mut sp.jac);
+            .evaluate(&sp.q_prev, &mut sp.g_prev, &mut sp.del.jac);
         sp.contacts
-            .evaluate(&sp.state.q, &mut sp.state.gap, &mut sp.jac);
-        sp.condense();
-        sp.jac
+            .evaluate(&sp.state.q, &mut sp.state.gap, &mut sp.del.jac);
+        sp.del.refresh(&sp.sys.stiffness);
+        sp.del
+            .jac
             .transpose_mul(&sp.state.v, &mut sp.state.local_velocity);
         Ok(sp)
-    }
-
-    fn condense(&mut self) {
-        condense_delassus(
-            &mut self.factor,
-            &self.jac,
-            self.n,
-            &mut self.cg,
-            &mut self.w,
-        );
     }
 }
 
@@ -170,7 +165,8 @@ impl Integrator for SchatzmanPaoli {
             );
             spmv_add(c.as_ref(), -0.5 * h * th, &self.q_lin, &mut self.work);
         }
-        self.factor.solve_in_place(&mut self.work);
+        self.del.next_epoch();
+        self.del.factor.solve_in_place(&mut self.work);
         for i in 0..n {
             self.q_free[i] = self.state.q[i] + self.work[i];
         }
@@ -181,26 +177,25 @@ impl Integrator for SchatzmanPaoli {
         for it in 1..=self.newton.max_iterations {
             st.newton_iterations += 1;
             if !self.linear || it == 1 {
-                let q = std::mem::take(&mut self.q_lin);
-                self.contacts.evaluate(&q, &mut self.g_lin, &mut self.jac);
-                self.q_lin = q;
+                self.contacts
+                    .evaluate(&self.q_lin, &mut self.g_lin, &mut self.del.jac);
                 if !self.linear {
-                    self.condense();
+                    self.del.refresh(&self.sys.stiffness);
                 }
             }
             for a in 0..m {
                 let lin = if it == 1 {
                     0.0
                 } else {
-                    self.jac.dot(a, &self.q_free) - self.jac.dot(a, &self.q_lin)
+                    self.del.jac.dot(a, &self.q_free) - self.del.jac.dot(a, &self.q_lin)
                 };
                 self.rhs[a] = self.g_lin[a] + lin + self.e[a] * self.g_prev[a];
             }
             self.p_warm.copy_from_slice(&self.p);
             grow_solve(
                 &mut self.ws,
-                &self.w,
-                m,
+                &mut self.del,
+                (Op::W, &self.sys.stiffness),
                 1.0,
                 &self.rhs,
                 &self.p_warm,
@@ -208,20 +203,9 @@ impl Integrator for SchatzmanPaoli {
                 0.0,
                 &mut st,
             )
-            .map_err(|e| crate::error::Error::NotConverged {
-                solver: "Schatzman–Paoli LCP".into(),
-                step: self.state.step + 1,
-                time: self.state.time,
-                detail: e.to_string(),
-            })?;
+            .map_err(|e| fail(&self.state, "Schatzman–Paoli LCP", e))?;
             self.q_new.copy_from_slice(&self.q_free);
-            for a in 0..m {
-                if self.p[a] != 0.0 {
-                    for (y, x) in self.q_new.iter_mut().zip(&self.cg[a * n..(a + 1) * n]) {
-                        *y += self.p[a] * x;
-                    }
-                }
-            }
+            self.del.add_inverse_g(1.0, &self.p, &mut self.q_new);
             if self.linear {
                 converged = true;
                 st.newton_residual = 0.0;
@@ -257,8 +241,9 @@ impl Integrator for SchatzmanPaoli {
         self.state.step += 1;
         self.state.time = self.state.step as f64 * h;
         self.contacts
-            .evaluate(&self.state.q, &mut self.state.gap, &mut self.jac);
-        self.jac
+            .evaluate(&self.state.q, &mut self.state.gap, &mut self.del.jac);
+        self.del
+            .jac
             .transpose_mul(&self.state.v, &mut self.state.local_velocity);
         st.max_violation = self.state.gap.iter().fold(0.0_f64, |a, &g| a.max(-g));
         Ok(st)
@@ -275,9 +260,8 @@ impl Integrator for SchatzmanPaoli {
     }
     fn path(&self) -> String {
         format!(
-            "M + h²θK + (hθ/2)C factored once ({}, n = {}); {} contact(s), {}; \
-             W_SP = GᵀM_SP⁻¹G dense {}×{}",
-            self.factor.backend_name(),
+            "M + h²θK + (hθ/2)C factored once ({}, n = {}); {} contact(s), {}; {}",
+            self.del.factor.backend_name(),
             self.n,
             self.m,
             if self.linear {
@@ -285,8 +269,7 @@ impl Integrator for SchatzmanPaoli {
             } else {
                 "nonlinear gap: re-linearized every Newton iteration"
             },
-            self.m,
-            self.m
+            self.del.describe()
         )
     }
 }

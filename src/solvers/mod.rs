@@ -45,6 +45,16 @@ pub enum SolveError {
     /// An equality block was not positive definite.
     #[error("equality block of the MLCP is not positive definite")]
     Singular,
+    /// More contacts are active in one step than the per-active-column Delassus pool
+    /// holds (see [`crate::integrators::delassus`]).
+    #[error(
+        "more than {cap} contacts active in one step: the per-active-column Delassus pool \
+         is full (raise `delassus_pool`, use `delassus = \"dense\"` or fewer candidates)"
+    )]
+    Capacity {
+        /// Columns the pool holds.
+        cap: usize,
+    },
 }
 
 /// Which LCP algorithm the schemes use.

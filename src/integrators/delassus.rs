@@ -1,0 +1,571 @@
+//! Condensed Delassus data (DESIGN.md §4): the contact-space operators
+//! `W = GᵀÂ⁻¹G`, `W_D = GᵀÂ⁻¹K N G` and `W_N = GᵀNG` of eq. 56–60, and the
+//! `n`-space corrections `Â⁻¹G x`, `Â⁻¹K N G x`, `N G x` that turn contact impulses
+//! back into velocities and positions. `Â` is the scheme's factored step matrix
+//! (`M̂ = M + hθC + h²θ²K` of eq. 47, or Schatzman–Paoli's `M + h²θK + (hθ/2)C`).
+//!
+//! Two storage paths, chosen by [`DelassusKind`]:
+//!
+//! * **dense**: `Â⁻¹G` (and `Â⁻¹K N G`) as dense `n × m` blocks plus dense `m × m`
+//!   operators, all computed once per linearization (`m` or `2m` sparse solves). Each
+//!   correction is then a few axpys: the fastest path for the tens of contacts of the
+//!   bar and of the academic examples.
+//! * **per-active-column**: only the columns `W_{:,β}` and `W_{D,:,β}` of contacts `β`
+//!   that have been active are computed (one or two solves when `β` first becomes
+//!   active; for a constant `G` they are kept across steps) and stored as `m`-vectors,
+//!   never as `n`-vectors; the `n`-space corrections are one sparse solve of the
+//!   gathered right-hand side `G x`. Memory is `O(m · k)` for `k` active contacts
+//!   instead of `O(n · m)`, and the set-up cost is paid only for contacts that touch.
+//!   This is the path for thousands of candidates on 10⁵–10⁶-dof meshes. The column
+//!   pool is allocated at construction; when it is full, the column of the contact
+//!   inactive for longest is recomputed on demand, so the step loop never allocates.
+//!
+//! The `Auto` choice takes the dense path up to [`AUTO_DENSE_MAX_CONTACTS`] contacts and
+//! while the dense blocks stay under 256 MiB, and the per-active-column path beyond.
+//! Both give the same iterates (tested to round-off in `tests/regression_delassus_paths.rs`).
+
+use serde::{Deserialize, Serialize};
+
+use super::Metric;
+use crate::contact::ContactJacobian;
+use crate::linalg::{SOLVE_BLOCK, SparseMatrix, SpdFactor, spmv};
+use crate::solvers::SolveError;
+
+/// How the Delassus data are stored (DESIGN.md §4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DelassusKind {
+    /// Dense up to [`AUTO_DENSE_MAX_CONTACTS`] contacts (and 256 MiB), per-active-column
+    /// above (default).
+    #[default]
+    Auto,
+    /// Dense `n × m` blocks `Â⁻¹G`, computed once per linearization.
+    Dense,
+    /// Columns of the active contacts only, computed when first needed.
+    Columns,
+}
+
+impl DelassusKind {
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            DelassusKind::Auto => "auto",
+            DelassusKind::Dense => "dense",
+            DelassusKind::Columns => "columns",
+        }
+    }
+}
+
+/// Largest contact count for which [`DelassusKind::Auto`] takes the dense path.
+pub const AUTO_DENSE_MAX_CONTACTS: usize = 64;
+/// Largest dense `n × m` storage [`DelassusKind::Auto`] accepts (bytes).
+const AUTO_DENSE_MAX_BYTES: usize = 256 << 20;
+/// Memory budget of the per-active-column pool (bytes): columns of `m` values each.
+const COLUMN_POOL_BYTES: usize = 2 << 30;
+const NONE: usize = usize::MAX;
+
+/// Which contact-space operator an entry or product refers to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Op {
+    /// `W = GᵀÂ⁻¹G` (eq. 57).
+    W,
+    /// `W_D = GᵀÂ⁻¹K N G` (the stiffness feedback of eq. 56a).
+    Wd,
+    /// `W_N = GᵀNG` (eq. 58 or 60).
+    Wn,
+}
+
+/// The factored step matrix with the Delassus data of one linearization of `G`.
+#[derive(Debug)]
+pub struct Delassus {
+    /// The factored step matrix `Â`.
+    pub factor: SpdFactor,
+    /// The contact Jacobian `G` at the current linearization point.
+    pub jac: ContactJacobian,
+    n: usize,
+    m: usize,
+    dense: bool,
+    with_d: bool,
+    metric: Metric,
+    // dense path: Â⁻¹G and Â⁻¹K N G (n × m), W_N (m × m)
+    cg: Vec<f64>,
+    d: Vec<f64>,
+    wn: Vec<f64>,
+    // both paths: columns of W and W_D (m values each) in slots
+    w: Vec<f64>,
+    wd: Vec<f64>,
+    slot: Vec<usize>,
+    owner: Vec<usize>,
+    stamp: Vec<u64>,
+    used: usize,
+    cap: usize,
+    epoch: u64,
+    /// Sparse solves spent on columns since construction (set-up included).
+    pub column_solves: usize,
+    t1: Vec<f64>,
+    t2: Vec<f64>,
+    // per-active-column path: contacts awaiting columns, and two n × SOLVE_BLOCK blocks
+    pending: Vec<usize>,
+    blk: Vec<f64>,
+    blk2: Vec<f64>,
+    /// `blk[n..2n]` holds `Â⁻¹G τ` for the position correction.
+    ng_ready: bool,
+}
+
+impl Delassus {
+    /// Sizes the storage for `n` dofs and the `m` columns of `jac`; `with_d` adds
+    /// `W_D`, `W_N` (projection schemes); `pool` columns on the per-active-column path
+    /// (0: as many as fit in 2 GiB). Columns are computed by [`Delassus::refresh`] and
+    /// [`Delassus::ensure`].
+    pub fn new(
+        factor: SpdFactor,
+        jac: ContactJacobian,
+        n: usize,
+        (kind, pool): (DelassusKind, usize),
+        with_d: bool,
+        metric: Metric,
+    ) -> Self {
+        let m = jac.ncols();
+        let per = if with_d { 2 } else { 1 };
+        let dense = match kind {
+            DelassusKind::Dense => true,
+            DelassusKind::Columns => false,
+            DelassusKind::Auto => {
+                m <= AUTO_DENSE_MAX_CONTACTS
+                    && n.saturating_mul(m).saturating_mul(8 * per) <= AUTO_DENSE_MAX_BYTES
+            }
+        };
+        let cap = if dense {
+            m
+        } else if pool > 0 {
+            m.min(pool)
+        } else {
+            m.min((COLUMN_POOL_BYTES / (8 * per * m.max(1))).max(1))
+        };
+        let nm = if dense { n * m } else { 0 };
+        let nb = if dense {
+            0
+        } else {
+            n * SOLVE_BLOCK.min(m).max(2)
+        };
+        Delassus {
+            factor,
+            jac,
+            n,
+            m,
+            dense,
+            with_d,
+            metric,
+            cg: vec![0.0; nm],
+            d: vec![0.0; if with_d { nm } else { 0 }],
+            wn: vec![0.0; if dense && with_d { m * m } else { 0 }],
+            w: vec![0.0; m * cap],
+            wd: vec![0.0; if with_d { m * cap } else { 0 }],
+            slot: vec![NONE; m],
+            owner: vec![NONE; cap],
+            stamp: vec![0; cap],
+            used: 0,
+            cap,
+            epoch: 1,
+            column_solves: 0,
+            t1: vec![0.0; n],
+            t2: vec![0.0; n],
+            pending: Vec::with_capacity(SOLVE_BLOCK),
+            blk: vec![0.0; nb],
+            blk2: vec![0.0; if with_d { nb } else { 0 }],
+            ng_ready: false,
+        }
+    }
+
+    /// Number of contacts `m`.
+    pub fn len(&self) -> usize {
+        self.m
+    }
+
+    /// True without contacts.
+    pub fn is_empty(&self) -> bool {
+        self.m == 0
+    }
+
+    /// The projection metric `N`.
+    pub fn metric(&self) -> Metric {
+        self.metric
+    }
+
+    /// True on the dense path.
+    pub fn is_dense(&self) -> bool {
+        self.dense
+    }
+
+    /// Columns the per-active-column pool holds at most.
+    pub fn capacity(&self) -> usize {
+        self.cap
+    }
+
+    /// One phrase for summaries: which path runs.
+    pub fn describe(&self) -> String {
+        if self.dense {
+            format!(
+                "Delassus dense: Â⁻¹G {}×{} and W {}×{} condensed per linearization",
+                self.n, self.m, self.m, self.m
+            )
+        } else {
+            format!(
+                "Delassus per-active-column: W columns computed when a contact first \
+                 activates (pool of {} columns of {}), corrections by one sparse solve",
+                self.cap, self.m
+            )
+        }
+    }
+
+    /// `G` changed (or at start): the dense path recomputes every column now, the
+    /// per-active-column path forgets its columns and recomputes them on demand.
+    pub fn refresh(&mut self, stiffness: &SparseMatrix) {
+        self.slot.iter_mut().for_each(|s| *s = NONE);
+        self.owner.iter_mut().for_each(|s| *s = NONE);
+        self.used = 0;
+        if !self.dense {
+            return;
+        }
+        let (n, m) = (self.n, self.m);
+        for a in 0..m {
+            let col = &mut self.cg[a * n..(a + 1) * n];
+            col.iter_mut().for_each(|x| *x = 0.0);
+            self.jac.axpy(a, 1.0, col);
+        }
+        self.factor.solve_block_in_place(&mut self.cg, m);
+        self.column_solves += m;
+        for b in 0..m {
+            for a in 0..m {
+                self.w[a + b * m] = self.jac.dot(a, &self.cg[b * n..(b + 1) * n]);
+            }
+            self.slot[b] = b;
+            self.owner[b] = b;
+        }
+        self.used = m;
+        if !self.with_d {
+            return;
+        }
+        for b in 0..m {
+            match self.metric {
+                Metric::Euclidean => {
+                    self.t1.iter_mut().for_each(|x| *x = 0.0);
+                    self.jac.axpy(b, 1.0, &mut self.t1);
+                }
+                Metric::Mass => self.t1.copy_from_slice(&self.cg[b * n..(b + 1) * n]),
+            }
+            spmv(
+                stiffness.as_ref(),
+                &self.t1,
+                &mut self.d[b * n..(b + 1) * n],
+            );
+        }
+        self.factor.solve_block_in_place(&mut self.d, m);
+        self.column_solves += m;
+        for b in 0..m {
+            for a in 0..m {
+                self.wd[a + b * m] = self.jac.dot(a, &self.d[b * n..(b + 1) * n]);
+                self.wn[a + b * m] = match self.metric {
+                    Metric::Euclidean => self.jac.col_dot_col(a, b),
+                    Metric::Mass => self.w[a + b * m],
+                };
+            }
+        }
+    }
+
+    /// Starts a new step: columns used from now on are protected from eviction until
+    /// the next call.
+    pub fn next_epoch(&mut self) {
+        self.epoch += 1;
+    }
+
+    /// Makes column `b` available (computing it on the per-active-column path).
+    pub fn ensure(&mut self, b: usize, stiffness: &SparseMatrix) -> Result<(), SolveError> {
+        self.request(b)?;
+        self.compute_pending(stiffness);
+        Ok(())
+    }
+
+    /// Ensures the columns of every contact in `idx`, computing the missing ones
+    /// [`SOLVE_BLOCK`] at a time.
+    pub fn ensure_all(
+        &mut self,
+        idx: &[usize],
+        stiffness: &SparseMatrix,
+    ) -> Result<(), SolveError> {
+        for &b in idx {
+            self.request(b)?;
+            if self.pending.len() == SOLVE_BLOCK {
+                self.compute_pending(stiffness);
+            }
+        }
+        self.compute_pending(stiffness);
+        Ok(())
+    }
+
+    /// Marks column `b` as used in this epoch; if absent, gives it a slot (evicting
+    /// the column unused for longest) and queues it for computation.
+    fn request(&mut self, b: usize) -> Result<(), SolveError> {
+        let s = self.slot[b];
+        if s != NONE {
+            self.stamp[s] = self.epoch;
+            return Ok(());
+        }
+        let s = if self.used < self.cap {
+            self.used += 1;
+            self.used - 1
+        } else {
+            let (s, &st) = self
+                .stamp
+                .iter()
+                .enumerate()
+                .min_by_key(|&(_, &st)| st)
+                .expect("pool has at least one slot");
+            if st >= self.epoch {
+                return Err(SolveError::Capacity { cap: self.cap });
+            }
+            self.slot[self.owner[s]] = NONE;
+            s
+        };
+        self.slot[b] = s;
+        self.owner[s] = b;
+        self.stamp[s] = self.epoch;
+        self.pending.push(b);
+        Ok(())
+    }
+
+    /// Computes the queued columns: `W_{:,β} = GᵀÂ⁻¹G_β` and, with projection,
+    /// `W_{D,:,β} = GᵀÂ⁻¹K N G_β`, by block solves.
+    fn compute_pending(&mut self, stiffness: &SparseMatrix) {
+        let k = self.pending.len();
+        if k == 0 {
+            return;
+        }
+        let (n, m) = (self.n, self.m);
+        let blk = &mut self.blk[..n * k];
+        blk.iter_mut().for_each(|x| *x = 0.0);
+        for (c, &b) in self.pending.iter().enumerate() {
+            self.jac.axpy(b, 1.0, &mut blk[c * n..(c + 1) * n]);
+        }
+        self.factor.solve_block_in_place(blk, k);
+        for (c, &b) in self.pending.iter().enumerate() {
+            let s = self.slot[b];
+            self.jac
+                .transpose_mul(&blk[c * n..(c + 1) * n], &mut self.w[s * m..(s + 1) * m]);
+        }
+        self.column_solves += k;
+        if self.with_d {
+            let blk2 = &mut self.blk2[..n * k];
+            for (c, &b) in self.pending.iter().enumerate() {
+                let out = &mut blk2[c * n..(c + 1) * n];
+                match self.metric {
+                    Metric::Mass => spmv(stiffness.as_ref(), &blk[c * n..(c + 1) * n], out),
+                    Metric::Euclidean => {
+                        self.t1.iter_mut().for_each(|x| *x = 0.0);
+                        self.jac.axpy(b, 1.0, &mut self.t1);
+                        spmv(stiffness.as_ref(), &self.t1, out);
+                    }
+                }
+            }
+            self.factor.solve_block_in_place(blk2, k);
+            for (c, &b) in self.pending.iter().enumerate() {
+                let s = self.slot[b];
+                self.jac
+                    .transpose_mul(&blk2[c * n..(c + 1) * n], &mut self.wd[s * m..(s + 1) * m]);
+            }
+            self.column_solves += k;
+        }
+        self.pending.clear();
+    }
+
+    /// Ensures the columns of the support of `x` (its non-zero entries).
+    pub fn ensure_support(
+        &mut self,
+        x: &[f64],
+        stiffness: &SparseMatrix,
+    ) -> Result<(), SolveError> {
+        for (b, &xb) in x.iter().enumerate() {
+            if xb != 0.0 {
+                self.request(b)?;
+                if self.pending.len() == SOLVE_BLOCK {
+                    self.compute_pending(stiffness);
+                }
+            }
+        }
+        self.compute_pending(stiffness);
+        Ok(())
+    }
+
+    /// Entry `(a, b)` of `op`; column `b` must be available ([`Delassus::ensure`]).
+    #[inline]
+    pub fn entry(&self, op: Op, a: usize, b: usize) -> f64 {
+        let m = self.m;
+        match op {
+            Op::W => self.w[self.slot[b] * m + a],
+            Op::Wd => self.wd[self.slot[b] * m + a],
+            Op::Wn => match self.metric {
+                Metric::Mass => self.w[self.slot[b] * m + a],
+                Metric::Euclidean if self.dense => self.wn[b * m + a],
+                Metric::Euclidean => self.jac.col_dot_col(a, b),
+            },
+        }
+    }
+
+    /// `out += s · op · x`; the columns of the support of `x` must be available.
+    pub fn mul_add(&self, op: Op, s: f64, x: &[f64], out: &mut [f64]) {
+        let m = self.m;
+        for (b, &xb) in x.iter().enumerate() {
+            if xb == 0.0 {
+                continue;
+            }
+            let f = s * xb;
+            let col = match (op, self.metric) {
+                (Op::W, _) | (Op::Wn, Metric::Mass) => &self.w,
+                (Op::Wd, _) => &self.wd,
+                (Op::Wn, Metric::Euclidean) => {
+                    if self.dense {
+                        &self.wn
+                    } else {
+                        for (a, o) in out.iter_mut().enumerate() {
+                            *o += f * self.jac.col_dot_col(a, b);
+                        }
+                        continue;
+                    }
+                }
+            };
+            let sb = self.slot[b];
+            for (o, &c) in out.iter_mut().zip(&col[sb * m..(sb + 1) * m]) {
+                *o += f * c;
+            }
+        }
+    }
+
+    /// `y += s · Â⁻¹ G x`.
+    pub fn add_inverse_g(&mut self, s: f64, x: &[f64], y: &mut [f64]) {
+        if x.iter().all(|&v| v == 0.0) {
+            return;
+        }
+        if self.dense {
+            let n = self.n;
+            for (a, &xa) in x.iter().enumerate() {
+                if xa != 0.0 {
+                    axpy(s * xa, &self.cg[a * n..(a + 1) * n], y);
+                }
+            }
+            return;
+        }
+        self.gather_g(x);
+        self.factor.solve_in_place(&mut self.t1);
+        axpy(s, &self.t1, y);
+    }
+
+    /// `v += Â⁻¹ (G p + kfac · K N G τ_used)`, the velocity update of eq. 56a
+    /// (`kfac = −hθ`, or 0 without the projection feedback), and prepares the position
+    /// correction `N G τ` for [`Delassus::add_position_correction`]. On the
+    /// per-active-column path this is one sparse solve, plus one block solve of
+    /// `Â⁻¹G[τ_used, τ]` for the `M̂⁻¹` metric.
+    pub fn add_velocity_correction(
+        &mut self,
+        p: &[f64],
+        kfac: f64,
+        tau_used: &[f64],
+        tau: &[f64],
+        v: &mut [f64],
+        stiffness: &SparseMatrix,
+    ) {
+        let n = self.n;
+        let feedback = kfac != 0.0 && tau_used.iter().any(|&t| t != 0.0);
+        let any_tau = tau.iter().any(|&t| t != 0.0);
+        if self.dense {
+            self.add_inverse_g(1.0, p, v);
+            if feedback {
+                for (a, &xa) in tau_used.iter().enumerate() {
+                    if xa != 0.0 {
+                        axpy(kfac * xa, &self.d[a * n..(a + 1) * n], v);
+                    }
+                }
+            }
+            return;
+        }
+        // blk columns: [G τ_used, G τ] (M̂⁻¹ metric: then solved)
+        self.ng_ready = false;
+        if self.metric == Metric::Mass && (feedback || any_tau) {
+            let blk = &mut self.blk[..2 * n];
+            blk.iter_mut().for_each(|x| *x = 0.0);
+            let (c0, c1) = blk.split_at_mut(n);
+            for a in 0..self.m {
+                if feedback && tau_used[a] != 0.0 {
+                    self.jac.axpy(a, tau_used[a], c0);
+                }
+                if tau[a] != 0.0 {
+                    self.jac.axpy(a, tau[a], c1);
+                }
+            }
+            self.factor.solve_block_in_place(blk, 2);
+            self.ng_ready = any_tau;
+        }
+        self.gather_g(p);
+        if feedback {
+            match self.metric {
+                Metric::Mass => spmv(stiffness.as_ref(), &self.blk[..n], &mut self.t2),
+                Metric::Euclidean => {
+                    let g = &mut self.blk[..n];
+                    g.iter_mut().for_each(|x| *x = 0.0);
+                    for (a, &t) in tau_used.iter().enumerate() {
+                        if t != 0.0 {
+                            self.jac.axpy(a, t, g);
+                        }
+                    }
+                    spmv(stiffness.as_ref(), g, &mut self.t2);
+                }
+            }
+            axpy(kfac, &self.t2, &mut self.t1);
+        }
+        if p.iter().any(|&x| x != 0.0) || feedback {
+            self.factor.solve_in_place(&mut self.t1);
+            axpy(1.0, &self.t1, v);
+        }
+    }
+
+    /// `q += N G τ` with the `τ` given to the last [`Delassus::add_velocity_correction`].
+    pub fn add_position_correction(&mut self, tau: &[f64], q: &mut [f64]) {
+        if self.metric == Metric::Mass && !self.dense {
+            if self.ng_ready {
+                let n = self.n;
+                axpy(1.0, &self.blk[n..2 * n], q);
+            }
+            return;
+        }
+        self.add_ng(1.0, tau, q);
+    }
+
+    /// `y += s · N G x` (`N = I` or `Â⁻¹`).
+    pub fn add_ng(&mut self, s: f64, x: &[f64], y: &mut [f64]) {
+        match self.metric {
+            Metric::Euclidean => {
+                for (a, &xa) in x.iter().enumerate() {
+                    if xa != 0.0 {
+                        self.jac.axpy(a, s * xa, y);
+                    }
+                }
+            }
+            Metric::Mass => self.add_inverse_g(s, x, y),
+        }
+    }
+
+    /// `t1 = G x`.
+    fn gather_g(&mut self, x: &[f64]) {
+        self.t1.iter_mut().for_each(|v| *v = 0.0);
+        for (a, &xa) in x.iter().enumerate() {
+            if xa != 0.0 {
+                self.jac.axpy(a, xa, &mut self.t1);
+            }
+        }
+    }
+}
+
+fn axpy(s: f64, x: &[f64], y: &mut [f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi += s * xi;
+    }
+}
