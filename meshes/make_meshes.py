@@ -7,6 +7,7 @@ committed files): `python meshes/make_meshes.py` from the repository root.
   ball.msh          Gmsh 4.1 ASCII, tet4 ball R = 0.05 m, groups "ball" (3) and "surface" (2)
   ball_binary.msh   the same mesh, Gmsh 4.1 binary
   disk.msh          Gmsh 2.2 ASCII, tri3 disk R = 0.05 m, groups "disk" (2) and "rim" (1)
+  disk_binary.msh   the same mesh, Gmsh 2.2 binary
   plate.vtu         meshio's default .vtu (binary, zlib) of a quad4 plate 0.2 × 0.05 m,
                     point data "bottom" (1 on the y = 0 edge, else 0)
   plate.vtk         the same plate as meshio's default legacy .vtk (5.1, binary)
@@ -46,6 +47,8 @@ gmsh.option.setNumber("Mesh.Binary", 0)
 gmsh.model.mesh.generate(2)
 gmsh.option.setNumber("Mesh.MshFileVersion", 2.2)
 gmsh.write("meshes/disk.msh")
+gmsh.option.setNumber("Mesh.Binary", 1)
+gmsh.write("meshes/disk_binary.msh")
 gmsh.model.remove()
 gmsh.finalize()
 

@@ -38,6 +38,13 @@ fn committed_meshes_have_the_counts_meshio_reports() {
             212,
             vec![("disk", 123), ("rim", 32)],
         ),
+        (
+            "disk_binary.msh",
+            123,
+            CellKind::Tri3,
+            212,
+            vec![("disk", 123), ("rim", 32)],
+        ),
         ("plate.vtu", 27, CellKind::Quad4, 16, vec![("bottom", 9)]),
         ("plate.vtk", 27, CellKind::Quad4, 16, vec![("bottom", 9)]),
     ] {
@@ -51,7 +58,11 @@ fn committed_meshes_have_the_counts_meshio_reports() {
     }
     // the binary file holds the same mesh as the ASCII one (whose coordinates are
     // printed with 16 significant digits: equal to 1e-15 relative)
-    for (x, y) in [("ball.msh", "ball_binary.msh"), ("plate.vtu", "plate.vtk")] {
+    for (x, y) in [
+        ("ball.msh", "ball_binary.msh"),
+        ("disk.msh", "disk_binary.msh"),
+        ("plate.vtu", "plate.vtk"),
+    ] {
         let a = read_mesh(&mesh_path(x)).unwrap();
         let b = read_mesh(&mesh_path(y)).unwrap();
         assert!(
@@ -140,6 +151,15 @@ fn bad_meshes_are_rejected_with_what_is_wrong() {
             "{name}: the message must name the file: {e}"
         );
     }
+    // a Gmsh 2.2 binary file cut short (a partial copy) names the section that ran out
+    let bytes = std::fs::read(mesh_path("disk_binary.msh")).unwrap();
+    let p = write("cut_binary.msh", "");
+    std::fs::write(&p, &bytes[..bytes.len() * 3 / 5]).unwrap();
+    let e = read_mesh(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("cut_binary.msh") && e.contains("past the end"),
+        "{e}"
+    );
     // an inverted tet (nodes 1, 3, 2, 4) reads, and assembly names the cell
     let p = write(
         "inverted.msh",

@@ -209,3 +209,55 @@ fn free_bar_axial_frequencies_match_n_pi_c0_over_l() {
         assert!(best < 5e-3, "mode {m}: closest relative error {best}");
     }
 }
+
+/// The parallel assembly hands each task a range of columns and visits cells in order,
+/// so `M` and `K` must be bitwise the same for 1 and 3 threads, and the same as the
+/// element matrices summed one by one (to rounding: 1e-12 relative).
+#[test]
+fn parallel_assembly_is_independent_of_threads() {
+    let mesh = distort(box_mesh(CellKind::Hex8, [5, 4, 3], [1.0, 0.8, 0.6]), 3);
+    let with = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| assemble(&mesh, &STEEL, Formulation::Solid, MassKind::Consistent).unwrap())
+    };
+    let (one, three) = (with(1), with(3));
+    assert_eq!(one.stiffness.val(), three.stiffness.val());
+    assert_eq!(one.mass.val(), three.mass.val());
+    // reference: dense sum of the element matrices
+    let n = 3 * mesh.points.len();
+    let mut k = vec![0.0; n * n];
+    for (id, (kind, nodes)) in mesh.cells.iter().enumerate() {
+        let x: Vec<[f64; 3]> = nodes.iter().map(|&v| mesh.points[v]).collect();
+        let e =
+            signorini::model::solid::element_matrices(id, *kind, &x, &STEEL, Formulation::Solid)
+                .unwrap();
+        for (a, &va) in nodes.iter().enumerate() {
+            for (b, &vb) in nodes.iter().enumerate() {
+                for i in 0..3 {
+                    for j in 0..3 {
+                        k[(3 * va + i) * n + 3 * vb + j] += e.k(3 * a + i, 3 * b + j);
+                    }
+                }
+            }
+        }
+    }
+    let s = one.stiffness.as_ref();
+    let scale = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut seen = 0.0;
+    for j in 0..n {
+        for p in s.col_ptr()[j]..s.col_ptr()[j + 1] {
+            let i = s.row_idx()[p];
+            assert!(
+                (s.val()[p] - k[i * n + j]).abs() <= 1e-12 * scale,
+                "K({i},{j})"
+            );
+            seen += k[i * n + j].abs();
+        }
+    }
+    // every nonzero of the dense sum is in the pattern
+    let total: f64 = k.iter().map(|v| v.abs()).sum();
+    assert!((seen - total).abs() <= 1e-12 * total);
+}

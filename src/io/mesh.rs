@@ -1,4 +1,4 @@
-//! Mesh input: Gmsh `.msh` (4.1 ASCII and binary through mshio; 2.2 ASCII and the
+//! Mesh input: Gmsh `.msh` (4.1 ASCII and binary through mshio; 2.2 ASCII and binary and the
 //! `$PhysicalNames` section, which mshio skips, by our own small parsers), VTK XML
 //! `.vtu` (through vtkio 0.7.0-rc2, which reads meshio's default binary + zlib files)
 //! and legacy `.vtk` (our parser: vtkio reads neither meshio's default legacy 5.1
@@ -265,70 +265,64 @@ fn read_msh41(
     Ok(raw)
 }
 
+/// Nodes per element of the Gmsh element types a 2.2 binary file may hold (its records
+/// do not carry their length).
+fn gmsh_nodes(t: usize) -> Option<usize> {
+    Some(match t {
+        15 => 1,
+        1 => 2,
+        2 | 8 => 3,
+        3 | 4 => 4,
+        7 => 5,
+        6 | 9 => 6,
+        5 | 16 => 8,
+        10 => 9,
+        11 => 10,
+        17 => 20,
+        12 => 27,
+        _ => return None,
+    })
+}
+
+/// One element of a 2.2 file: number, Gmsh type, physical tag, node tags.
+type Element22 = (u64, usize, Option<u64>, Vec<u64>);
+
+/// The nodes (tag, coordinates) and elements of a 2.2 file.
+type Gmsh22 = (Vec<(u64, [f64; 3])>, Vec<Element22>);
+
 fn read_msh22(
     path: &Path,
     bytes: &[u8],
     names: &HashMap<(usize, i64), String>,
 ) -> Result<RawMesh, Error> {
-    let text = std::str::from_utf8(bytes).map_err(|_| {
-        bad(
-            path,
-            "Gmsh 2.2 binary files are not supported (write ASCII)",
-        )
-    })?;
-    let section = |name: &str| -> Result<Vec<&str>, Error> {
-        let start = text
-            .find(&format!("${name}"))
-            .ok_or_else(|| bad(path, format!("no ${name} section")))?;
-        let end = text[start..]
-            .find(&format!("$End{name}"))
-            .ok_or_else(|| bad(path, format!("${name} is not closed")))?;
-        Ok(text[start..start + end]
-            .lines()
-            .skip(2)
-            .filter(|l| !l.trim().is_empty())
-            .collect())
+    let fmt = find(bytes, b"$MeshFormat").unwrap_or(0);
+    let header: Vec<String> = String::from_utf8_lossy(&bytes[fmt..(fmt + 64).min(bytes.len())])
+        .lines()
+        .nth(1)
+        .unwrap_or("")
+        .split_whitespace()
+        .map(str::to_string)
+        .collect();
+    let (nodes, elements) = if header.get(1).map(String::as_str) == Some("1") {
+        read_msh22_binary(path, bytes, &header)?
+    } else {
+        read_msh22_ascii(path, bytes)?
     };
     let mut raw = RawMesh::default();
-    let mut index = HashMap::new();
-    for (i, line) in section("Nodes")?.iter().enumerate() {
-        let v: Vec<&str> = line.split_whitespace().collect();
-        let num = |k: usize| -> Result<f64, Error> {
-            v.get(k)
-                .and_then(|s| s.parse().ok())
-                .ok_or_else(|| bad(path, format!("$Nodes line {}: `{line}`", i + 1)))
-        };
-        let tag = v
-            .first()
-            .and_then(|s| s.parse::<u64>().ok())
-            .ok_or_else(|| bad(path, format!("$Nodes line {}: `{line}`", i + 1)))?;
+    let mut index = HashMap::with_capacity(nodes.len());
+    for (tag, x) in nodes {
         index.insert(tag, raw.points.len());
-        raw.points.push([num(1)?, num(2)?, num(3)?]);
+        raw.points.push(x);
     }
-    // elementary-entity dimension of each physical tag comes from the element type
-    for (i, line) in section("Elements")?.iter().enumerate() {
-        let v: Vec<u64> = line
-            .split_whitespace()
-            .map(|s| s.parse())
-            .collect::<Result<_, _>>()
-            .map_err(|_| bad(path, format!("$Elements line {}: `{line}`", i + 1)))?;
-        if v.len() < 3 {
-            return Err(bad(path, format!("$Elements line {}: `{line}`", i + 1)));
-        }
-        let (d, kind) = gmsh_kind(v[1] as usize);
-        let ntags = v[2] as usize;
-        let phys = if ntags > 0 { v.get(3).copied() } else { None };
-        let ns: Vec<usize> = v
+    for (num, t, phys, tags) in elements {
+        let (d, kind) = gmsh_kind(t);
+        let ns: Vec<usize> = tags
             .iter()
-            .skip(3 + ntags)
             .map(|t| {
                 index.get(t).copied().ok_or_else(|| {
                     bad(
                         path,
-                        format!(
-                            "element {} refers to node tag {t}, which is not defined",
-                            v[0]
-                        ),
+                        format!("element {num} refers to node tag {t}, which is not defined"),
                     )
                 })
             })
@@ -343,6 +337,159 @@ fn read_msh22(
         raw.cells.push((d, kind, ns));
     }
     Ok(raw)
+}
+
+/// The lines of section `$name` after its count line.
+fn section22<'a>(path: &Path, text: &'a str, name: &str) -> Result<Vec<&'a str>, Error> {
+    let start = text
+        .find(&format!("${name}"))
+        .ok_or_else(|| bad(path, format!("no ${name} section")))?;
+    let end = text[start..]
+        .find(&format!("$End{name}"))
+        .ok_or_else(|| bad(path, format!("${name} is not closed")))?;
+    Ok(text[start..start + end]
+        .lines()
+        .skip(2)
+        .filter(|l| !l.trim().is_empty())
+        .collect())
+}
+
+fn read_msh22_ascii(path: &Path, bytes: &[u8]) -> Result<Gmsh22, Error> {
+    let text = std::str::from_utf8(bytes)
+        .map_err(|_| bad(path, "Gmsh 2.2 ASCII file holds non-UTF-8 bytes"))?;
+    let mut nodes = Vec::new();
+    for (i, line) in section22(path, text, "Nodes")?.iter().enumerate() {
+        let v: Vec<&str> = line.split_whitespace().collect();
+        let err = || bad(path, format!("$Nodes line {}: `{line}`", i + 1));
+        let num = |k: usize| -> Result<f64, Error> {
+            v.get(k).and_then(|s| s.parse().ok()).ok_or_else(err)
+        };
+        let tag = v
+            .first()
+            .and_then(|s| s.parse::<u64>().ok())
+            .ok_or_else(err)?;
+        nodes.push((tag, [num(1)?, num(2)?, num(3)?]));
+    }
+    let mut elements = Vec::new();
+    for (i, line) in section22(path, text, "Elements")?.iter().enumerate() {
+        let v: Vec<u64> = line
+            .split_whitespace()
+            .map(|s| s.parse())
+            .collect::<Result<_, _>>()
+            .map_err(|_| bad(path, format!("$Elements line {}: `{line}`", i + 1)))?;
+        if v.len() < 3 || v.len() < 3 + v[2] as usize {
+            return Err(bad(path, format!("$Elements line {}: `{line}`", i + 1)));
+        }
+        let ntags = v[2] as usize;
+        let phys = if ntags > 0 { Some(v[3]) } else { None };
+        elements.push((v[0], v[1] as usize, phys, v[3 + ntags..].to_vec()));
+    }
+    Ok((nodes, elements))
+}
+
+/// Gmsh 2.2 binary: after `$Nodes` and its count line, `n` records of (i32 tag,
+/// 3 × f64); after `$Elements` and its count line, blocks of an i32 header (type,
+/// count, tags) followed by `count` records of i32 (number, tags, nodes). The file's
+/// `1` after the header tells its byte order; little-endian files are read.
+fn read_msh22_binary(path: &Path, bytes: &[u8], header: &[String]) -> Result<Gmsh22, Error> {
+    if header.get(2).map(String::as_str) != Some("8") {
+        return Err(bad(
+            path,
+            format!(
+                "Gmsh 2.2 binary with data size {:?} (expected 8)",
+                header.get(2)
+            ),
+        ));
+    }
+    let fmt = find(bytes, b"$MeshFormat").unwrap_or(0);
+    let after_header = fmt
+        + bytes[fmt..]
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| **b == b'\n')
+            .nth(1)
+            .map(|(i, _)| i + 1)
+            .ok_or_else(|| bad(path, "truncated $MeshFormat"))?;
+    let one = bytes
+        .get(after_header..after_header + 4)
+        .ok_or_else(|| bad(path, "truncated $MeshFormat"))?;
+    if i32::from_le_bytes(one.try_into().unwrap()) != 1 {
+        return Err(bad(
+            path,
+            "Gmsh 2.2 binary file is big-endian (signorini reads little-endian files)",
+        ));
+    }
+    // the position just after `$name\n<count>\n`, and the count
+    let open = |name: &str| -> Result<(usize, usize), Error> {
+        let tag = format!("${name}\n");
+        let start = find(bytes, tag.as_bytes())
+            .ok_or_else(|| bad(path, format!("no ${name} section")))?
+            + tag.len();
+        let nl = bytes[start..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .ok_or_else(|| bad(path, format!("${name} has no count line")))?;
+        let count = std::str::from_utf8(&bytes[start..start + nl])
+            .ok()
+            .and_then(|s| s.trim().parse().ok())
+            .ok_or_else(|| bad(path, format!("${name} count is not a number")))?;
+        Ok((start + nl + 1, count))
+    };
+    let short = |name: &str| bad(path, format!("${name} data run past the end of the file"));
+    let i32_at = |p: usize| -> Option<i32> {
+        bytes
+            .get(p..p + 4)
+            .map(|b| i32::from_le_bytes(b.try_into().unwrap()))
+    };
+    let f64_at = |p: usize| -> Option<f64> {
+        bytes
+            .get(p..p + 8)
+            .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+    };
+    let (mut p, n) = open("Nodes")?;
+    let mut nodes = Vec::with_capacity(n.min(bytes.len() / 28));
+    for _ in 0..n {
+        let tag = i32_at(p).ok_or_else(|| short("Nodes"))?;
+        let x = [f64_at(p + 4), f64_at(p + 12), f64_at(p + 20)];
+        let [Some(x0), Some(x1), Some(x2)] = x else {
+            return Err(short("Nodes"));
+        };
+        nodes.push((tag as u64, [x0, x1, x2]));
+        p += 28;
+    }
+    let (mut p, n) = open("Elements")?;
+    let mut elements = Vec::with_capacity(n.min(bytes.len() / 8));
+    while elements.len() < n {
+        let (Some(t), Some(count), Some(ntags)) = (i32_at(p), i32_at(p + 4), i32_at(p + 8)) else {
+            return Err(short("Elements"));
+        };
+        p += 12;
+        let t = t as usize;
+        let nn = gmsh_nodes(t).ok_or_else(|| {
+            bad(
+                path,
+                format!("element type {t} is unknown (in a binary $Elements block)"),
+            )
+        })?;
+        if count <= 0 || ntags < 0 || elements.len() + count as usize > n {
+            return Err(bad(
+                path,
+                format!("$Elements block header (type {t}, count {count}, tags {ntags})"),
+            ));
+        }
+        let ntags = ntags as usize;
+        for _ in 0..count {
+            let rec: Vec<i32> = (0..1 + ntags + nn)
+                .map(|k| i32_at(p + 4 * k))
+                .collect::<Option<_>>()
+                .ok_or_else(|| short("Elements"))?;
+            p += 4 * rec.len();
+            let phys = if ntags > 0 { Some(rec[1] as u64) } else { None };
+            let tags = rec[1 + ntags..].iter().map(|&v| v as u64).collect();
+            elements.push((rec[0] as u64, t, phys, tags));
+        }
+    }
+    Ok((nodes, elements))
 }
 
 fn vtk_kind(t: u8) -> (usize, Result<CellKind, String>) {

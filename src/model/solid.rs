@@ -9,8 +9,7 @@
 //! strains. An element whose Jacobian determinant is not positive at any integration
 //! point is reported as inverted, with its index.
 
-use nalgebra::{DMatrix, Matrix3, SMatrix, Vector3};
-use rayon::prelude::*;
+use nalgebra::{Matrix2, Matrix3, SMatrix, Vector3};
 
 use super::{LinearSystem, MassKind};
 use crate::assembly::{Accumulate, PatternAssembler};
@@ -205,26 +204,258 @@ impl Mesh {
     }
 }
 
-/// Element matrices of one cell, dense, `nodes·dim` square.
-pub struct ElementMatrices {
+/// Element matrices of one cell on fixed-size matrices, `ND = nodes·dim` square.
+#[derive(Clone, Debug)]
+pub struct ElementMatrices<const ND: usize> {
     /// Stiffness.
-    pub k: DMatrix<f64>,
+    pub k: SMatrix<f64, ND, ND>,
     /// Consistent mass.
-    pub m: DMatrix<f64>,
+    pub m: SMatrix<f64, ND, ND>,
     /// Volume (3-D) or area times thickness (2-D) (m³).
     pub volume: f64,
 }
 
+/// The element matrices of a cell of any kind (each on its own fixed size).
+// Unboxed on purpose: the value lives on the stack of one assembly task; boxing would
+// allocate once per cell.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Debug)]
+pub enum AnyElement {
+    /// tri3, 6 dofs.
+    Tri3(ElementMatrices<6>),
+    /// quad4, 8 dofs.
+    Quad4(ElementMatrices<8>),
+    /// tet4, 12 dofs.
+    Tet4(ElementMatrices<12>),
+    /// hex8, 24 dofs.
+    Hex8(ElementMatrices<24>),
+}
+
+macro_rules! each_element {
+    ($s:expr, $e:ident => $body:expr) => {
+        match $s {
+            AnyElement::Tri3($e) => $body,
+            AnyElement::Quad4($e) => $body,
+            AnyElement::Tet4($e) => $body,
+            AnyElement::Hex8($e) => $body,
+        }
+    };
+}
+
+impl AnyElement {
+    /// Stiffness entry `(a, b)` (local dofs, node-major).
+    pub fn k(&self, a: usize, b: usize) -> f64 {
+        each_element!(self, e => e.k[(a, b)])
+    }
+    /// Consistent mass entry `(a, b)`.
+    pub fn m(&self, a: usize, b: usize) -> f64 {
+        each_element!(self, e => e.m[(a, b)])
+    }
+    /// Volume (or area times thickness) (m³).
+    pub fn volume(&self) -> f64 {
+        each_element!(self, e => e.volume)
+    }
+    /// Local dofs (`nodes·dim`).
+    pub fn ndof(&self) -> usize {
+        each_element!(self, e => e.k.nrows())
+    }
+}
+
 const G2: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_625_8];
 
-/// Computes the element matrices of cell `id`; errors name the cell.
+/// One integration point: shape values, reference gradients, weight.
+type Point<const NN: usize, const D: usize> = ([f64; NN], [[f64; D]; NN], f64);
+
+/// Quadrature of the triangle: constant gradients; the 3 edge-midpoint rule (degree 2)
+/// integrates the consistent mass exactly.
+fn tri3_points() -> [Point<3, 2>; 3] {
+    let g = [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
+    [[0.5, 0.0], [0.5, 0.5], [0.0, 0.5]].map(|[r, s]| ([1.0 - r - s, r, s], g, 1.0 / 6.0))
+}
+
+/// 2×2 Gauss points of the bilinear quadrilateral.
+fn quad4_points() -> [Point<4, 2>; 4] {
+    std::array::from_fn(|p| {
+        let (r, s) = (G2[p / 2], G2[p % 2]);
+        (
+            [
+                0.25 * (1.0 - r) * (1.0 - s),
+                0.25 * (1.0 + r) * (1.0 - s),
+                0.25 * (1.0 + r) * (1.0 + s),
+                0.25 * (1.0 - r) * (1.0 + s),
+            ],
+            [
+                [-0.25 * (1.0 - s), -0.25 * (1.0 - r)],
+                [0.25 * (1.0 - s), -0.25 * (1.0 + r)],
+                [0.25 * (1.0 + s), 0.25 * (1.0 + r)],
+                [-0.25 * (1.0 + s), 0.25 * (1.0 - r)],
+            ],
+            1.0,
+        )
+    })
+}
+
+/// The tetrahedron's 4-point rule of degree 2 (exact for the consistent mass).
+fn tet4_points() -> [Point<4, 3>; 4] {
+    let g = [
+        [-1.0, -1.0, -1.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    let (a, b) = (0.585_410_196_624_968_5, 0.138_196_601_125_010_5);
+    [[b, b, b], [a, b, b], [b, a, b], [b, b, a]]
+        .map(|[r, s, u]| ([1.0 - r - s - u, r, s, u], g, 1.0 / 24.0))
+}
+
+/// 2×2×2 Gauss points of the trilinear hexahedron (VTK / Gmsh node order).
+fn hex8_points() -> [Point<8, 3>; 8] {
+    const SGN: [[f64; 3]; 8] = [
+        [-1.0, -1.0, -1.0],
+        [1.0, -1.0, -1.0],
+        [1.0, 1.0, -1.0],
+        [-1.0, 1.0, -1.0],
+        [-1.0, -1.0, 1.0],
+        [1.0, -1.0, 1.0],
+        [1.0, 1.0, 1.0],
+        [-1.0, 1.0, 1.0],
+    ];
+    std::array::from_fn(|p| {
+        let (r, s, u) = (G2[p / 4], G2[(p / 2) % 2], G2[p % 2]);
+        (
+            SGN.map(|c| 0.125 * (1.0 + c[0] * r) * (1.0 + c[1] * s) * (1.0 + c[2] * u)),
+            SGN.map(|c| {
+                [
+                    0.125 * c[0] * (1.0 + c[1] * s) * (1.0 + c[2] * u),
+                    0.125 * c[1] * (1.0 + c[0] * r) * (1.0 + c[2] * u),
+                    0.125 * c[2] * (1.0 + c[0] * r) * (1.0 + c[1] * s),
+                ]
+            }),
+            1.0,
+        )
+    })
+}
+
+/// Plane (2-D) kernel: `K = ∫ Bᵀ D B t dA`, `M = ∫ ρ Nᵀ N t dA`; `ND = 2 NN`.
+fn plane_kernel<const NN: usize, const ND: usize>(
+    x: &[[f64; 3]],
+    pts: &[Point<NN, 2>],
+    d: &Matrix3<f64>,
+    rho: f64,
+    t: f64,
+    inverted: &dyn Fn(f64) -> Error,
+) -> Result<ElementMatrices<ND>, Error> {
+    debug_assert_eq!(ND, 2 * NN);
+    let mut e = ElementMatrices {
+        k: SMatrix::<f64, ND, ND>::zeros(),
+        m: SMatrix::<f64, ND, ND>::zeros(),
+        volume: 0.0,
+    };
+    for (n, g, w) in pts {
+        let mut jac = Matrix2::<f64>::zeros();
+        for a in 0..NN {
+            for i in 0..2 {
+                for j in 0..2 {
+                    jac[(i, j)] += x[a][i] * g[a][j];
+                }
+            }
+        }
+        let det: f64 = jac.determinant();
+        if det.is_nan() || det <= 0.0 {
+            return Err(inverted(det));
+        }
+        let jinv = jac.try_inverse().ok_or_else(|| inverted(det))?;
+        let dv = det * w * t;
+        e.volume += dv;
+        let mut b = SMatrix::<f64, 3, ND>::zeros();
+        for a in 0..NN {
+            // ∇N_a = J⁻ᵀ ∇_ref N_a
+            let gx = jinv[(0, 0)] * g[a][0] + jinv[(1, 0)] * g[a][1];
+            let gy = jinv[(0, 1)] * g[a][0] + jinv[(1, 1)] * g[a][1];
+            b[(0, 2 * a)] = gx;
+            b[(1, 2 * a + 1)] = gy;
+            b[(2, 2 * a)] = gy;
+            b[(2, 2 * a + 1)] = gx;
+        }
+        let db = d * b * dv;
+        e.k += b.transpose() * db;
+        for a in 0..NN {
+            for c in 0..NN {
+                let v = rho * n[a] * n[c] * dv;
+                e.m[(2 * a, 2 * c)] += v;
+                e.m[(2 * a + 1, 2 * c + 1)] += v;
+            }
+        }
+    }
+    Ok(e)
+}
+
+/// Solid (3-D) kernel: `K = ∫ Bᵀ D B dV`, `M = ∫ ρ Nᵀ N dV`; `ND = 3 NN`.
+fn solid_kernel<const NN: usize, const ND: usize>(
+    x: &[[f64; 3]],
+    pts: &[Point<NN, 3>],
+    d: &SMatrix<f64, 6, 6>,
+    rho: f64,
+    inverted: &dyn Fn(f64) -> Error,
+) -> Result<ElementMatrices<ND>, Error> {
+    debug_assert_eq!(ND, 3 * NN);
+    let mut e = ElementMatrices {
+        k: SMatrix::<f64, ND, ND>::zeros(),
+        m: SMatrix::<f64, ND, ND>::zeros(),
+        volume: 0.0,
+    };
+    for (n, g, w) in pts {
+        let mut jac = Matrix3::<f64>::zeros();
+        for a in 0..NN {
+            for i in 0..3 {
+                for j in 0..3 {
+                    jac[(i, j)] += x[a][i] * g[a][j];
+                }
+            }
+        }
+        let det: f64 = jac.determinant();
+        if det.is_nan() || det <= 0.0 {
+            return Err(inverted(det));
+        }
+        let jinv_t = jac.try_inverse().ok_or_else(|| inverted(det))?.transpose();
+        let dv = det * w;
+        e.volume += dv;
+        let mut b = SMatrix::<f64, 6, ND>::zeros();
+        for a in 0..NN {
+            let gx = jinv_t * Vector3::new(g[a][0], g[a][1], g[a][2]);
+            let c = 3 * a;
+            b[(0, c)] = gx[0];
+            b[(1, c + 1)] = gx[1];
+            b[(2, c + 2)] = gx[2];
+            b[(3, c + 1)] = gx[2];
+            b[(3, c + 2)] = gx[1];
+            b[(4, c)] = gx[2];
+            b[(4, c + 2)] = gx[0];
+            b[(5, c)] = gx[1];
+            b[(5, c + 1)] = gx[0];
+        }
+        let db = d * b * dv;
+        e.k += b.transpose() * db;
+        for a in 0..NN {
+            for c in 0..NN {
+                let v = rho * n[a] * n[c] * dv;
+                for i in 0..3 {
+                    e.m[(3 * a + i, 3 * c + i)] += v;
+                }
+            }
+        }
+    }
+    Ok(e)
+}
+
+/// Computes the element matrices of cell `id` (nodes at `x`); errors name the cell.
 pub fn element_matrices(
     id: usize,
     kind: CellKind,
     x: &[[f64; 3]],
     mat: &Material,
     f: Formulation,
-) -> Result<ElementMatrices, Error> {
+) -> Result<AnyElement, Error> {
     let inverted = |det: f64| {
         Error::invalid(
             &format!("cell {id} ({})", kind.name()),
@@ -233,186 +464,35 @@ pub fn element_matrices(
         )
     };
     let rho = mat.density;
-    match kind {
-        CellKind::Tri3 | CellKind::Quad4 => {
-            let t = f.thickness();
-            let d = mat.d2(f);
-            let nn = kind.nodes();
-            let mut k = DMatrix::zeros(2 * nn, 2 * nn);
-            let mut m = DMatrix::zeros(2 * nn, 2 * nn);
-            let mut vol = 0.0;
-            // (shape values, reference gradients, weight) at each point
-            let pts: Vec<(Vec<f64>, Vec<[f64; 2]>, f64)> = if kind == CellKind::Tri3 {
-                // exact: constant strain; mass with the 3-point rule at edge midpoints
-                let grads = vec![[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
-                [[0.5, 0.0], [0.5, 0.5], [0.0, 0.5]]
-                    .iter()
-                    .map(|&[r, s]| (vec![1.0 - r - s, r, s], grads.clone(), 1.0 / 6.0))
-                    .collect()
-            } else {
-                let mut v = Vec::new();
-                for &r in &G2 {
-                    for &s in &G2 {
-                        let n = vec![
-                            0.25 * (1.0 - r) * (1.0 - s),
-                            0.25 * (1.0 + r) * (1.0 - s),
-                            0.25 * (1.0 + r) * (1.0 + s),
-                            0.25 * (1.0 - r) * (1.0 + s),
-                        ];
-                        let g = vec![
-                            [-0.25 * (1.0 - s), -0.25 * (1.0 - r)],
-                            [0.25 * (1.0 - s), -0.25 * (1.0 + r)],
-                            [0.25 * (1.0 + s), 0.25 * (1.0 + r)],
-                            [-0.25 * (1.0 + s), 0.25 * (1.0 - r)],
-                        ];
-                        v.push((n, g, 1.0));
-                    }
-                }
-                v
-            };
-            for (n, g, w) in &pts {
-                let mut jac = nalgebra::Matrix2::zeros();
-                for a in 0..nn {
-                    for i in 0..2 {
-                        for j in 0..2 {
-                            jac[(i, j)] += x[a][i] * g[a][j];
-                        }
-                    }
-                }
-                let det: f64 = jac.determinant();
-                if det.is_nan() || det <= 0.0 {
-                    return Err(inverted(det));
-                }
-                let jinv = jac.try_inverse().ok_or_else(|| inverted(det))?;
-                let dv = det * w * t;
-                vol += dv;
-                let mut b = DMatrix::zeros(3, 2 * nn);
-                for a in 0..nn {
-                    // ∇N_a = J⁻ᵀ ∇_ref N_a
-                    let gx = jinv[(0, 0)] * g[a][0] + jinv[(1, 0)] * g[a][1];
-                    let gy = jinv[(0, 1)] * g[a][0] + jinv[(1, 1)] * g[a][1];
-                    b[(0, 2 * a)] = gx;
-                    b[(1, 2 * a + 1)] = gy;
-                    b[(2, 2 * a)] = gy;
-                    b[(2, 2 * a + 1)] = gx;
-                }
-                let db = d * &b;
-                k += b.transpose() * db * dv;
-                for a in 0..nn {
-                    for c in 0..nn {
-                        let v = rho * n[a] * n[c] * dv;
-                        m[(2 * a, 2 * c)] += v;
-                        m[(2 * a + 1, 2 * c + 1)] += v;
-                    }
-                }
-            }
-            Ok(ElementMatrices { k, m, volume: vol })
+    Ok(match kind {
+        CellKind::Tri3 => AnyElement::Tri3(plane_kernel(
+            x,
+            &tri3_points(),
+            &mat.d2(f),
+            rho,
+            f.thickness(),
+            &inverted,
+        )?),
+        CellKind::Quad4 => AnyElement::Quad4(plane_kernel(
+            x,
+            &quad4_points(),
+            &mat.d2(f),
+            rho,
+            f.thickness(),
+            &inverted,
+        )?),
+        CellKind::Tet4 => {
+            AnyElement::Tet4(solid_kernel(x, &tet4_points(), &mat.d3(), rho, &inverted)?)
         }
-        CellKind::Tet4 | CellKind::Hex8 => {
-            let d = mat.d3();
-            let nn = kind.nodes();
-            let mut k = DMatrix::zeros(3 * nn, 3 * nn);
-            let mut m = DMatrix::zeros(3 * nn, 3 * nn);
-            let mut vol = 0.0;
-            let pts: Vec<(Vec<f64>, Vec<[f64; 3]>, f64)> = if kind == CellKind::Tet4 {
-                let grads = vec![
-                    [-1.0, -1.0, -1.0],
-                    [1.0, 0.0, 0.0],
-                    [0.0, 1.0, 0.0],
-                    [0.0, 0.0, 1.0],
-                ];
-                // 4-point rule of degree 2 (exact for the consistent mass)
-                let (a, b) = (0.585_410_196_624_968_5, 0.138_196_601_125_010_5);
-                [[b, b, b], [a, b, b], [b, a, b], [b, b, a]]
-                    .iter()
-                    .map(|&[r, s, u]| (vec![1.0 - r - s - u, r, s, u], grads.clone(), 1.0 / 24.0))
-                    .collect()
-            } else {
-                let sgn = [
-                    [-1.0, -1.0, -1.0],
-                    [1.0, -1.0, -1.0],
-                    [1.0, 1.0, -1.0],
-                    [-1.0, 1.0, -1.0],
-                    [-1.0, -1.0, 1.0],
-                    [1.0, -1.0, 1.0],
-                    [1.0, 1.0, 1.0],
-                    [-1.0, 1.0, 1.0],
-                ];
-                let mut v = Vec::new();
-                for &r in &G2 {
-                    for &s in &G2 {
-                        for &u in &G2 {
-                            let n: Vec<f64> = sgn
-                                .iter()
-                                .map(|c| {
-                                    0.125 * (1.0 + c[0] * r) * (1.0 + c[1] * s) * (1.0 + c[2] * u)
-                                })
-                                .collect();
-                            let g: Vec<[f64; 3]> = sgn
-                                .iter()
-                                .map(|c| {
-                                    [
-                                        0.125 * c[0] * (1.0 + c[1] * s) * (1.0 + c[2] * u),
-                                        0.125 * c[1] * (1.0 + c[0] * r) * (1.0 + c[2] * u),
-                                        0.125 * c[2] * (1.0 + c[0] * r) * (1.0 + c[1] * s),
-                                    ]
-                                })
-                                .collect();
-                            v.push((n, g, 1.0));
-                        }
-                    }
-                }
-                v
-            };
-            for (n, g, w) in &pts {
-                let mut jac = Matrix3::zeros();
-                for a in 0..nn {
-                    for i in 0..3 {
-                        for j in 0..3 {
-                            jac[(i, j)] += x[a][i] * g[a][j];
-                        }
-                    }
-                }
-                let det: f64 = jac.determinant();
-                if det.is_nan() || det <= 0.0 {
-                    return Err(inverted(det));
-                }
-                let jinv = jac.try_inverse().ok_or_else(|| inverted(det))?;
-                let dv = det * w;
-                vol += dv;
-                let mut b = DMatrix::zeros(6, 3 * nn);
-                for a in 0..nn {
-                    let gr = Vector3::new(g[a][0], g[a][1], g[a][2]);
-                    let gx = jinv.transpose() * gr;
-                    let c = 3 * a;
-                    b[(0, c)] = gx[0];
-                    b[(1, c + 1)] = gx[1];
-                    b[(2, c + 2)] = gx[2];
-                    b[(3, c + 1)] = gx[2];
-                    b[(3, c + 2)] = gx[1];
-                    b[(4, c)] = gx[2];
-                    b[(4, c + 2)] = gx[0];
-                    b[(5, c)] = gx[1];
-                    b[(5, c + 1)] = gx[0];
-                }
-                let db = d * &b;
-                k += b.transpose() * db * dv;
-                for a in 0..nn {
-                    for c in 0..nn {
-                        let v = rho * n[a] * n[c] * dv;
-                        for i in 0..3 {
-                            m[(3 * a + i, 3 * c + i)] += v;
-                        }
-                    }
-                }
-            }
-            Ok(ElementMatrices { k, m, volume: vol })
+        CellKind::Hex8 => {
+            AnyElement::Hex8(solid_kernel(x, &hex8_points(), &mat.d3(), rho, &inverted)?)
         }
-    }
+    })
 }
 
-/// Assembles `M` and `K` of a mesh in parallel (rayon over cells; the triplets are then
-/// summed by nalgebra-sparse). `contact_nodes` matter only for
+/// Assembles `M` and `K` of a mesh in parallel (rayon; each task owns a range of
+/// columns of the one pattern, see [`PatternAssembler::par_assemble_pair`]); the result
+/// does not depend on the thread count. `contact_nodes` matter only for
 /// [`MassKind::Redistributed`].
 pub fn assemble(
     mesh: &Mesh,
@@ -475,32 +555,33 @@ pub fn assemble_with_contacts(
             ));
         }
     }
-    let elems: Vec<ElementMatrices> = mesh
-        .cells
-        .par_iter()
-        .enumerate()
-        .map(|(id, (kind, nodes))| {
-            let x: Vec<[f64; 3]> = nodes.iter().map(|&v| mesh.points[v]).collect();
-            element_matrices(id, *kind, &x, mat, f)
-        })
-        .collect::<Result<_, _>>()?;
     let cell_nodes: Vec<&[usize]> = mesh.cells.iter().map(|(_, c)| c.as_slice()).collect();
     let mut ak = PatternAssembler::new(mesh.points.len(), dim, &cell_nodes);
     let mut am = ak.zeroed_like();
-    for ((_, nodes), e) in mesh.cells.iter().zip(&elems) {
-        let dofs: Vec<usize> = nodes
-            .iter()
-            .flat_map(|&v| (0..dim).map(move |i| v * dim + i))
-            .collect();
-        ak.add_element(&dofs, |a, b| e.k[(a, b)]);
+    ak.par_assemble_pair(&mut am, &cell_nodes, |id, k, m| {
+        let (kind, nodes) = &mesh.cells[id];
+        let mut x = [[0.0; 3]; 8];
+        let mut dofs = [0usize; 24];
+        for (a, &v) in nodes.iter().enumerate() {
+            x[a] = mesh.points[v];
+            for i in 0..dim {
+                dofs[a * dim + i] = v * dim + i;
+            }
+        }
+        let nd = nodes.len() * dim;
+        let (x, dofs) = (&x[..nodes.len()], &dofs[..nd]);
+        let e = element_matrices(id, *kind, x, mat, f)?;
+        k.add_element(dofs, |a, b| e.k(a, b));
         super::add_element_mass(
-            &mut am,
+            m,
             mass,
-            &dofs,
-            |a, b| e.m[(a, b)],
+            dofs,
+            |a, b| e.m(a, b),
             |a| is_contact_node[dofs[a] / dim],
         );
-    }
+        Ok(())
+    })
+    .map_err(|(_, e)| e)?;
     Ok(LinearSystem {
         mass: am.finish(),
         stiffness: ak.finish(),
