@@ -1,13 +1,15 @@
 //! `signorini`: command-line front end. Parses flags, prints progress and results;
 //! all the work is in the library.
 
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use signorini::integrators::delassus::DelassusKind;
 use signorini::integrators::{Forecast, Metric, SchemeKind};
+use signorini::io::OutputOptions;
+use signorini::io::frames::Encoding;
 use signorini::model::MassKind;
 use signorini::run::{self, Progress};
 use signorini::scene::bar::BarScene;
@@ -52,6 +54,43 @@ struct SceneArgs {
     /// Print nothing but errors.
     #[arg(long)]
     quiet: bool,
+    #[command(flatten)]
+    output: OutputArgs,
+}
+
+/// Output strides and formats (override the scene's `[output]`).
+#[derive(Args, Clone)]
+struct OutputArgs {
+    /// Save a field frame every K steps (default: about 100 frames; frames are also saved
+    /// at the start, at contact onset and release and at the last step).
+    #[arg(long, value_name = "K")]
+    save_every: Option<usize>,
+    /// Write a history row every K steps (default 1).
+    #[arg(long, value_name = "K")]
+    history_every: Option<usize>,
+    /// Write no .vtu/.pvd field frames.
+    #[arg(long)]
+    no_fields: bool,
+    /// Write the .vtu arrays as text instead of zlib-compressed binary.
+    #[arg(long)]
+    ascii: bool,
+}
+
+impl OutputArgs {
+    fn apply(&self, o: &mut OutputOptions) {
+        if let Some(k) = self.save_every {
+            o.stride = k;
+        }
+        if let Some(k) = self.history_every {
+            o.history_stride = k;
+        }
+        if self.no_fields {
+            o.fields = false;
+        }
+        if self.ascii {
+            o.encoding = Encoding::Ascii;
+        }
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -186,6 +225,8 @@ struct BarArgs {
     /// Print nothing but errors.
     #[arg(long)]
     quiet: bool,
+    #[command(flatten)]
+    output: OutputArgs,
 }
 
 impl BarArgs {
@@ -249,36 +290,41 @@ impl BarArgs {
     }
 }
 
-/// Progress on stderr: a rewritten line on a terminal, a line per 10 % otherwise.
-struct CliProgress {
-    tty: bool,
-    last_decile: usize,
-    start: std::time::Instant,
+/// Progress on stderr: an indicatif bar with steps/s and ETA on a terminal, a plain line
+/// per 10 % otherwise (logs, CI).
+enum CliProgress {
+    Bar(indicatif::ProgressBar),
+    Lines {
+        last_decile: usize,
+        start: std::time::Instant,
+    },
 }
 
 impl Progress for CliProgress {
     fn update(&mut self, step: usize, total: usize) {
-        let frac = step as f64 / total as f64;
-        let el = self.start.elapsed().as_secs_f64();
-        let eta = if frac > 0.0 { el / frac - el } else { 0.0 };
-        let rate = step as f64 / el.max(1e-9);
-        if self.tty {
-            eprint!(
-                "\r  step {step}/{total} ({:5.1} %), {rate:.0} steps/s, ETA {eta:.1} s   ",
-                100.0 * frac
-            );
-            if step == total {
-                eprintln!();
+        match self {
+            CliProgress::Bar(b) => {
+                if b.length() != Some(total as u64) {
+                    b.set_length(total as u64);
+                }
+                b.set_position(step as u64);
+                if step == total {
+                    b.finish();
+                }
             }
-            let _ = std::io::stderr().flush();
-        } else {
-            let decile = (frac * 10.0).floor() as usize;
-            if decile > self.last_decile || step == total {
-                self.last_decile = decile;
-                eprintln!(
-                    "  step {step}/{total} ({:.0} %), {rate:.0} steps/s, ETA {eta:.1} s",
-                    100.0 * frac
-                );
+            CliProgress::Lines { last_decile, start } => {
+                let frac = step as f64 / total as f64;
+                let el = start.elapsed().as_secs_f64();
+                let eta = if frac > 0.0 { el / frac - el } else { 0.0 };
+                let rate = step as f64 / el.max(1e-9);
+                let decile = (frac * 10.0).floor() as usize;
+                if decile > *last_decile || step == total {
+                    *last_decile = decile;
+                    eprintln!(
+                        "  step {step}/{total} ({:.0} %), {rate:.0} steps/s, ETA {eta:.1} s",
+                        100.0 * frac
+                    );
+                }
             }
         }
     }
@@ -298,7 +344,13 @@ fn run_bar(args: &BarArgs) -> Result<(), signorini::Error> {
             scene.scheme.theta
         );
     }
-    let result = run::run_bar(&scene, Some(&args.out), progress_sink(args.quiet).as_mut())?;
+    let mut options = OutputOptions::default();
+    args.output.apply(&mut options);
+    let out = run::Output {
+        dir: &args.out,
+        options: &options,
+    };
+    let result = run::run_bar(&scene, Some(out), progress_sink(args.quiet).as_mut())?;
     if !args.quiet {
         print_summary(&result.summary, &args.out);
     }
@@ -309,10 +361,20 @@ fn progress_sink(quiet: bool) -> Box<dyn Progress> {
     if quiet {
         Box::new(run::Quiet)
     } else {
-        Box::new(CliProgress {
-            tty: std::io::stderr().is_terminal(),
-            last_decile: 0,
-            start: std::time::Instant::now(),
+        Box::new(if std::io::stderr().is_terminal() {
+            let bar = indicatif::ProgressBar::new(0);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "  {bar:40} {pos}/{len} steps  {per_sec}  ETA {eta}",
+                )
+                .expect("valid template"),
+            );
+            CliProgress::Bar(bar)
+        } else {
+            CliProgress::Lines {
+                last_decile: 0,
+                start: std::time::Instant::now(),
+            }
         })
     }
 }
@@ -336,7 +398,13 @@ fn run_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
             scene.scheme.kind.name()
         );
     }
-    let result = run::run_scene(&scene, Some(&out), progress_sink(args.quiet).as_mut())?;
+    let mut options = scene.output.clone();
+    args.output.apply(&mut options);
+    let o = run::Output {
+        dir: &out,
+        options: &options,
+    };
+    let result = run::run_scene(&scene, Some(o), progress_sink(args.quiet).as_mut())?;
     if !args.quiet {
         print_summary(&result.summary, &out);
     }
@@ -433,8 +501,13 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
             rel(c.total_impulse, c.analytic_total_impulse)
         );
     }
+    let frames = if s.frames > 0 {
+        format!(", {}/fields.pvd ({} frames)", out.display(), s.frames)
+    } else {
+        String::new()
+    };
     println!(
-        "wrote               {}/summary.json, {}/history.csv",
+        "wrote               {}/summary.json, {}/history.csv{frames}",
         out.display(),
         out.display()
     );

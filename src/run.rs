@@ -12,7 +12,8 @@ use serde::Serialize;
 use crate::analytic::ImpactingBar;
 use crate::error::Error;
 use crate::integrators::{Forecast, Integrator, StepStats};
-use crate::io::{HistoryWriter, write_atomic};
+use crate::io::frames::{FrameWriter, Geometry};
+use crate::io::{HistoryWriter, OutputOptions, write_atomic};
 use crate::scene::bar::BarScene;
 
 /// Receives progress; the CLI prints it, the library stays silent.
@@ -98,8 +99,11 @@ pub struct Summary {
     pub wall_seconds: f64,
     /// `wall_seconds / steps`.
     pub seconds_per_step: f64,
-    /// Seconds spent writing the history (included in `wall_seconds`).
+    /// Seconds spent on output: history rows (with their energies) and field frames
+    /// (included in `wall_seconds`, except the first frame, written before the loop).
     pub output_seconds: f64,
+    /// Field frames written (`fields.pvd`).
+    pub frames: usize,
     /// Largest penetration over the run (m, ≥ 0).
     pub max_violation: f64,
     /// Contact response vs analytic (bar scenes).
@@ -114,6 +118,10 @@ pub struct Summary {
     pub energy: [f64; 2],
     /// Linear-algebra path taken.
     pub path: String,
+    /// Seconds to build the model (mesh, parallel assembly of `M` and `K`, contacts).
+    pub model_seconds: f64,
+    /// Seconds to build the integrator (factorization of `M̂`, Delassus data).
+    pub integrator_seconds: f64,
     /// The scene parameters as run.
     pub parameters: serde_json::Value,
 }
@@ -165,13 +173,28 @@ impl Acc {
     }
 }
 
-/// Runs the bar scene; writes `history.csv` and `summary.json` into `out_dir` if given.
+/// Where and what a run writes.
+#[derive(Clone, Copy, Debug)]
+pub struct Output<'a> {
+    /// Output directory.
+    pub dir: &'a Path,
+    /// Strides, formats.
+    pub options: &'a OutputOptions,
+}
+
+/// Runs the bar scene; writes `history.csv`, `summary.json` and the field frames
+/// (`fields.pvd`, `fields/*.vtu`) into `out.dir` if given.
 pub fn run_bar(
     scene: &BarScene,
-    out_dir: Option<&Path>,
+    out: Option<Output>,
     progress: &mut dyn Progress,
 ) -> Result<RunResult, Error> {
-    let mut integ = scene.build()?.into_integrator(&scene.scheme, scene.dt)?;
+    let t0 = Instant::now();
+    let mut model = scene.build()?;
+    let geometry = std::mem::take(&mut model.geometry);
+    let t1 = Instant::now();
+    let mut integ = model.into_integrator(&scene.scheme, scene.dt)?;
+    let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
     let parameters = serde_json::to_value(scene).expect("scene serializes");
     run(
         integ.as_mut(),
@@ -180,19 +203,30 @@ pub fn run_bar(
         scene.scheme.theta,
         scene.analytic(),
         parameters,
-        out_dir,
+        out.map(|o| (o, geometry)),
         progress,
     )
+    .and_then(|mut r| {
+        [r.summary.model_seconds, r.summary.integrator_seconds] = setup;
+        if let Some(o) = out {
+            write_summary(&r.summary, o.dir)?;
+        }
+        Ok(r)
+    })
 }
 
-/// Runs a scene file; writes into `out_dir` if given.
+/// Runs a scene file; writes into `out.dir` if given.
 pub fn run_scene(
     scene: &crate::scene::file::Scene,
-    out_dir: Option<&Path>,
+    out: Option<Output>,
     progress: &mut dyn Progress,
 ) -> Result<RunResult, Error> {
-    let (model, report) = scene.build()?;
+    let t0 = Instant::now();
+    let (mut model, report) = scene.build()?;
+    let geometry = std::mem::take(&mut model.geometry);
+    let t1 = Instant::now();
     let mut integ = model.into_integrator(&scene.scheme, scene.time.dt)?;
+    let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
     let parameters = serde_json::to_value(scene).expect("scene serializes");
     run(
         integ.as_mut(),
@@ -201,12 +235,26 @@ pub fn run_scene(
         scene.scheme.theta,
         scene.reference.map(|r| r.impacting_bar),
         parameters,
-        out_dir,
+        out.map(|o| (o, geometry)),
         progress,
     )
+    .and_then(|mut r| {
+        [r.summary.model_seconds, r.summary.integrator_seconds] = setup;
+        if let Some(o) = out {
+            write_summary(&r.summary, o.dir)?;
+        }
+        Ok(r)
+    })
 }
 
-/// Steps `integ` `steps` times, streaming the history and measuring the contact.
+/// Steps `integ` `steps` times, streaming the history and the field frames (when
+/// `out` is given) and measuring the contact; the caller writes the summary
+/// ([`write_summary`]).
+///
+/// Frames are saved at the start, every `frame_stride` steps, at each contact onset and
+/// release and at the last step; history rows every `history_stride` steps and at the
+/// last step. The time spent writing (including the energies and fields computed only
+/// for output) is measured and reported as `output_seconds`.
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     integ: &mut dyn Integrator,
@@ -215,18 +263,41 @@ pub fn run(
     theta: f64,
     reference: Option<ImpactingBar>,
     parameters: serde_json::Value,
-    out_dir: Option<&Path>,
+    out: Option<(Output, Geometry)>,
     progress: &mut dyn Progress,
 ) -> Result<RunResult, Error> {
     let h = integ.dt();
     let m = integ.state().gap.len();
-    let mut history = match out_dir {
-        Some(d) => {
-            std::fs::create_dir_all(d).map_err(|e| Error::io(d, e))?;
-            Some(HistoryWriter::create(&d.join("history.csv"), m)?)
+    let mut output_seconds = 0.0;
+    let t0 = Instant::now();
+    let (mut history, mut frames, frame_stride, history_stride) = match out {
+        Some((o, geom)) => {
+            o.options.validate()?;
+            std::fs::create_dir_all(o.dir).map_err(|e| Error::io(o.dir, e))?;
+            let hist = HistoryWriter::create(&o.dir.join("history.csv"), m)?;
+            let frames = if o.options.fields {
+                let mut w = FrameWriter::create(
+                    o.dir,
+                    "fields",
+                    geom,
+                    integ.jacobian(),
+                    o.options.encoding,
+                )?;
+                w.write(integ.state(), integ.jacobian(), h)?;
+                Some(w)
+            } else {
+                None
+            };
+            (
+                Some(hist),
+                frames,
+                o.options.frame_stride(steps),
+                o.options.history_stride,
+            )
         }
-        None => None,
+        None => (None, None, usize::MAX, usize::MAX),
     };
+    output_seconds += t0.elapsed().as_secs_f64();
     let energy0 = {
         let s = integ.state();
         integ.system().kinetic_energy(&s.v) + integ.system().potential_energy(&s.q)
@@ -234,23 +305,41 @@ pub fn run(
     let mut force = Vec::with_capacity(steps);
     let mut min_gap = Vec::with_capacity(steps);
     let mut acc = Acc::default();
-    let mut output_seconds = 0.0;
+    let mut closed_before = false;
     let start = Instant::now();
-    let report_every = (steps / 100).max(1);
+    let report_every = (steps / 1000).max(1);
     for k in 0..steps {
         let st = integ.step()?;
         acc.add(&st);
         let s = integ.state();
         force.push(s.impulse.iter().sum::<f64>() / h);
         min_gap.push(s.gap.iter().copied().fold(f64::INFINITY, f64::min));
-        if let Some(w) = history.as_mut() {
+        let last = k + 1 == steps;
+        if history.is_some() {
             let t0 = Instant::now();
-            let ke = integ.system().kinetic_energy(&s.v);
-            let pe = integ.system().potential_energy(&s.q);
-            w.row(s, &st, ke, pe)?;
+            if let Some(w) = history
+                .as_mut()
+                .filter(|_| (k + 1) % history_stride == 0 || last)
+            {
+                let ke = integ.system().kinetic_energy(&s.v);
+                let pe = integ.system().potential_energy(&s.q);
+                w.row(s, &st, ke, pe)?;
+            }
+            let closed = s.impulse.iter().any(|&p| p > 0.0);
+            let switch = closed != closed_before;
+            closed_before = closed;
+            if let Some(w) = frames
+                .as_mut()
+                .filter(|_| (k + 1) % frame_stride == 0 || last || switch)
+            {
+                if let Some(hw) = history.as_mut() {
+                    hw.flush()?;
+                }
+                w.write(s, integ.jacobian(), h)?;
+            }
             output_seconds += t0.elapsed().as_secs_f64();
         }
-        if (k + 1) % report_every == 0 || k + 1 == steps {
+        if (k + 1) % report_every == 0 || last {
             progress.update(k + 1, steps);
         }
     }
@@ -275,6 +364,7 @@ pub fn run(
         wall_seconds: wall,
         seconds_per_step: wall / steps.max(1) as f64,
         output_seconds,
+        frames: frames.as_ref().map_or(0, |f| f.frames().len()),
         max_violation: acc.violation,
         contact,
         iterations: acc.iterations(steps),
@@ -282,13 +372,17 @@ pub fn run(
         max_lcp_residual: acc.lcp_res,
         energy: [energy0, energy1],
         path: integ.path(),
+        model_seconds: 0.0,
+        integrator_seconds: 0.0,
         parameters,
     };
-    if let Some(d) = out_dir {
-        let json = serde_json::to_string_pretty(&summary).expect("summary serializes");
-        write_atomic(&d.join("summary.json"), json.as_bytes())?;
-    }
     Ok(RunResult { summary, force })
+}
+
+/// Writes `summary.json` into `dir` atomically.
+pub fn write_summary(summary: &Summary, dir: &Path) -> Result<(), Error> {
+    let json = serde_json::to_string_pretty(summary).expect("summary serializes");
+    write_atomic(&dir.join("summary.json"), json.as_bytes())
 }
 
 /// Measures the first contact interval.

@@ -85,7 +85,12 @@ fn elastic_ball_from_gmsh_drops_and_rebounds_without_penetrating() {
     // "surface" nodes within 2 cm of the floor (1 cm below the ball)
     assert_eq!(report.contacts, 18);
     let dir = std::env::temp_dir().join(format!("signorini-ball-{}", std::process::id()));
-    let r = run_scene(&s, Some(&dir), &mut Quiet).unwrap();
+    let options = signorini::io::OutputOptions::default();
+    let out = signorini::run::Output {
+        dir: &dir,
+        options: &options,
+    };
+    let r = run_scene(&s, Some(out), &mut Quiet).unwrap();
     assert!(
         r.summary.max_violation <= 1e-12,
         "{:e}",

@@ -189,6 +189,9 @@ macro_rules! delegate_to_core {
         fn path(&self) -> String {
             self.core.path()
         }
+        fn jacobian(&self) -> &$crate::contact::ContactJacobian {
+            &self.core.del.jac
+        }
     };
 }
 pub(crate) use delegate_to_core;

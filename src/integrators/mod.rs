@@ -113,6 +113,9 @@ pub trait Integrator {
     /// A one-line description of the solution path taken (factorization, Delassus
     /// data, Newton or not), for summaries.
     fn path(&self) -> String;
+    /// The contact Jacobian `G` of the last evaluation (at the end of the last step;
+    /// for nonlinear gaps, at the last Newton iterate), for the output of `G P / h`.
+    fn jacobian(&self) -> &crate::contact::ContactJacobian;
 }
 
 /// Which scheme to run.

@@ -258,6 +258,9 @@ impl Integrator for SchatzmanPaoli {
     fn dt(&self) -> f64 {
         self.h
     }
+    fn jacobian(&self) -> &crate::contact::ContactJacobian {
+        &self.del.jac
+    }
     fn path(&self) -> String {
         format!(
             "M + h²θK + (hθ/2)C factored once ({}, n = {}); {} contact(s), {}; {}",

@@ -5,11 +5,14 @@
 //! and renamed into place when complete, so a killed run never leaves a truncated file
 //! under the final name and keeps every flushed row in the `.part` file.
 
+pub mod frames;
 pub mod mesh;
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
 
 use crate::error::Error;
 use crate::integrators::{State, StepStats};
@@ -102,6 +105,13 @@ impl HistoryWriter {
         Ok(())
     }
 
+    /// Pushes the buffered rows to the file (the run does it at every field frame, so
+    /// a killed run's history reaches at least its last frame).
+    pub fn flush(&mut self) -> Result<(), Error> {
+        self.rows_since_flush = 0;
+        self.out.flush().map_err(|e| Error::io(&self.tmp, e))
+    }
+
     /// Flushes, syncs and renames the file into place.
     pub fn finish(mut self) -> Result<(), Error> {
         self.out.flush().map_err(|e| Error::io(&self.tmp, e))?;
@@ -110,5 +120,66 @@ impl HistoryWriter {
             .sync_all()
             .map_err(|e| Error::io(&self.tmp, e))?;
         std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(&self.path, e))
+    }
+}
+
+/// What a run writes and how often (`[output]` in scene files; `--save-every`,
+/// `--history-every`, `--no-fields`, `--ascii` on the command line).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputOptions {
+    /// Output directory (the CLI's `--out` overrides it).
+    #[serde(default)]
+    pub dir: Option<PathBuf>,
+    /// Save a field frame every `stride` steps; 0 (default) picks about 100 frames over
+    /// the run. Frames are also saved at the start, at every contact onset and release
+    /// (the set of closed contacts turns non-empty or empty) and at the last step.
+    #[serde(default)]
+    pub stride: usize,
+    /// Write a history row every `history_stride` steps (default 1: every step).
+    #[serde(default = "one")]
+    pub history_stride: usize,
+    /// Write `.vtu` frames and the `.pvd` collection (default true).
+    #[serde(default = "yes")]
+    pub fields: bool,
+    /// Array encoding of the `.vtu` files (default zlib-compressed binary).
+    #[serde(default)]
+    pub encoding: frames::Encoding,
+}
+
+fn one() -> usize {
+    1
+}
+fn yes() -> bool {
+    true
+}
+
+impl Default for OutputOptions {
+    fn default() -> Self {
+        OutputOptions {
+            dir: None,
+            stride: 0,
+            history_stride: 1,
+            fields: true,
+            encoding: frames::Encoding::Zlib,
+        }
+    }
+}
+
+impl OutputOptions {
+    /// The frame stride for a run of `steps` steps (`stride`, or about 100 frames).
+    pub fn frame_stride(&self, steps: usize) -> usize {
+        if self.stride > 0 {
+            self.stride
+        } else {
+            steps.div_ceil(100).max(1)
+        }
+    }
+    /// Rejects a zero history stride.
+    pub fn validate(&self) -> Result<(), Error> {
+        if self.history_stride == 0 {
+            return Err(Error::invalid("history_stride", 0, "must be at least 1"));
+        }
+        Ok(())
     }
 }

@@ -12,6 +12,7 @@ use crate::contact::check_restitution;
 use crate::contact::plane::NodesOnPlane;
 use crate::error::{Error, require_finite, require_in, require_positive};
 use crate::integrators::SchemeParams;
+use crate::io::frames::Geometry;
 use crate::model::MassKind;
 use crate::model::rod::Rod;
 use crate::scene::Model;
@@ -127,6 +128,7 @@ impl BarScene {
             contacts: Box::new(contacts),
             q0: vec![0.0; n],
             v0: vec![self.velocity; n],
+            geometry: Geometry::rod(self.length, self.elements, self.young, self.density),
         })
     }
 

@@ -42,6 +42,7 @@ use crate::contact::sphere::{RoundObstacle, Side};
 use crate::contact::{Composite, ContactSet};
 use crate::error::{Error, require_positive};
 use crate::integrators::SchemeParams;
+use crate::io::frames::{GeomCell, Geometry};
 use crate::model::generate::{box_mesh, rectangle_mesh};
 use crate::model::rod::Rod;
 use crate::model::solid::{CellKind, Formulation, Material, Mesh, assemble_with_contacts};
@@ -70,7 +71,7 @@ pub struct Scene {
     pub loads: Loads,
     /// Output options.
     #[serde(default)]
-    pub output: OutputSpec,
+    pub output: crate::io::OutputOptions,
     /// Directory that relative mesh paths start from (the scene file's directory).
     #[serde(skip)]
     pub base_dir: PathBuf,
@@ -268,15 +269,6 @@ pub struct Loads {
     pub gravity: Option<Vec<f64>>,
 }
 
-/// `[output]`.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct OutputSpec {
-    /// Output directory (the CLI's `--out` overrides it).
-    #[serde(default)]
-    pub dir: Option<PathBuf>,
-}
-
 /// What [`Scene::build`] reports about the model, for `signorini check`.
 #[derive(Clone, Debug, Serialize)]
 pub struct ModelReport {
@@ -344,6 +336,7 @@ impl Scene {
             ));
         }
         self.scheme.validate()?;
+        self.output.validate().map_err(|e| prefix("output", e))?;
         if self.bodies.is_empty() {
             return Err(Error::invalid(
                 "bodies",
@@ -392,6 +385,10 @@ impl Scene {
         let mut fixed = Vec::new();
         let mut cells = 0;
         let dim = self.bodies[0].dim();
+        let mut geometry = Geometry {
+            dim,
+            ..Geometry::default()
+        };
         for (bi, b) in self.bodies.iter().enumerate() {
             let at = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
             if b.dim() != dim {
@@ -472,6 +469,23 @@ impl Scene {
                 }
             }
             fixed.extend(fx);
+            let base = geometry.points.len();
+            match &b.mesh {
+                MeshSpec::Rod { elements, .. } => {
+                    geometry.cells.extend(
+                        (0..*elements).map(|e| (GeomCell::Line, vec![base + e, base + e + 1], bi)),
+                    );
+                }
+                _ => geometry.cells.extend(mesh.cells.iter().map(|(k, c)| {
+                    (
+                        GeomCell::Solid(*k),
+                        c.iter().map(|v| base + v).collect(),
+                        bi,
+                    )
+                })),
+            }
+            geometry.points.extend_from_slice(&mesh.points);
+            geometry.bodies.push((b.material, b.formulation));
             systems.push(sys);
             meshes.push(mesh);
         }
@@ -486,6 +500,7 @@ impl Scene {
         let full = LinearSystem::block_diagonal(systems)?;
         let fixed_dofs = fixed.iter().filter(|&&f| f).count();
         let (system, map) = full.restrict(&fixed);
+        geometry.dof_of = map.clone();
         let v0: Vec<f64> = v0
             .iter()
             .zip(&map)
@@ -602,6 +617,7 @@ impl Scene {
                 contacts,
                 q0: vec![0.0; n],
                 v0,
+                geometry,
             },
             report,
         ))

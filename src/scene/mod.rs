@@ -23,6 +23,8 @@ pub struct Model {
     pub q0: Vec<f64>,
     /// Initial velocity.
     pub v0: Vec<f64>,
+    /// Points, cells and dof map for the field output.
+    pub geometry: crate::io::frames::Geometry,
 }
 
 impl Model {

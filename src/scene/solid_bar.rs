@@ -9,6 +9,7 @@ use crate::analytic::ImpactingBar;
 use crate::contact::plane::NodesOnPlane;
 use crate::error::{Error, require_finite, require_in, require_positive};
 use crate::integrators::SchemeParams;
+use crate::io::frames::{GeomCell, Geometry};
 use crate::model::MassKind;
 use crate::model::generate::box_mesh;
 use crate::model::solid::{CellKind, Formulation, Material, assemble};
@@ -127,11 +128,23 @@ impl SolidBarScene {
         for v in v0.iter_mut().step_by(3) {
             *v = self.velocity;
         }
+        let geometry = Geometry {
+            points: mesh.points.clone(),
+            cells: mesh
+                .cells
+                .iter()
+                .map(|(k, c)| (GeomCell::Solid(*k), c.clone(), 0))
+                .collect(),
+            bodies: vec![(self.material, Formulation::Solid)],
+            dim: 3,
+            dof_of: (0..n).map(Some).collect(),
+        };
         Ok(Model {
             system,
             contacts: Box::new(contacts),
             q0: vec![0.0; n],
             v0,
+            geometry,
         })
     }
 

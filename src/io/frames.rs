@@ -1,0 +1,480 @@
+//! Field output for ParaView: one `.vtu` (VTK XML unstructured grid) per saved frame and
+//! one `.pvd` collection listing the frames with their times (issue 4, DESIGN.md §6).
+//!
+//! Point data: `displacement` and `velocity` (vectors, m and m/s), `contact_force`
+//! (vector `G P / h` at the contact nodes, zero elsewhere, N) and `gap` (m, at the
+//! candidate nodes, NaN elsewhere so ParaView leaves the others blank). Cell data, at
+//! the cell centre: `strain` and `stress` (symmetric tensors in ParaView's order
+//! `XX, YY, ZZ, XY, YZ, XZ`; Pa for stress) and `von_mises` (Pa). Rods are lines with the
+//! uniaxial stress `E ∂u/∂x`. Field data: `TimeValue` (s) and `Step`. Every array
+//! carries its SI unit as a `units` attribute of its `<DataArray>` (readers ignore
+//! attributes they do not know); a `String` field-data array would be the VTK way, but
+//! meshio 5.3.5 refuses to open a file holding one (tested), so the units are not there.
+//!
+//! Files: each `.vtu` is written as `NAME.part` and renamed when complete, and the
+//! `.pvd` is rewritten the same way after every frame, so a run killed at any point
+//! leaves a collection that lists exactly the completed frames.
+//!
+//! The writer is ours rather than vtkio's: vtkio builds a whole owned model of the grid
+//! for every file (a copy of the mesh per frame) and has no `.pvd`, while this writer
+//! encodes the frame's arrays straight from reused buffers (zlib through `flate2`,
+//! base64 through `base64`). vtkio reads the files back in the tests, as VTK, meshio
+//! and ParaView do in CI.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use base64::Engine;
+use base64::engine::general_purpose::STANDARD as B64;
+
+use crate::contact::ContactJacobian;
+use crate::error::Error;
+use crate::integrators::State;
+use crate::model::solid::{CellKind, Formulation, Material, centre_strain, hooke, von_mises};
+
+/// One cell of the output geometry.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GeomCell {
+    /// A two-node rod element (uniaxial stress along x).
+    Line,
+    /// A solid or plane element.
+    Solid(CellKind),
+}
+
+impl GeomCell {
+    fn vtk_type(&self) -> u8 {
+        match self {
+            GeomCell::Line => 3,
+            GeomCell::Solid(CellKind::Tri3) => 5,
+            GeomCell::Solid(CellKind::Quad4) => 9,
+            GeomCell::Solid(CellKind::Tet4) => 10,
+            GeomCell::Solid(CellKind::Hex8) => 12,
+        }
+    }
+}
+
+/// What the writers need to draw the model: points, cells, the material of each cell
+/// and where each nodal displacement component lives in the integrator's dof vector.
+#[derive(Clone, Debug, Default)]
+pub struct Geometry {
+    /// Reference coordinates (m).
+    pub points: Vec<[f64; 3]>,
+    /// Cells: kind, nodes, body index (into `bodies`).
+    pub cells: Vec<(GeomCell, Vec<usize>, usize)>,
+    /// Material and formulation per body.
+    pub bodies: Vec<(Material, Formulation)>,
+    /// Displacement components per point (1 for rods, 2 or 3 for solids).
+    pub dim: usize,
+    /// `point · dim + component` → dof of the integrated system (`None` when fixed).
+    pub dof_of: Vec<Option<usize>>,
+}
+
+impl Geometry {
+    /// The geometry of a straight rod of `elements` elements along x (one dof per node).
+    pub fn rod(length: f64, elements: usize, young: f64, density: f64) -> Self {
+        let n = elements.max(1);
+        Geometry {
+            points: (0..=n)
+                .map(|i| [length * i as f64 / n as f64, 0.0, 0.0])
+                .collect(),
+            cells: (0..n)
+                .map(|e| (GeomCell::Line, vec![e, e + 1], 0))
+                .collect(),
+            bodies: vec![(
+                Material {
+                    young,
+                    poisson: 0.0,
+                    density,
+                },
+                Formulation::Solid,
+            )],
+            dim: 1,
+            dof_of: (0..=n).map(Some).collect(),
+        }
+    }
+}
+
+/// How array data are encoded in the `.vtu` files.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Encoding {
+    /// Inline base64 of zlib-compressed blocks (VTK's `vtkZLibDataCompressor`).
+    #[default]
+    Zlib,
+    /// Inline base64, uncompressed.
+    Binary,
+    /// Plain text numbers.
+    Ascii,
+}
+
+/// Streams frames as `.vtu` files and keeps the `.pvd` collection up to date.
+pub struct FrameWriter {
+    dir: PathBuf,
+    stem: String,
+    geom: Geometry,
+    encoding: Encoding,
+    /// point index of each contact (from the Jacobian pattern)
+    contact_point: Vec<usize>,
+    frames: Vec<(f64, String)>,
+    // per-frame scratch, sized once
+    disp: Vec<f64>,
+    vel: Vec<f64>,
+    force: Vec<f64>,
+    gap: Vec<f64>,
+    strain: Vec<f64>,
+    stress: Vec<f64>,
+    mises: Vec<f64>,
+    xml: String,
+    static_xml: String,
+    raw: Vec<u8>,
+    zip: Vec<u8>,
+    deflate: flate2::Compress,
+}
+
+impl FrameWriter {
+    /// Prepares `dir/<stem>.pvd` and `dir/<stem>/` for the frames of a run whose contact
+    /// Jacobian has the pattern of `jac`.
+    pub fn create(
+        dir: &Path,
+        stem: &str,
+        geom: Geometry,
+        jac: &ContactJacobian,
+        encoding: Encoding,
+    ) -> Result<Self, Error> {
+        let frames_dir = dir.join(stem);
+        std::fs::create_dir_all(&frames_dir).map_err(|e| Error::io(&frames_dir, e))?;
+        let mut point_of_dof = vec![usize::MAX; geom.dof_of.iter().flatten().count()];
+        for (k, d) in geom.dof_of.iter().enumerate() {
+            if let Some(d) = d {
+                point_of_dof[*d] = k / geom.dim;
+            }
+        }
+        let contact_point = (0..jac.ncols())
+            .map(|a| {
+                jac.col(a)
+                    .0
+                    .first()
+                    .and_then(|&d| point_of_dof.get(d).copied())
+                    .unwrap_or(usize::MAX)
+            })
+            .collect();
+        let (np, nc) = (geom.points.len(), geom.cells.len());
+        let mut w = FrameWriter {
+            dir: dir.to_path_buf(),
+            stem: stem.to_string(),
+            encoding,
+            contact_point,
+            frames: Vec::new(),
+            disp: vec![0.0; 3 * np],
+            vel: vec![0.0; 3 * np],
+            force: vec![0.0; 3 * np],
+            gap: vec![f64::NAN; np],
+            strain: vec![0.0; 6 * nc],
+            stress: vec![0.0; 6 * nc],
+            mises: vec![0.0; nc],
+            xml: String::new(),
+            raw: Vec::new(),
+            zip: Vec::new(),
+            deflate: flate2::Compress::new(flate2::Compression::fast(), true),
+            static_xml: String::new(),
+            geom,
+        };
+        w.static_xml = w.encode_static();
+        Ok(w)
+    }
+
+    /// Frames written so far: (time, file relative to the output directory).
+    pub fn frames(&self) -> &[(f64, String)] {
+        &self.frames
+    }
+
+    /// Path of the `.pvd` collection.
+    pub fn pvd_path(&self) -> PathBuf {
+        self.dir.join(format!("{}.pvd", self.stem))
+    }
+
+    /// Computes the fields of `state` (contact force `G P / h` with the Jacobian `jac`)
+    /// and writes them as the next frame, then rewrites the `.pvd`.
+    pub fn write(&mut self, state: &State, jac: &ContactJacobian, h: f64) -> Result<(), Error> {
+        self.fill(state, jac, h);
+        let name = format!("{}/frame_{:06}.vtu", self.stem, self.frames.len());
+        let path = self.dir.join(&name);
+        self.encode(state.time, state.step);
+        write_renamed(&path, self.xml.as_bytes())?;
+        self.frames.push((state.time, name));
+        let mut pvd = String::from(
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" \
+             byte_order=\"LittleEndian\">\n  <Collection>\n",
+        );
+        for (t, f) in &self.frames {
+            let _ = writeln!(
+                pvd,
+                "    <DataSet timestep=\"{t:e}\" group=\"\" part=\"0\" file=\"{f}\"/>"
+            );
+        }
+        pvd.push_str("  </Collection>\n</VTKFile>\n");
+        write_renamed(&self.pvd_path(), pvd.as_bytes())
+    }
+
+    fn fill(&mut self, s: &State, jac: &ContactJacobian, h: f64) {
+        let g = &self.geom;
+        let dim = g.dim;
+        for (k, d) in g.dof_of.iter().enumerate() {
+            let (p, i) = (k / dim, k % dim);
+            let (u, v) = d.map_or((0.0, 0.0), |d| (s.q[d], s.v[d]));
+            self.disp[3 * p + i] = u;
+            self.vel[3 * p + i] = v;
+        }
+        self.force.iter_mut().for_each(|f| *f = 0.0);
+        self.gap.iter_mut().for_each(|f| *f = f64::NAN);
+        // G P / h, mapped back to the points through the dof map
+        for a in 0..jac.ncols().min(s.impulse.len()) {
+            let p = self.contact_point[a];
+            if p == usize::MAX {
+                continue;
+            }
+            self.gap[p] = if self.gap[p].is_nan() {
+                s.gap[a]
+            } else {
+                self.gap[p].min(s.gap[a])
+            };
+            let (dofs, vals) = jac.col(a);
+            for (&d, &gv) in dofs.iter().zip(vals) {
+                // the component of dof d at point p
+                if let Some(k) = (0..dim).find(|&i| g.dof_of[p * dim + i] == Some(d)) {
+                    self.force[3 * p + k] += gv * s.impulse[a] / h;
+                }
+            }
+        }
+        for (c, (kind, nodes, body)) in g.cells.iter().enumerate() {
+            let (mat, form) = &g.bodies[*body];
+            let mut eps = [0.0; 6];
+            let sig;
+            match kind {
+                GeomCell::Line => {
+                    let (a, b) = (nodes[0], nodes[1]);
+                    let l = g.points[b][0] - g.points[a][0];
+                    eps[0] = (self.disp[3 * b] - self.disp[3 * a]) / l;
+                    sig = [mat.young * eps[0], 0.0, 0.0, 0.0, 0.0, 0.0];
+                }
+                GeomCell::Solid(k) => {
+                    let mut x = [[0.0; 3]; 8];
+                    let mut u = [[0.0; 3]; 8];
+                    for (j, &p) in nodes.iter().enumerate() {
+                        x[j] = g.points[p];
+                        u[j] = [self.disp[3 * p], self.disp[3 * p + 1], self.disp[3 * p + 2]];
+                    }
+                    eps = centre_strain(*k, &x, &u, mat, *form);
+                    sig = hooke(mat, &eps);
+                }
+            }
+            self.strain[6 * c..6 * c + 6].copy_from_slice(&eps);
+            self.stress[6 * c..6 * c + 6].copy_from_slice(&sig);
+            self.mises[c] = von_mises(&sig);
+        }
+    }
+
+    fn encode(&mut self, time: f64, step: usize) {
+        let g = &self.geom;
+        let (np, nc) = (g.points.len(), g.cells.len());
+        let compressed = self.encoding == Encoding::Zlib;
+        let mut x = std::mem::take(&mut self.xml);
+        x.clear();
+        let _ = write!(
+            x,
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" \
+             byte_order=\"LittleEndian\" header_type=\"UInt64\"{}>\n<UnstructuredGrid>\n",
+            if compressed {
+                " compressor=\"vtkZLibDataCompressor\""
+            } else {
+                ""
+            }
+        );
+        x.push_str("<FieldData>\n");
+        self.array_f64(&mut x, "TimeValue", 1, &[time]);
+        self.array_i64(&mut x, "Step", 1, &[step as i64]);
+        x.push_str("</FieldData>\n");
+        let _ = writeln!(x, "<Piece NumberOfPoints=\"{np}\" NumberOfCells=\"{nc}\">");
+        x.push_str("<PointData Vectors=\"displacement\" Scalars=\"gap\">\n");
+        let (disp, vel, force, gap) = (
+            std::mem::take(&mut self.disp),
+            std::mem::take(&mut self.vel),
+            std::mem::take(&mut self.force),
+            std::mem::take(&mut self.gap),
+        );
+        self.array_f64(&mut x, "displacement", 3, &disp);
+        self.array_f64(&mut x, "velocity", 3, &vel);
+        self.array_f64(&mut x, "contact_force", 3, &force);
+        self.array_f64(&mut x, "gap", 1, &gap);
+        (self.disp, self.vel, self.force, self.gap) = (disp, vel, force, gap);
+        x.push_str("</PointData>\n<CellData Tensors=\"stress\" Scalars=\"von_mises\">\n");
+        let (strain, stress, mises) = (
+            std::mem::take(&mut self.strain),
+            std::mem::take(&mut self.stress),
+            std::mem::take(&mut self.mises),
+        );
+        self.array_f64(&mut x, "strain", 6, &strain);
+        self.array_f64(&mut x, "stress", 6, &stress);
+        self.array_f64(&mut x, "von_mises", 1, &mises);
+        (self.strain, self.stress, self.mises) = (strain, stress, mises);
+        x.push_str("</CellData>\n");
+        x.push_str(&self.static_xml);
+        x.push_str("</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+        self.xml = x;
+    }
+
+    /// The `<Points>` and `<Cells>` elements, encoded once for every frame.
+    fn encode_static(&mut self) -> String {
+        let mut x = String::from("<Points>\n");
+        let pts: Vec<f64> = self.geom.points.iter().flatten().copied().collect();
+        self.array_f64(&mut x, "Points", 3, &pts);
+        x.push_str("</Points>\n<Cells>\n");
+        let conn: Vec<i64> = self
+            .geom
+            .cells
+            .iter()
+            .flat_map(|(_, n, _)| n.iter().map(|&v| v as i64))
+            .collect();
+        let offs: Vec<i64> = self
+            .geom
+            .cells
+            .iter()
+            .scan(0i64, |o, (_, n, _)| {
+                *o += n.len() as i64;
+                Some(*o)
+            })
+            .collect();
+        let types: Vec<u8> = self
+            .geom
+            .cells
+            .iter()
+            .map(|(k, _, _)| k.vtk_type())
+            .collect();
+        self.array_i64(&mut x, "connectivity", 1, &conn);
+        self.array_i64(&mut x, "offsets", 1, &offs);
+        self.array_raw(&mut x, "UInt8", "types", 1, types.len(), &types, |s, v| {
+            for b in v {
+                let _ = write!(s, "{b} ");
+            }
+        });
+        x.push_str("</Cells>\n");
+        x
+    }
+
+    fn array_f64(&mut self, x: &mut String, name: &str, comps: usize, v: &[f64]) {
+        let bytes: &[u8] = bytemuck_f64(v);
+        self.array_raw(x, "Float64", name, comps, v.len(), bytes, |s, _| {
+            for (k, a) in v.iter().enumerate() {
+                let _ = write!(s, "{a:e}");
+                s.push(if (k + 1) % comps == 0 { '\n' } else { ' ' });
+            }
+        });
+    }
+
+    fn array_i64(&mut self, x: &mut String, name: &str, comps: usize, v: &[i64]) {
+        let bytes: Vec<u8> = v.iter().flat_map(|a| a.to_le_bytes()).collect();
+        self.array_raw(x, "Int64", name, comps, v.len(), &bytes, |s, _| {
+            for a in v {
+                let _ = write!(s, "{a} ");
+            }
+        });
+    }
+
+    /// One `<DataArray>`; `ascii` prints the values for the ASCII encoding.
+    #[allow(clippy::too_many_arguments)]
+    fn array_raw(
+        &mut self,
+        x: &mut String,
+        ty: &str,
+        name: &str,
+        comps: usize,
+        len: usize,
+        bytes: &[u8],
+        ascii: impl Fn(&mut String, &[u8]),
+    ) {
+        let fmt = if self.encoding == Encoding::Ascii {
+            "ascii"
+        } else {
+            "binary"
+        };
+        let unit = match name {
+            "displacement" | "gap" | "Points" => " units=\"m\"",
+            "velocity" => " units=\"m/s\"",
+            "contact_force" => " units=\"N\"",
+            "stress" | "von_mises" => " units=\"Pa\"",
+            "strain" => " units=\"1\"",
+            "TimeValue" => " units=\"s\"",
+            _ => "",
+        };
+        let _ = writeln!(
+            x,
+            "<DataArray type=\"{ty}\" Name=\"{name}\" NumberOfComponents=\"{comps}\" \
+             NumberOfTuples=\"{}\" format=\"{fmt}\"{unit}>",
+            len / comps.max(1)
+        );
+        match self.encoding {
+            Encoding::Ascii => ascii(x, bytes),
+            Encoding::Binary => {
+                self.raw.clear();
+                self.raw
+                    .extend_from_slice(&(bytes.len() as u64).to_le_bytes());
+                self.raw.extend_from_slice(bytes);
+                B64.encode_string(&self.raw, x);
+            }
+            Encoding::Zlib => {
+                // one block: header [nblocks, block size, last block size, compressed
+                // size], base64-encoded on its own, then the compressed block
+                self.zip.clear();
+                if !bytes.is_empty() {
+                    // one reused deflate state (a fresh one zeroes its window each time)
+                    self.deflate.reset();
+                    self.zip.reserve(bytes.len() / 2 + 64);
+                    loop {
+                        let done = self.deflate.total_in() as usize;
+                        let st = self
+                            .deflate
+                            .compress_vec(
+                                &bytes[done..],
+                                &mut self.zip,
+                                flate2::FlushCompress::Finish,
+                            )
+                            .expect("deflate into memory");
+                        if st == flate2::Status::StreamEnd {
+                            break;
+                        }
+                        self.zip.reserve(self.zip.len().max(1024));
+                    }
+                }
+                self.raw.clear();
+                let n = bytes.len() as u64;
+                let head: [u64; 4] = [u64::from(n > 0), n, n, self.zip.len() as u64];
+                let hl = if n > 0 { 4 } else { 3 };
+                for h in &head[..hl] {
+                    self.raw.extend_from_slice(&h.to_le_bytes());
+                }
+                B64.encode_string(&self.raw, x);
+                B64.encode_string(&self.zip, x);
+            }
+        }
+        x.push_str("\n</DataArray>\n");
+    }
+}
+
+/// The little-endian bytes of an `f64` slice (every supported target is little-endian;
+/// checked at compile time below).
+fn bytemuck_f64(v: &[f64]) -> &[u8] {
+    const _: () = assert!(cfg!(target_endian = "little"));
+    // SAFETY: f64 has no padding and every bit pattern is a valid u8 sequence; the
+    // length is the slice's size in bytes and the lifetime is the input's.
+    unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<u8>(), std::mem::size_of_val(v)) }
+}
+
+/// Writes `bytes` to `path.part` and renames it onto `path` (no fsync: a killed process
+/// loses nothing the kernel has, and frames are too frequent to sync each one).
+fn write_renamed(path: &Path, bytes: &[u8]) -> Result<(), Error> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".part");
+    let tmp = PathBuf::from(tmp);
+    std::fs::write(&tmp, bytes).map_err(|e| Error::io(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}
