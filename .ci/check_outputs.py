@@ -1,0 +1,93 @@
+#!/usr/bin/env python3
+"""Opens a finished run's outputs with the real clients (VTK and meshio from PyPI) and
+fails on any mismatch.
+
+Usage: check_outputs.py OUT_DIR   (a directory written by `signorini bar` or `run`)
+
+Checks, for every frame listed in OUT_DIR/fields.pvd:
+  - VTK's vtkXMLUnstructuredGridReader and meshio both open it and agree on the
+    points, the cells and every point/cell array (bit for bit);
+  - the arrays users rely on are there with the right number of components;
+  - the field data TimeValue equals the .pvd timestep and Step is a history step;
+  - the contact force at the contact nodes equals the history's impulse / dt.
+and that the frame count matches summary.json.
+"""
+import csv
+import json
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import meshio
+import numpy as np
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy
+
+POINT = {"displacement": 3, "velocity": 3, "contact_force": 3, "gap": 1}
+CELL = {"strain": 6, "stress": 6, "von_mises": 1}
+
+
+def fail(msg):
+    print(f"check_outputs: FAIL: {msg}")
+    sys.exit(1)
+
+
+def main(out):
+    out = Path(out)
+    summary = json.loads((out / "summary.json").read_text())
+    dt = summary["dt"]
+    with open(out / "history.csv") as f:
+        rows = {int(r["step"]): r for r in csv.DictReader(f)}
+    frames = [(float(d.get("timestep")), d.get("file"))
+              for d in ET.parse(out / "fields.pvd").getroot().iter("DataSet")]
+    if len(frames) != summary["frames"]:
+        fail(f"{len(frames)} frames in fields.pvd, summary says {summary['frames']}")
+    if any(b[0] <= a[0] for a, b in zip(frames, frames[1:])):
+        fail("frame times are not increasing")
+    ncontact = len([k for k in next(iter(rows.values())) if k.startswith("impulse_")])
+    for t, name in frames:
+        path = out / name
+        r = vtk.vtkXMLUnstructuredGridReader()
+        r.SetFileName(str(path))
+        r.Update()
+        g = r.GetOutput()
+        if g.GetNumberOfPoints() == 0:
+            fail(f"{name}: VTK read no points")
+        m = meshio.read(path)
+        if not np.array_equal(vtk_to_numpy(g.GetPoints().GetData()), m.points):
+            fail(f"{name}: points differ between VTK and meshio")
+        ncells = sum(len(c.data) for c in m.cells)
+        if ncells != g.GetNumberOfCells():
+            fail(f"{name}: {ncells} cells in meshio, {g.GetNumberOfCells()} in VTK")
+        for arrays, vdata, mdata in [(POINT, g.GetPointData(), m.point_data),
+                                     (CELL, g.GetCellData(), None)]:
+            for a, ncomp in arrays.items():
+                va = vdata.GetArray(a)
+                if va is None or va.GetNumberOfComponents() != ncomp:
+                    fail(f"{name}: array {a} missing or not {ncomp} components")
+                v = vtk_to_numpy(va)
+                mv = (mdata[a] if mdata is not None
+                      else np.concatenate([c for c in m.cell_data[a]]))
+                if not np.array_equal(v.reshape(mv.shape), mv, equal_nan=True):
+                    fail(f"{name}: {a} differs between VTK and meshio")
+        fd = g.GetFieldData()
+        tv = vtk_to_numpy(fd.GetArray("TimeValue"))[0]
+        step = int(vtk_to_numpy(fd.GetArray("Step"))[0])
+        if abs(tv - t) > 1e-12 * max(abs(t), dt):
+            fail(f"{name}: TimeValue {tv} but the .pvd says {t}")
+        if step == 0:
+            continue
+        row = rows.get(step)
+        if row is None:
+            fail(f"{name}: step {step} has no history row")
+        force = vtk_to_numpy(g.GetPointData().GetArray("contact_force"))
+        total = float(np.linalg.norm(force, axis=1).sum())
+        want = sum(abs(float(row[f"impulse_{c}"])) for c in range(ncontact)) / dt
+        if abs(total - want) > 1e-9 * max(want, 1.0):
+            fail(f"{name}: contact force {total} N, history {want} N")
+    print(f"check_outputs: OK, {len(frames)} frames of {out} read by VTK {vtk.vtkVersion.GetVTKVersion()} "
+          f"and meshio {meshio.__version__}, identical, consistent with history.csv")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])
