@@ -31,6 +31,7 @@ pub mod integrators;
 pub mod io;
 pub mod linalg;
 pub mod model;
+pub mod plot;
 pub mod run;
 pub mod scene;
 pub mod solvers;

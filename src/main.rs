@@ -42,6 +42,12 @@ enum Command {
     Run(SceneArgs),
     /// Validate a scene file and print what the model includes and which paths the run takes.
     Check(SceneArgs),
+    /// Redraw the plots (contact force, energy, violation; PNG and SVG) of a run directory
+    /// from its history.csv and summary.json.
+    Plot {
+        /// The run's output directory.
+        dir: PathBuf,
+    },
 }
 
 #[derive(Args)]
@@ -74,6 +80,9 @@ struct OutputArgs {
     /// Write the .vtu arrays as text instead of zlib-compressed binary.
     #[arg(long)]
     ascii: bool,
+    /// Draw no plots at the end of the run.
+    #[arg(long)]
+    no_plots: bool,
 }
 
 impl OutputArgs {
@@ -89,6 +98,9 @@ impl OutputArgs {
         }
         if self.ascii {
             o.encoding = Encoding::Ascii;
+        }
+        if self.no_plots {
+            o.plots = false;
         }
     }
 }
@@ -501,11 +513,14 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
             rel(c.total_impulse, c.analytic_total_impulse)
         );
     }
-    let frames = if s.frames > 0 {
+    let mut frames = if s.frames > 0 {
         format!(", {}/fields.pvd ({} frames)", out.display(), s.frames)
     } else {
         String::new()
     };
+    if out.join("contact_force.png").exists() {
+        frames.push_str(", plots (contact_force, energy, violation .png/.svg)");
+    }
     println!(
         "wrote               {}/summary.json, {}/history.csv{frames}",
         out.display(),
@@ -519,6 +534,11 @@ fn main() -> ExitCode {
         Some(Command::Bar(a)) => run_bar(&a),
         Some(Command::Run(a)) => run_scene(&a),
         Some(Command::Check(a)) => check_scene(&a),
+        Some(Command::Plot { dir }) => signorini::plot::plot_run(&dir).map(|files| {
+            for f in files {
+                println!("wrote {}", f.display());
+            }
+        }),
         None => run_bar(&cli.bar),
     };
     match result {

@@ -210,6 +210,9 @@ pub fn run_bar(
         [r.summary.model_seconds, r.summary.integrator_seconds] = setup;
         if let Some(o) = out {
             write_summary(&r.summary, o.dir)?;
+            if o.options.plots {
+                crate::plot::plot_run(o.dir)?;
+            }
         }
         Ok(r)
     })
@@ -242,6 +245,9 @@ pub fn run_scene(
         [r.summary.model_seconds, r.summary.integrator_seconds] = setup;
         if let Some(o) = out {
             write_summary(&r.summary, o.dir)?;
+            if o.options.plots {
+                crate::plot::plot_run(o.dir)?;
+            }
         }
         Ok(r)
     })

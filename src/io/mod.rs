@@ -145,6 +145,10 @@ pub struct OutputOptions {
     /// Array encoding of the `.vtu` files (default zlib-compressed binary).
     #[serde(default)]
     pub encoding: frames::Encoding,
+    /// Draw the plots (contact force, energy, violation; PNG and SVG) at the end of the
+    /// run (default true).
+    #[serde(default = "yes")]
+    pub plots: bool,
 }
 
 fn one() -> usize {
@@ -162,6 +166,7 @@ impl Default for OutputOptions {
             history_stride: 1,
             fields: true,
             encoding: frames::Encoding::Zlib,
+            plots: true,
         }
     }
 }

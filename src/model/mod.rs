@@ -187,17 +187,26 @@ impl LinearSystem {
                 next += 1;
             }
         }
+        // The map is increasing, so kept rows stay sorted within each kept column: the
+        // sub-matrix is a filter of the compressed columns (no triplets, no sort).
         let sub = |m: &SparseMatrix| {
             let m = m.as_ref();
-            let mut asm = crate::assembly::Assembler::new(next, m.compute_nnz());
-            for j in 0..m.ncols() {
+            let mut col_ptr = Vec::with_capacity(next + 1);
+            let mut row_idx = Vec::with_capacity(m.compute_nnz());
+            let mut values = Vec::with_capacity(m.compute_nnz());
+            col_ptr.push(0);
+            for j in (0..m.ncols()).filter(|&j| map[j].is_some()) {
                 for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
-                    if let (Some(a), Some(b)) = (map[m.row_idx()[k]], map[j]) {
-                        asm.add(a, b, m.val()[k]);
+                    if let Some(a) = map[m.row_idx()[k]] {
+                        row_idx.push(a);
+                        values.push(m.val()[k]);
                     }
                 }
+                col_ptr.push(row_idx.len());
             }
-            asm.finish()
+            let sym =
+                faer::sparse::SymbolicSparseColMat::new_checked(next, next, col_ptr, None, row_idx);
+            SparseMatrix::new(sym, values)
         };
         let sys = LinearSystem {
             mass: sub(&self.mass),
