@@ -85,8 +85,60 @@ def main(out):
         want = sum(abs(float(row[f"impulse_{c}"])) for c in range(ncontact)) / dt
         if abs(total - want) > 1e-9 * max(want, 1.0):
             fail(f"{name}: contact force {total} N, history {want} N")
+    h5 = out / "fields.vtkhdf"
+    if h5.exists():
+        check_vtkhdf(h5, out, frames, rows)
     print(f"check_outputs: OK, {len(frames)} frames of {out} read by VTK {vtk.vtkVersion.GetVTKVersion()} "
           f"and meshio {meshio.__version__}, identical, consistent with history.csv")
+
+
+def check_vtkhdf(h5, out, frames, rows):
+    """Every time step of the VTKHDF file (VTK's vtkHDFReader) equals its .vtu frame, and
+    /history (h5py) equals history.csv column by column."""
+    import h5py
+    r = vtk.vtkHDFReader()
+    r.SetFileName(str(h5))
+    r.UpdateInformation()
+    info = r.GetOutputInformation(0)
+    key = vtk.vtkStreamingDemandDrivenPipeline.TIME_STEPS()
+    times = [info.Get(key, i) for i in range(info.Length(key))]
+    if len(times) != len(frames):
+        fail(f"{h5}: {len(times)} time steps, fields.pvd has {len(frames)}")
+    for (t, name), th in zip(frames, times):
+        if abs(t - th) > 1e-12 * max(abs(t), 1e-300):
+            fail(f"{h5}: time {th}, .pvd {t}")
+        r.UpdateTimeStep(th)
+        g = r.GetOutput()
+        v = vtk.vtkXMLUnstructuredGridReader()
+        v.SetFileName(str(out / name))
+        v.Update()
+        ref = v.GetOutput()
+        if g.GetNumberOfPoints() != ref.GetNumberOfPoints() or g.GetNumberOfCells() != ref.GetNumberOfCells():
+            fail(f"{h5} at t = {th}: grid differs from {name}")
+        for a in POINT:
+            x, y = (vtk_to_numpy(d.GetPointData().GetArray(a)) for d in (g, ref))
+            if not np.array_equal(x, y, equal_nan=True):
+                fail(f"{h5} at t = {th}: point array {a} differs from {name}")
+        for a in CELL:
+            x, y = (vtk_to_numpy(d.GetCellData().GetArray(a)) for d in (g, ref))
+            if not np.array_equal(x, y, equal_nan=True):
+                fail(f"{h5} at t = {th}: cell array {a} differs from {name}")
+    with h5py.File(h5, "r") as f:
+        hist = f["history"]
+        steps = sorted(rows)
+        for col in ["time", "kinetic_energy", "potential_energy", "max_violation",
+                    "newton_iterations", "projection_iterations", "index_set_iterations"]:
+            want = np.array([float(rows[k][col]) for k in steps])
+            if not np.array_equal(hist[col][:].astype(float), want):
+                fail(f"{h5}: /history/{col} differs from history.csv")
+        m = hist["impulse"].shape[1] if hist["impulse"].ndim == 2 else 0
+        for q in ["gap", "velocity", "impulse", "projection"]:
+            for c in range(m):
+                want = np.array([float(rows[k][f"{q}_{c}"]) for k in steps])
+                if not np.array_equal(hist[q][:, c], want):
+                    fail(f"{h5}: /history/{q}[:, {c}] differs from history.csv")
+    print(f"check_outputs: {h5}: {len(times)} VTKHDF time steps equal the .vtu frames; "
+          f"/history equals history.csv")
 
 
 if __name__ == "__main__":

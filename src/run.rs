@@ -281,14 +281,39 @@ pub fn run(
             o.options.validate()?;
             std::fs::create_dir_all(o.dir).map_err(|e| Error::io(o.dir, e))?;
             let hist = HistoryWriter::create(&o.dir.join("history.csv"), m)?;
-            let frames = if o.options.fields {
-                let mut w = FrameWriter::create(
+            #[cfg(feature = "hdf5")]
+            let h5 = if o.options.hdf5() {
+                Some(crate::io::h5::RunFile::create(o.dir)?)
+            } else {
+                None
+            };
+            #[cfg(feature = "hdf5")]
+            let hist = match &h5 {
+                Some(f) => hist.with_hdf5(crate::io::h5::History::create(
+                    f,
+                    m,
+                    integ.name(),
+                    h,
+                    theta,
+                    &parameters,
+                )?),
+                None => hist,
+            };
+            let frames = if o.options.fields || o.options.hdf5() {
+                let w = FrameWriter::create(
                     o.dir,
                     "fields",
                     geom,
                     integ.jacobian(),
                     o.options.encoding,
                 )?;
+                let w = if o.options.fields { w } else { w.without_vtu() };
+                #[cfg(feature = "hdf5")]
+                let w = match &h5 {
+                    Some(f) => w.with_hdf5(f)?,
+                    None => w,
+                };
+                let mut w = w;
                 w.write(integ.state(), integ.jacobian(), h)?;
                 Some(w)
             } else {

@@ -259,6 +259,24 @@ fn killed_run_leaves_a_valid_collection() {
         assert_eq!(f.point["displacement"].len(), 3 * 2001);
     }
     assert!(!dir.join("summary.json").exists(), "the run did not finish");
+    // the HDF5 file (when built with it) opens and holds every frame the .pvd lists
+    #[cfg(feature = "hdf5")]
+    {
+        let f = hdf5::File::open(dir.join("fields.vtkhdf")).unwrap();
+        let steps = f.group("VTKHDF/Steps").unwrap();
+        let n: i64 = steps.attr("NSteps").unwrap().read_scalar().unwrap();
+        assert!(
+            n as usize >= frames.len(),
+            "{n} HDF5 steps, {} frames",
+            frames.len()
+        );
+        let d = f.dataset("VTKHDF/PointData/displacement").unwrap();
+        assert!(d.shape()[0] >= n as usize * 2001);
+        let t: Vec<f64> = steps.dataset("Values").unwrap().read_raw().unwrap();
+        for (k, (tf, _)) in frames.iter().enumerate() {
+            assert_eq!(t[k], *tf, "frame {k}");
+        }
+    }
     // the history is flushed before every frame: it reaches the last frame's step
     let rows = std::fs::read_to_string(dir.join("history.csv.part")).unwrap();
     let last_step = (frames.last().unwrap().0 / 1e-8).round() as usize;

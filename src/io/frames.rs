@@ -94,6 +94,16 @@ impl Geometry {
     }
 }
 
+/// Point arrays of a frame: name and components, in the order they are written.
+pub const POINT_ARRAYS: [(&str, usize); 4] = [
+    ("displacement", 3),
+    ("velocity", 3),
+    ("contact_force", 3),
+    ("gap", 1),
+];
+/// Cell arrays of a frame.
+pub const CELL_ARRAYS: [(&str, usize); 3] = [("strain", 6), ("stress", 6), ("von_mises", 1)];
+
 /// How array data are encoded in the `.vtu` files.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -129,6 +139,10 @@ pub struct FrameWriter {
     raw: Vec<u8>,
     zip: Vec<u8>,
     deflate: flate2::Compress,
+    /// write `.vtu` files and the `.pvd`
+    vtu: bool,
+    #[cfg(feature = "hdf5")]
+    h5: Option<super::h5::VtkHdf>,
 }
 
 impl FrameWriter {
@@ -176,11 +190,50 @@ impl FrameWriter {
             raw: Vec::new(),
             zip: Vec::new(),
             deflate: flate2::Compress::new(flate2::Compression::fast(), true),
+            vtu: true,
+            #[cfg(feature = "hdf5")]
+            h5: None,
             static_xml: String::new(),
             geom,
         };
         w.static_xml = w.encode_static();
         Ok(w)
+    }
+
+    /// Writes no `.vtu` / `.pvd` (when only the HDF5 fields are wanted).
+    pub fn without_vtu(mut self) -> Self {
+        self.vtu = false;
+        self
+    }
+
+    /// Also appends every frame to the VTKHDF grid of the run's HDF5 file.
+    #[cfg(feature = "hdf5")]
+    pub fn with_hdf5(mut self, run: &super::h5::RunFile) -> Result<Self, Error> {
+        let g = &self.geom;
+        let conn: Vec<i64> = g
+            .cells
+            .iter()
+            .flat_map(|(_, n, _)| n.iter().map(|&v| v as i64))
+            .collect();
+        let offs: Vec<i64> = g
+            .cells
+            .iter()
+            .scan(0i64, |o, (_, n, _)| {
+                *o += n.len() as i64;
+                Some(*o)
+            })
+            .collect();
+        let types: Vec<u8> = g.cells.iter().map(|(k, _, _)| k.vtk_type()).collect();
+        self.h5 = Some(super::h5::VtkHdf::create(
+            run,
+            &g.points,
+            &conn,
+            &offs,
+            &types,
+            &POINT_ARRAYS,
+            &CELL_ARRAYS,
+        )?);
+        Ok(self)
     }
 
     /// Frames written so far: (time, file relative to the output directory).
@@ -197,6 +250,18 @@ impl FrameWriter {
     /// and writes them as the next frame, then rewrites the `.pvd`.
     pub fn write(&mut self, state: &State, jac: &ContactJacobian, h: f64) -> Result<(), Error> {
         self.fill(state, jac, h);
+        #[cfg(feature = "hdf5")]
+        if let Some(w) = self.h5.as_mut() {
+            w.append(
+                state.time,
+                &[&self.disp, &self.vel, &self.force, &self.gap],
+                &[&self.strain, &self.stress, &self.mises],
+            )?;
+        }
+        if !self.vtu {
+            self.frames.push((state.time, String::new()));
+            return Ok(());
+        }
         let name = format!("{}/frame_{:06}.vtu", self.stem, self.frames.len());
         let path = self.dir.join(&name);
         self.encode(state.time, state.step);

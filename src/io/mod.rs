@@ -6,6 +6,8 @@
 //! under the final name and keeps every flushed row in the `.part` file.
 
 pub mod frames;
+#[cfg(feature = "hdf5")]
+pub mod h5;
 pub mod mesh;
 
 use std::fs::File;
@@ -34,6 +36,8 @@ fn part_path(path: &Path) -> PathBuf {
 
 /// Streams one CSV row per step; see the module doc for the file protocol.
 pub struct HistoryWriter {
+    #[cfg(feature = "hdf5")]
+    h5: Option<h5::History>,
     out: BufWriter<File>,
     tmp: PathBuf,
     path: PathBuf,
@@ -58,11 +62,20 @@ impl HistoryWriter {
         }
         writeln!(out, "{header}").map_err(|e| Error::io(&tmp, e))?;
         Ok(HistoryWriter {
+            #[cfg(feature = "hdf5")]
+            h5: None,
             out,
             tmp,
             path: path.to_path_buf(),
             rows_since_flush: 0,
         })
+    }
+
+    /// Also writes every row to `/history` of the run's HDF5 file.
+    #[cfg(feature = "hdf5")]
+    pub fn with_hdf5(mut self, h: h5::History) -> Self {
+        self.h5 = Some(h);
+        self
     }
 
     /// Appends the row of the step that just ended.
@@ -97,6 +110,10 @@ impl HistoryWriter {
             writeln!(o)
         })();
         r.map_err(|e| Error::io(&self.tmp, e))?;
+        #[cfg(feature = "hdf5")]
+        if let Some(h) = self.h5.as_mut() {
+            h.row(state, stats, kinetic, potential)?;
+        }
         self.rows_since_flush += 1;
         if self.rows_since_flush >= Self::FLUSH_EVERY {
             self.out.flush().map_err(|e| Error::io(&self.tmp, e))?;
@@ -109,11 +126,19 @@ impl HistoryWriter {
     /// a killed run's history reaches at least its last frame).
     pub fn flush(&mut self) -> Result<(), Error> {
         self.rows_since_flush = 0;
+        #[cfg(feature = "hdf5")]
+        if let Some(h) = self.h5.as_mut() {
+            h.flush()?;
+        }
         self.out.flush().map_err(|e| Error::io(&self.tmp, e))
     }
 
     /// Flushes, syncs and renames the file into place.
     pub fn finish(mut self) -> Result<(), Error> {
+        #[cfg(feature = "hdf5")]
+        if let Some(h) = self.h5.as_mut() {
+            h.flush()?;
+        }
         self.out.flush().map_err(|e| Error::io(&self.tmp, e))?;
         self.out
             .get_ref()
@@ -149,6 +174,10 @@ pub struct OutputOptions {
     /// run (default true).
     #[serde(default = "yes")]
     pub plots: bool,
+    /// Write `fields.vtkhdf` (VTKHDF fields and `/history`); default: yes when built with
+    /// the `hdf5` feature, and asking for it without the feature is an error.
+    #[serde(default)]
+    pub hdf5: Option<bool>,
 }
 
 fn one() -> usize {
@@ -167,6 +196,7 @@ impl Default for OutputOptions {
             fields: true,
             encoding: frames::Encoding::Zlib,
             plots: true,
+            hdf5: None,
         }
     }
 }
@@ -180,8 +210,20 @@ impl OutputOptions {
             steps.div_ceil(100).max(1)
         }
     }
-    /// Rejects a zero history stride.
+    /// Whether the HDF5 file is written.
+    pub fn hdf5(&self) -> bool {
+        self.hdf5.unwrap_or(cfg!(feature = "hdf5"))
+    }
+    /// Rejects a zero history stride, and HDF5 output from a build without it.
     pub fn validate(&self) -> Result<(), Error> {
+        if self.hdf5() && !cfg!(feature = "hdf5") {
+            return Err(Error::invalid(
+                "hdf5",
+                "true",
+                "this signorini was built without the `hdf5` cargo feature \
+                 (cargo build --release --features hdf5, with libhdf5-dev installed)",
+            ));
+        }
         if self.history_stride == 0 {
             return Err(Error::invalid("history_stride", 0, "must be at least 1"));
         }

@@ -1,0 +1,133 @@
+//! HDF5 output (feature `hdf5`): `fields.vtkhdf` read back with the hdf5 crate and
+//! compared bit for bit with the `.vtu` frames (read by vtkio) and with `history.csv`.
+#![cfg(feature = "hdf5")]
+
+use std::path::PathBuf;
+
+use signorini::io::OutputOptions;
+use signorini::run::{Output, Quiet, run_bar};
+use signorini::scene::bar::BarScene;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("signorini-h5-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn vtu_point_array(path: &std::path::Path, name: &str) -> Vec<f64> {
+    use vtkio::model::{Attribute, DataSet};
+    let vtk = vtkio::Vtk::import(path).unwrap();
+    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
+        panic!()
+    };
+    let p = pieces
+        .into_iter()
+        .next()
+        .unwrap()
+        .into_loaded_piece_data(None)
+        .unwrap();
+    p.data
+        .point
+        .into_iter()
+        .find_map(|a| match a {
+            Attribute::DataArray(d) if d.name == name => d.data.cast_into::<f64>(),
+            _ => None,
+        })
+        .unwrap()
+}
+
+#[test]
+fn vtkhdf_and_history_hold_what_the_vtu_and_csv_hold() {
+    let scene = BarScene {
+        elements: 50,
+        dt: 4e-6,
+        t_end: 5e-4,
+        ..BarScene::default()
+    };
+    let dir = tmp("bar");
+    let options = OutputOptions {
+        stride: 25,
+        ..OutputOptions::default()
+    };
+    let r = run_bar(
+        &scene,
+        Some(Output {
+            dir: &dir,
+            options: &options,
+        }),
+        &mut Quiet,
+    )
+    .unwrap();
+    let f = hdf5::File::open(dir.join("fields.vtkhdf")).unwrap();
+    let root = f.group("VTKHDF").unwrap();
+    let version: Vec<i64> = root.attr("Version").unwrap().read_raw().unwrap();
+    assert_eq!(version, vec![2, 2]);
+    let ty: hdf5::types::FixedAscii<16> = root.attr("Type").unwrap().read_scalar().unwrap();
+    assert_eq!(ty.as_str(), "UnstructuredGrid");
+    let nsteps: i64 = root
+        .group("Steps")
+        .unwrap()
+        .attr("NSteps")
+        .unwrap()
+        .read_scalar()
+        .unwrap();
+    assert_eq!(nsteps as usize, r.summary.frames);
+    let np = 51;
+    let disp: Vec<f64> = root
+        .dataset("PointData/displacement")
+        .unwrap()
+        .read_raw()
+        .unwrap();
+    assert_eq!(disp.len(), 3 * np * r.summary.frames);
+    let times: Vec<f64> = root.dataset("Steps/Values").unwrap().read_raw().unwrap();
+    let offsets: Vec<i64> = root
+        .dataset("Steps/PointDataOffsets/displacement")
+        .unwrap()
+        .read_raw()
+        .unwrap();
+    // every frame equals its .vtu twin, bit for bit
+    let pvd = std::fs::read_to_string(dir.join("fields.pvd")).unwrap();
+    let files: Vec<&str> = pvd
+        .lines()
+        .filter_map(|l| l.split("file=\"").nth(1))
+        .map(|s| s.trim_end_matches("\"/>"))
+        .collect();
+    assert_eq!(files.len(), times.len());
+    for (k, file) in files.iter().enumerate() {
+        let v = vtu_point_array(&dir.join(file), "displacement");
+        let o = offsets[k] as usize * 3;
+        assert_eq!(&disp[o..o + 3 * np], &v[..], "frame {k}");
+    }
+    // /history equals history.csv column by column
+    let csv = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let hist = f.group("history").unwrap();
+    let time: Vec<f64> = hist.dataset("time").unwrap().read_raw().unwrap();
+    let step: Vec<i64> = hist.dataset("step").unwrap().read_raw().unwrap();
+    let impulse: Vec<f64> = hist.dataset("impulse").unwrap().read_raw().unwrap();
+    let ke: Vec<f64> = hist.dataset("kinetic_energy").unwrap().read_raw().unwrap();
+    let newton: Vec<i64> = hist
+        .dataset("newton_iterations")
+        .unwrap()
+        .read_raw()
+        .unwrap();
+    assert_eq!(time.len(), rows.len());
+    for (i, r) in rows.iter().enumerate() {
+        assert_eq!(step[i] as f64, r[0]);
+        assert_eq!(time[i], r[1]);
+        assert_eq!(ke[i], r[2]);
+        assert_eq!(newton[i] as f64, r[5]);
+        assert_eq!(impulse[i], r[10]);
+    }
+    let dt: f64 = hist.attr("dt").unwrap().read_scalar().unwrap();
+    assert_eq!(dt, scene.dt);
+    let params: hdf5::types::VarLenUnicode =
+        hist.attr("parameters").unwrap().read_scalar().unwrap();
+    let p: serde_json::Value = serde_json::from_str(params.as_str()).unwrap();
+    assert_eq!(p["elements"], 50);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
