@@ -279,6 +279,7 @@ pub fn run(
     let (mut history, mut frames, frame_stride, history_stride) = match out {
         Some((o, geom)) => {
             o.options.validate()?;
+            let geom_outlines = geom.outlines.clone();
             std::fs::create_dir_all(o.dir).map_err(|e| Error::io(o.dir, e))?;
             let hist = HistoryWriter::create(&o.dir.join("history.csv"), m)?;
             #[cfg(feature = "hdf5")]
@@ -307,6 +308,12 @@ pub fn run(
                     integ.jacobian(),
                     o.options.encoding,
                 )?;
+                if o.options.fields && !geom_outlines.is_empty() {
+                    crate::io::frames::write_outlines(
+                        &o.dir.join("obstacles.vtu"),
+                        &geom_outlines,
+                    )?;
+                }
                 let w = if o.options.fields { w } else { w.without_vtu() };
                 #[cfg(feature = "hdf5")]
                 let w = match &h5 {

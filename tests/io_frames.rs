@@ -144,6 +144,18 @@ fn free_flight_frames_hold_the_rigid_motion_in_every_encoding() {
             assert_eq!(f.cell["stress"].len(), 8 * 6);
             frames.push(f);
         }
+        // the floor is drawn once as a square outline in its plane, around the box
+        let floor = read_frame(&dir.join("obstacles.vtu"));
+        assert_eq!(floor.types, vec![3u8; 4], "four line segments");
+        assert!(floor.points.chunks(3).all(|p| p[2] == 0.0));
+        let xs: Vec<f64> = floor.points.chunks(3).map(|p| p[0]).collect();
+        let (lo, hi) = xs
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+        assert!(
+            lo < 0.0 && hi > 0.1,
+            "the square covers the box: [{lo}, {hi}]"
+        );
         by_encoding.push(frames);
         std::fs::remove_dir_all(&dir).unwrap();
     }

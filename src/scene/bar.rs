@@ -12,7 +12,7 @@ use crate::contact::check_restitution;
 use crate::contact::plane::NodesOnPlane;
 use crate::error::{Error, require_finite, require_in, require_positive};
 use crate::integrators::SchemeParams;
-use crate::io::frames::Geometry;
+use crate::io::frames::{Geometry, Outline};
 use crate::model::MassKind;
 use crate::model::rod::Rod;
 use crate::scene::Model;
@@ -128,7 +128,10 @@ impl BarScene {
             contacts: Box::new(contacts),
             q0: vec![0.0; n],
             v0: vec![self.velocity; n],
-            geometry: Geometry::rod(self.length, self.elements, self.young, self.density),
+            geometry: Geometry {
+                outlines: vec![wall(-self.gap, 0.2 * self.length)],
+                ..Geometry::rod(self.length, self.elements, self.young, self.density)
+            },
         })
     }
 
@@ -142,4 +145,19 @@ impl BarScene {
             velocity: self.velocity,
         })
     }
+}
+
+/// The wall `x = x0` drawn as a square of side `side` in the y–z plane.
+fn wall(x0: f64, side: f64) -> Outline {
+    let mut o = Outline {
+        name: "wall".into(),
+        ..Outline::default()
+    };
+    let h = 0.5 * side;
+    let c = [[-h, -h], [h, -h], [h, h], [-h, h]];
+    for k in 0..4 {
+        let (p, q) = (c[k], c[(k + 1) % 4]);
+        o.segment([x0, p[0], p[1]], [x0, q[0], q[1]]);
+    }
+    o
 }

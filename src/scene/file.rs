@@ -42,7 +42,7 @@ use crate::contact::sphere::{RoundObstacle, Side};
 use crate::contact::{Composite, ContactSet};
 use crate::error::{Error, require_positive};
 use crate::integrators::SchemeParams;
-use crate::io::frames::{GeomCell, Geometry};
+use crate::io::frames::{GeomCell, Geometry, Outline, orthonormal};
 use crate::model::generate::{box_mesh, rectangle_mesh};
 use crate::model::rod::Rod;
 use crate::model::solid::{CellKind, Formulation, Material, Mesh, assemble_with_contacts};
@@ -596,6 +596,11 @@ impl Scene {
             }
             sets.push(set);
         }
+        geometry.outlines = self
+            .obstacles
+            .iter()
+            .map(|o| outline(o, &geometry.points, dim))
+            .collect();
         let contacts: Box<dyn ContactSet> = if sets.len() == 1 {
             sets.pop().expect("one set")
         } else {
@@ -744,6 +749,99 @@ impl BodySpec {
             }
         }
     }
+}
+
+/// The outline of obstacle `o` for ParaView, sized to the bodies' bounding box: a
+/// plane as a square (3-D) or a segment (2-D) around the box centre's projection, a
+/// sphere as three great circles (one circle in 2-D), a cylinder as its two end
+/// circles and eight generators over the box's extent along the axis.
+fn outline(o: &ObstacleSpec, points: &[[f64; 3]], dim: usize) -> Outline {
+    let mut lo = [f64::MAX; 3];
+    let mut hi = [f64::MIN; 3];
+    for p in points {
+        for i in 0..3 {
+            lo[i] = lo[i].min(p[i]);
+            hi[i] = hi[i].max(p[i]);
+        }
+    }
+    let centre: [f64; 3] = std::array::from_fn(|i| 0.5 * (lo[i] + hi[i]));
+    let size = (0..3)
+        .map(|i| (hi[i] - lo[i]).powi(2))
+        .sum::<f64>()
+        .sqrt()
+        .max(1e-3);
+    let v3 = |v: &[f64]| -> [f64; 3] { std::array::from_fn(|i| v.get(i).copied().unwrap_or(0.0)) };
+    let unit = |v: [f64; 3]| {
+        let l = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        v.map(|x| x / l)
+    };
+    let dot = |a: [f64; 3], b: [f64; 3]| (0..3).map(|i| a[i] * b[i]).sum::<f64>();
+    let mut out = Outline {
+        name: o.name().to_string(),
+        ..Outline::default()
+    };
+    match o {
+        ObstacleSpec::Plane { point, normal, .. } => {
+            let (p, n) = (v3(point), unit(v3(normal)));
+            let d = dot(n, std::array::from_fn(|i| centre[i] - p[i]));
+            let c: [f64; 3] = std::array::from_fn(|i| centre[i] - d * n[i]);
+            let (a, b) = if dim == 2 {
+                ([-n[1], n[0], 0.0], [0.0, 0.0, 0.0])
+            } else {
+                orthonormal(n)
+            };
+            let h = 0.75 * size;
+            let corner = |s: f64, t: f64| -> [f64; 3] {
+                std::array::from_fn(|i| c[i] + h * (s * a[i] + t * b[i]))
+            };
+            if dim == 2 {
+                out.segment(corner(-1.0, 0.0), corner(1.0, 0.0));
+            } else {
+                for (s0, t0, s1, t1) in [
+                    (-1.0, -1.0, 1.0, -1.0),
+                    (1.0, -1.0, 1.0, 1.0),
+                    (1.0, 1.0, -1.0, 1.0),
+                    (-1.0, 1.0, -1.0, -1.0),
+                ] {
+                    out.segment(corner(s0, t0), corner(s1, t1));
+                }
+            }
+        }
+        ObstacleSpec::Sphere { center, radius, .. } => {
+            let c = v3(center);
+            let e = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+            out.circle(c, e[0], e[1], *radius, 96);
+            if dim == 3 {
+                out.circle(c, e[1], e[2], *radius, 96);
+                out.circle(c, e[0], e[2], *radius, 96);
+            }
+        }
+        ObstacleSpec::Cylinder {
+            point,
+            axis,
+            radius,
+            ..
+        } => {
+            let (p, n) = (v3(point), unit(v3(axis)));
+            let (a, b) = orthonormal(n);
+            let t = dot(n, std::array::from_fn(|i| centre[i] - p[i]));
+            let half = 0.75 * size;
+            for s in [-1.0, 1.0] {
+                let c: [f64; 3] = std::array::from_fn(|i| p[i] + (t + s * half) * n[i]);
+                out.circle(c, a, b, *radius, 96);
+            }
+            for k in 0..8 {
+                let th = std::f64::consts::PI * k as f64 / 4.0;
+                let r: [f64; 3] =
+                    std::array::from_fn(|i| radius * (th.cos() * a[i] + th.sin() * b[i]));
+                out.segment(
+                    std::array::from_fn(|i| p[i] + r[i] + (t - half) * n[i]),
+                    std::array::from_fn(|i| p[i] + r[i] + (t + half) * n[i]),
+                );
+            }
+        }
+    }
+    out
 }
 
 fn prefix(p: &str, e: Error) -> Error {

@@ -138,6 +138,7 @@ impl SolidBarScene {
             bodies: vec![(self.material, Formulation::Solid)],
             dim: 3,
             dof_of: (0..n).map(Some).collect(),
+            outlines: Vec::new(),
         };
         Ok(Model {
             system,
