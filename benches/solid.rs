@@ -1,9 +1,13 @@
 //! 3-D solids: assembly time serial vs parallel (rayon, 1 thread vs all cores), and the
-//! per-step cost of Algorithm 2 on a hex8 box pressed on a plane, for about 10⁴ and
-//! 10⁵ dofs. Run: `cargo bench --bench solid`.
+//! per-step cost of Algorithm 2 (LCP `auto`) on a hex8 box pressed on a plane with its
+//! whole bottom face, for about 10⁴ and 10⁵ dofs, with the Delassus data dense (`n × m`
+//! blocks formed once) or per active column (DESIGN.md §4). The step samples are the
+//! steady pressed state: every column is computed before the first sample. Run:
+//! `cargo bench --bench solid`.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use signorini::contact::plane::NodesOnPlane;
+use signorini::integrators::delassus::DelassusKind;
 use signorini::integrators::{self, SchemeParams};
 use signorini::model::MassKind;
 use signorini::model::generate::box_mesh;
@@ -66,9 +70,13 @@ fn steps(c: &mut Criterion) {
         for v in v0.iter_mut().skip(2).step_by(3) {
             *v = -0.1;
         }
-        for (label, lcp) in [("lemke", LcpKind::Lemke), ("auto", LcpKind::Auto)] {
+        for (label, delassus) in [
+            ("dense", DelassusKind::Dense),
+            ("columns", DelassusKind::Columns),
+        ] {
             let params = SchemeParams {
-                lcp,
+                lcp: LcpKind::Auto,
+                delassus,
                 ..SchemeParams::default()
             };
             let mut integ = integrators::build(

@@ -4,6 +4,10 @@
 //! `v0` (sec. 6.2, after Doyen–Ern–Piperno): the contact force is constant,
 //! `r = E S |v0| / c0` with `c0 = √(E/ρ)`, for `T = 2L/c0`; the bar then leaves with
 //! `−v0` (all its momentum reversed), so the total impulse is `2 ρ S L |v0|`.
+//!
+//! [`ball::BouncingBall`]: the bouncing ball of eq. 7 (Ballard's example).
+
+pub mod ball;
 
 /// The analytic impacting bar.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

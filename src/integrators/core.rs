@@ -279,6 +279,7 @@ impl ThetaCore {
             (params.delassus, params.delassus_pool),
             with_projection,
             params.metric,
+            linear,
         );
         let mut core = ThetaCore {
             sys,

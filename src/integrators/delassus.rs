@@ -20,8 +20,13 @@
 //!   pool is allocated at construction; when it is full, the column of the contact
 //!   inactive for longest is recomputed on demand, so the step loop never allocates.
 //!
-//! The `Auto` choice takes the dense path up to [`AUTO_DENSE_MAX_CONTACTS`] contacts and
-//! while the dense blocks stay under 256 MiB, and the per-active-column path beyond.
+//! The `Auto` choice takes the dense path while the dense blocks stay under 256 MiB and
+//! either `G` is constant (the blocks are formed once, by blocked solves) or there are
+//! at most [`AUTO_DENSE_MAX_CONTACTS`] contacts (a nonlinear `G` re-forms every block at
+//! every linearization); the per-active-column path otherwise. Measured
+//! (`cargo bench --bench solid`, hex8 box pressed on a plane, every contact active):
+//! 10k dofs and 225 contacts, dense 9.7 ms against columns 30.9 ms per step; 98k dofs
+//! and 1024 contacts, dense 1.94 s (805 MB of blocks) against columns 2.23 s.
 //! Both give the same iterates (tested to round-off in `tests/regression_delassus_paths.rs`).
 
 use serde::{Deserialize, Serialize};
@@ -35,8 +40,8 @@ use crate::solvers::SolveError;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum DelassusKind {
-    /// Dense up to [`AUTO_DENSE_MAX_CONTACTS`] contacts (and 256 MiB), per-active-column
-    /// above (default).
+    /// Dense while the blocks fit in 256 MiB and `G` is constant (or the contacts are
+    /// at most [`AUTO_DENSE_MAX_CONTACTS`]); per-active-column otherwise (default).
     #[default]
     Auto,
     /// Dense `n × m` blocks `Â⁻¹G`, computed once per linearization.
@@ -56,7 +61,8 @@ impl DelassusKind {
     }
 }
 
-/// Largest contact count for which [`DelassusKind::Auto`] takes the dense path.
+/// Largest contact count for which [`DelassusKind::Auto`] takes the dense path when `G`
+/// changes with `q`.
 pub const AUTO_DENSE_MAX_CONTACTS: usize = 64;
 /// Largest dense `n × m` storage [`DelassusKind::Auto`] accepts (bytes).
 const AUTO_DENSE_MAX_BYTES: usize = 256 << 20;
@@ -124,6 +130,7 @@ impl Delassus {
         (kind, pool): (DelassusKind, usize),
         with_d: bool,
         metric: Metric,
+        linear: bool,
     ) -> Self {
         let m = jac.ncols();
         let per = if with_d { 2 } else { 1 };
@@ -131,7 +138,7 @@ impl Delassus {
             DelassusKind::Dense => true,
             DelassusKind::Columns => false,
             DelassusKind::Auto => {
-                m <= AUTO_DENSE_MAX_CONTACTS
+                (linear || m <= AUTO_DENSE_MAX_CONTACTS)
                     && n.saturating_mul(m).saturating_mul(8 * per) <= AUTO_DENSE_MAX_BYTES
             }
         };

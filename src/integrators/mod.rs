@@ -244,8 +244,8 @@ pub struct SchemeParams {
     pub lcp: LcpKind,
     /// Newton loop controls.
     pub newton: NewtonParams,
-    /// Delassus storage (default: dense up to 64 contacts, per-active-column above;
-    /// see [`delassus`]).
+    /// Delassus storage (default `auto`: dense while the blocks fit in 256 MiB and `G`
+    /// is constant, per-active-column otherwise; see [`delassus`]).
     pub delassus: delassus::DelassusKind,
     /// Columns the per-active-column Delassus pool holds (0, default: as many as fit
     /// in 2 GiB, capped at the contact count). When full, the column of the contact

@@ -97,6 +97,7 @@ impl SchatzmanPaoli {
             (params.delassus, params.delassus_pool),
             false,
             Metric::Mass,
+            linear,
         );
         let mut sp = SchatzmanPaoli {
             sys,
