@@ -35,5 +35,6 @@ pub mod plot;
 pub mod run;
 pub mod scene;
 pub mod solvers;
+pub mod study;
 
 pub use error::Error;

@@ -42,6 +42,15 @@ enum Command {
     Run(SceneArgs),
     /// Validate a scene file and print what the model includes and which paths the run takes.
     Check(SceneArgs),
+    /// Run one of the paper's studies on its academic examples (convergence,
+    /// projection-multiplier, chattering, energy): CSV, plot and verdict lines.
+    Study {
+        /// The study.
+        name: String,
+        /// Output directory (default out/study-NAME).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Redraw the plots (contact force, energy, violation; PNG and SVG) of a run directory
     /// from its history.csv and summary.json.
     Plot {
@@ -534,6 +543,18 @@ fn main() -> ExitCode {
         Some(Command::Bar(a)) => run_bar(&a),
         Some(Command::Run(a)) => run_scene(&a),
         Some(Command::Check(a)) => check_scene(&a),
+        Some(Command::Study { name, out }) => {
+            let dir = out.unwrap_or_else(|| PathBuf::from(format!("out/study-{name}")));
+            signorini::study::run(&name, &dir).map(|v| {
+                for line in v {
+                    println!("{line}");
+                }
+                println!(
+                    "wrote {}/{name}.csv, .png, .svg, verdict.txt",
+                    dir.display()
+                );
+            })
+        }
         Some(Command::Plot { dir }) => signorini::plot::plot_run(&dir).map(|files| {
             for f in files {
                 println!("wrote {}", f.display());

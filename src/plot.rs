@@ -87,6 +87,15 @@ fn decimate(p: Vec<(f64, f64)>, buckets: usize) -> Vec<(f64, f64)> {
 }
 
 fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, f: &Figure) -> Result<(), String> {
+    draw_labeled(root, f, f.x, f.y)
+}
+
+fn draw_labeled<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    f: &Figure,
+    xl: &str,
+    yl: &str,
+) -> Result<(), String> {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(e)?;
     let all = f.series.iter().flat_map(|s| s.points.iter());
@@ -111,8 +120,8 @@ fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, f: &Figure) -> Result<
         .map_err(e)?;
     chart
         .configure_mesh()
-        .x_desc(f.x)
-        .y_desc(f.y)
+        .x_desc(xl)
+        .y_desc(yl)
         .x_label_formatter(&|v| tick(*v))
         .y_label_formatter(&|v| tick(*v))
         .label_style(("sans-serif", 14))
@@ -283,4 +292,153 @@ pub fn plot_run(dir: &Path) -> Result<Vec<PathBuf>, Error> {
         written.extend([png, svg]);
     }
     Ok(written)
+}
+
+/// One curve of [`lines`]: legend and points.
+pub struct Curve {
+    /// Legend.
+    pub name: String,
+    /// Points (x, y).
+    pub points: Vec<(f64, f64)>,
+}
+
+const PALETTE: [RGBColor; 12] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(0, 0, 0),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+    RGBColor(174, 199, 232),
+];
+
+/// Draws `curves` as lines (with markers on log–log axes when `log`) into
+/// `stem.png` and `stem.svg`; returns the two paths. Used by the studies.
+pub fn lines(
+    stem: &Path,
+    title: &str,
+    x: &'static str,
+    y: &'static str,
+    curves: &[Curve],
+    log: bool,
+) -> Result<Vec<PathBuf>, Error> {
+    register_font();
+    let mut out = Vec::new();
+    for ext in ["png", "svg"] {
+        let path = stem.with_extension(ext);
+        let r = if ext == "png" {
+            draw_lines(
+                BitMapBackend::new(&path, (1000, 600)).into_drawing_area(),
+                title,
+                x,
+                y,
+                curves,
+                log,
+            )
+        } else {
+            draw_lines(
+                SVGBackend::new(&path, (1000, 600)).into_drawing_area(),
+                title,
+                x,
+                y,
+                curves,
+                log,
+            )
+        };
+        r.map_err(|e| plot_error(&path, e))?;
+        out.push(path);
+    }
+    Ok(out)
+}
+
+fn draw_lines<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    title: &str,
+    xl: &str,
+    yl: &str,
+    curves: &[Curve],
+    log: bool,
+) -> Result<(), String> {
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    root.fill(&WHITE).map_err(e)?;
+    let ok = |x: f64, y: f64| x.is_finite() && y.is_finite() && (!log || (x > 0.0 && y > 0.0));
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for &(x, y) in curves.iter().flat_map(|c| c.points.iter()) {
+        if ok(x, y) {
+            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+        }
+    }
+    if x0 > x1 {
+        (x0, x1, y0, y1) = (1.0, 10.0, 1.0, 10.0);
+    }
+    if log {
+        let (x0, x1, y0, y1) = (x0 / 1.5, x1 * 1.5, y0 / 2.0, y1 * 2.0);
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(50)
+            .y_label_area_size(90)
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+            .map_err(e)?;
+        chart
+            .configure_mesh()
+            .x_desc(xl)
+            .y_desc(yl)
+            .x_label_formatter(&|v| format!("{v:.0e}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .label_style(("sans-serif", 14))
+            .draw()
+            .map_err(e)?;
+        for (i, c) in curves.iter().enumerate() {
+            let color = PALETTE[i % PALETTE.len()];
+            let pts: Vec<(f64, f64)> = c
+                .points
+                .iter()
+                .copied()
+                .filter(|&(x, y)| ok(x, y))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(pts.iter().copied(), color.stroke_width(2)))
+                .map_err(e)?
+                .label(c.name.as_str())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2))
+                });
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))
+                .map_err(e)?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .label_font(("sans-serif", 14))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(e)?;
+        return root.present().map_err(e);
+    }
+    let f = Figure {
+        stem: "",
+        title: title.to_string(),
+        x: "",
+        y: "",
+        series: curves
+            .iter()
+            .enumerate()
+            .map(|(i, c)| Series {
+                name: c.name.clone(),
+                points: c.points.clone(),
+                color: PALETTE[i % PALETTE.len()],
+                dashed: false,
+            })
+            .collect(),
+        legend: SeriesLabelPosition::UpperRight,
+    };
+    draw_labeled(root, &f, xl, yl)
 }

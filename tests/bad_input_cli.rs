@@ -60,3 +60,19 @@ fn unknown_names_are_rejected_by_the_parser() {
         assert!(err.contains("error"), "{err}");
     }
 }
+
+#[test]
+fn unknown_study_and_missing_run_dir_are_named() {
+    let (code, err) = signorini(&["study", "bogus", "--out", "/tmp/signorini-bad-study"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("study") && err.contains("bogus") && err.contains("convergence"),
+        "{err}"
+    );
+    let (code, err) = signorini(&["plot", "/nonexistent/signorini-run"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("/nonexistent/signorini-run/history.csv"),
+        "{err}"
+    );
+}

@@ -1,0 +1,487 @@
+//! Studies of the paper's academic examples (issue 5), each one command
+//! (`signorini study NAME --out DIR`) that writes a CSV table, a plot (PNG and SVG) and
+//! a verdict line per finding (`verdict.txt`, also returned).
+//!
+//! This first set runs on the bouncing ball of eq. 7 (Ballard's example,
+//! [`BouncingBall::ballard`]) against its closed form:
+//! - `convergence`: errors in position and velocity in the uniform, l1 and l2 norms
+//!   against h for Moreau–Jean, Schatzman–Paoli and Algorithm 1, with fitted orders
+//!   (Fig. 2 a, b);
+//! - `projection-multiplier`: max |τ| against h for Algorithm 1 (Fig. 3 a, eq. 37:
+//!   τ = O(h));
+//! - `chattering`: Algorithm 1 with the explicit forecast γ = 0, 1, 2 (eq. 61) and the
+//!   free forecast (eq. 62), and Algorithm 2, at h = 5e-2: contact switches after the
+//!   accumulation, post-accumulation velocity amplitude, time to rest (Fig. 4);
+//! - `energy`: kinetic, potential and total energy for e = 1/2 and e = 1, without
+//!   projection (Moreau–Jean) and with it (Algorithms 1 and 2) (Figs. 6, 7).
+//!
+//! Moreau–Jean and Algorithm 1 run with [`STUDY_FORECAST`] in the convergence,
+//! projection-multiplier and energy studies.
+//!
+//! The linear oscillator (eq. 8) and the rocking block (eq. 9–10) are not here yet.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::analytic::ball::BouncingBall;
+use crate::contact::plane::NodesOnPlane;
+use crate::error::Error;
+use crate::integrators::{self, Forecast, SchemeKind, SchemeParams};
+use crate::io::write_atomic;
+use crate::model::point_mass::point_mass;
+use crate::plot::{Curve, lines};
+
+/// The studies `signorini study` knows.
+pub const NAMES: [&str; 4] = [
+    "convergence",
+    "projection-multiplier",
+    "chattering",
+    "energy",
+];
+
+/// A run of the ball: per step the time at the end of the step, height, velocity,
+/// impulse and projection multiplier.
+#[derive(Clone, Debug, Default)]
+pub struct Trajectory {
+    /// `t_{k+1}` (s).
+    pub t: Vec<f64>,
+    /// Height `q` (m).
+    pub q: Vec<f64>,
+    /// Velocity `v` (m/s).
+    pub v: Vec<f64>,
+    /// Impulse `P` over the step (N·s).
+    pub p: Vec<f64>,
+    /// Projection multiplier `τ` (eq. 28).
+    pub tau: Vec<f64>,
+}
+
+/// Integrates the ball `b` with `params` and step `h` up to `t_end`.
+pub fn ball_run(
+    b: &BouncingBall,
+    params: &SchemeParams,
+    h: f64,
+    t_end: f64,
+) -> Result<Trajectory, Error> {
+    let sys = point_mass(1, b.mass, &[b.force])?;
+    let contact = NodesOnPlane::new(
+        vec![vec![0]],
+        vec![vec![b.q0]],
+        vec![1.0],
+        0.0,
+        b.restitution,
+    )?;
+    let mut integ = integrators::build(params, sys, Box::new(contact), &[0.0], &[b.v0], h)?;
+    let steps = (t_end / h).round() as usize;
+    let mut r = Trajectory::default();
+    for _ in 0..steps {
+        integ.step()?;
+        let s = integ.state();
+        r.t.push(s.time);
+        r.q.push(b.q0 + s.q[0]);
+        r.v.push(s.v[0]);
+        r.p.push(s.impulse[0]);
+        r.tau.push(s.projection[0]);
+    }
+    Ok(r)
+}
+
+/// Least-squares slope of `log err` against `log h` (zero errors skipped).
+pub fn fit_order(h: &[f64], err: &[f64]) -> f64 {
+    let pts: Vec<(f64, f64)> = h
+        .iter()
+        .zip(err)
+        .filter(|(_, e)| **e > 0.0)
+        .map(|(h, e)| (h.ln(), e.ln()))
+        .collect();
+    let n = pts.len() as f64;
+    let (sx, sy) = pts.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+    let (mx, my) = (sx / n, sy / n);
+    let num: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let den: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    num / den
+}
+
+/// Uniform, l1 and l2 norms of `e` sampled every `h`.
+fn norms(e: &[f64], h: f64) -> [f64; 3] {
+    let max = e.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let l1 = h * e.iter().map(|x| x.abs()).sum::<f64>();
+    let l2 = (h * e.iter().map(|x| x * x).sum::<f64>()).sqrt();
+    [max, l1, l2]
+}
+
+fn params(kind: SchemeKind, forecast: Forecast) -> SchemeParams {
+    SchemeParams {
+        kind,
+        forecast,
+        ..SchemeParams::default()
+    }
+}
+
+/// Steps of the convergence study: h₀ = 0.0137 s times 0.7^j, j = 0 … 11 (down to
+/// 2.7e-4). h₀ divides no impact time and the ratio is not a power of 2, so the
+/// distance from an impact to the grid varies from one h to the next instead of
+/// repeating, which keeps the fitted slopes from aliasing.
+pub fn convergence_steps() -> Vec<f64> {
+    (0..12).map(|j| 0.0137 * 0.7f64.powi(j)).collect()
+}
+
+/// The activation rule of the convergence, projection-multiplier and energy studies
+/// for Moreau–Jean and Algorithm 1: the explicit forecast with γ = 0 (eq. 61), i.e. a
+/// contact is active when its gap at the start of the step is closed, the index set
+/// the paper's consistency analysis (Prop. 1–2) assumes. With the free forecast
+/// (eq. 62) the ball is caught before it penetrates, τ is zero and no energy is
+/// created, so Figs. 3 and 7 would not show (measured: max |τ| = 0 at every h).
+pub const STUDY_FORECAST: Forecast = Forecast::Explicit { gamma: 0.0 };
+
+/// Horizon of the convergence study (s): three impacts (t = 1, 2, 2.5), before the
+/// accumulation at t = 3.
+pub const CONVERGENCE_T: f64 = 2.6;
+
+/// The fitted orders of one scheme: position then velocity, each uniform / l1 / l2.
+#[derive(Clone, Copy, Debug)]
+pub struct Orders {
+    /// Scheme.
+    pub kind: SchemeKind,
+    /// Position orders (uniform, l1, l2).
+    pub q: [f64; 3],
+    /// Velocity orders (uniform, l1, l2).
+    pub v: [f64; 3],
+}
+
+/// One row of the convergence table: scheme, h, errors (q uniform, l1, l2, v uniform,
+/// l1, l2).
+pub type ErrorRow = (SchemeKind, f64, [f64; 6]);
+
+/// Runs the convergence study; returns the fitted orders and the table rows
+/// (scheme, h, six errors).
+pub fn convergence_orders() -> Result<(Vec<Orders>, Vec<ErrorRow>), Error> {
+    let b = BouncingBall::ballard();
+    let hs = convergence_steps();
+    let mut rows = Vec::new();
+    let mut orders = Vec::new();
+    for kind in [
+        SchemeKind::MoreauJean,
+        SchemeKind::SchatzmanPaoli,
+        SchemeKind::DirectProjection,
+    ] {
+        let mut errs = Vec::new();
+        for &h in &hs {
+            let r = ball_run(&b, &params(kind, STUDY_FORECAST), h, CONVERGENCE_T)?;
+            let (mut eq, mut ev) = (Vec::new(), Vec::new());
+            for k in 0..r.t.len() {
+                let (q, v) = b.state(r.t[k]);
+                eq.push(r.q[k] - q);
+                ev.push(r.v[k] - v);
+            }
+            let (nq, nv) = (norms(&eq, h), norms(&ev, h));
+            let e = [nq[0], nq[1], nq[2], nv[0], nv[1], nv[2]];
+            rows.push((kind, h, e));
+            errs.push(e);
+        }
+        let col = |i: usize| errs.iter().map(|e| e[i]).collect::<Vec<_>>();
+        orders.push(Orders {
+            kind,
+            q: [0, 1, 2].map(|i| fit_order(&hs, &col(i))),
+            v: [3, 4, 5].map(|i| fit_order(&hs, &col(i))),
+        });
+    }
+    Ok((orders, rows))
+}
+
+fn convergence(dir: &Path) -> Result<Vec<String>, Error> {
+    let (orders, rows) = convergence_orders()?;
+    let mut csv = String::from("scheme,h,q_uniform,q_l1,q_l2,v_uniform,v_l1,v_l2\n");
+    for (k, h, e) in &rows {
+        let _ = writeln!(
+            csv,
+            "{},{h},{},{},{},{},{},{}",
+            k.name(),
+            e[0],
+            e[1],
+            e[2],
+            e[3],
+            e[4],
+            e[5]
+        );
+    }
+    write_atomic(&dir.join("convergence.csv"), csv.as_bytes())?;
+    let mut curves = Vec::new();
+    for (i, label) in ["q uniform", "q l1", "v l1", "v l2"].iter().enumerate() {
+        let c = [0, 1, 4, 5][i];
+        for o in &orders {
+            curves.push(Curve {
+                name: format!("{} {label}", o.kind.name()),
+                points: rows
+                    .iter()
+                    .filter(|r| r.0 == o.kind)
+                    .map(|r| (r.1, r.2[c]))
+                    .collect(),
+            });
+        }
+    }
+    curves.truncate(12);
+    lines(
+        &dir.join("convergence"),
+        "Bouncing ball: error against h (Fig. 2)",
+        "h (s)",
+        "error",
+        &curves,
+        true,
+    )?;
+    // expected (theory, Fig. 2): position order 1 in every norm; velocity order 0 in
+    // the uniform norm (a jump missed by one step), 1 in l1 and 1/2 in l2
+    let want_q = [1.0, 1.0, 1.0];
+    let want_v = [0.0, 1.0, 0.5];
+    let close = |a: &[f64; 3], b: &[f64; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 0.15);
+    Ok(orders
+        .iter()
+        .map(|o| {
+            format!(
+                "convergence {}: position orders {:.2}/{:.2}/{:.2} (uniform/l1/l2; expected 1), \
+                 velocity {:.2}/{:.2}/{:.2} (expected 0/1/0.5): {}",
+                o.kind.name(),
+                o.q[0],
+                o.q[1],
+                o.q[2],
+                o.v[0],
+                o.v[1],
+                o.v[2],
+                if close(&o.q, &want_q) && close(&o.v, &want_v) {
+                    "as in Fig. 2"
+                } else {
+                    "DIFFERS from Fig. 2's orders by more than 0.15"
+                }
+            )
+        })
+        .collect())
+}
+
+/// max |τ| of Algorithm 1 on the ball for each h of [`convergence_steps`] (up to
+/// t = 2.6), and the fitted slope.
+pub fn projection_multipliers() -> Result<(Vec<(f64, f64)>, f64), Error> {
+    let b = BouncingBall::ballard();
+    let hs = convergence_steps();
+    let mut pts = Vec::new();
+    for &h in &hs {
+        let r = ball_run(
+            &b,
+            &params(SchemeKind::DirectProjection, STUDY_FORECAST),
+            h,
+            CONVERGENCE_T,
+        )?;
+        pts.push((h, r.tau.iter().fold(0.0f64, |m, x| m.max(x.abs()))));
+    }
+    let slope = fit_order(&hs, &pts.iter().map(|p| p.1).collect::<Vec<_>>());
+    Ok((pts, slope))
+}
+
+fn projection_multiplier(dir: &Path) -> Result<Vec<String>, Error> {
+    let (pts, slope) = projection_multipliers()?;
+    let mut csv = String::from("h,max_abs_tau\n");
+    for (h, t) in &pts {
+        let _ = writeln!(csv, "{h},{t}");
+    }
+    write_atomic(&dir.join("projection-multiplier.csv"), csv.as_bytes())?;
+    lines(
+        &dir.join("projection-multiplier"),
+        "Bouncing ball, Algorithm 1: max |τ| against h (Fig. 3)",
+        "h (s)",
+        "max |τ| (kg·m, M̂⁻¹ metric)",
+        &[Curve {
+            name: "max |τ|".into(),
+            points: pts,
+        }],
+        true,
+    )?;
+    Ok(vec![format!(
+        "projection-multiplier: max |τ| = O(h^{slope:.2}) (expected slope 1, eq. 37): {}",
+        if (slope - 1.0).abs() <= 0.15 {
+            "as in Fig. 3"
+        } else {
+            "DIFFERS from Fig. 3"
+        }
+    )])
+}
+
+/// Chattering measures of one run after `t0`.
+#[derive(Clone, Copy, Debug)]
+pub struct Chatter {
+    /// Contact switches (impulse turning positive or zero) after `t0`.
+    pub switches: usize,
+    /// max |v| after `t0` (m/s).
+    pub amplitude: f64,
+    /// First time from which |v| ≤ 1e-10 and no switch follows (s), if any.
+    pub rest: Option<f64>,
+}
+
+/// Measures chattering on a trajectory after `t0`.
+pub fn chatter(r: &Trajectory, t0: f64) -> Chatter {
+    let closed: Vec<bool> = r.p.iter().map(|&p| p > 0.0).collect();
+    let switches = (1..closed.len())
+        .filter(|&k| r.t[k] > t0 && closed[k] != closed[k - 1])
+        .count();
+    let amplitude = (0..r.t.len())
+        .filter(|&k| r.t[k] > t0)
+        .fold(0.0f64, |m, k| m.max(r.v[k].abs()));
+    // last step that moves or switches; rest starts after it
+    let last_bad = (1..r.t.len())
+        .rev()
+        .find(|&k| r.v[k].abs() > 1e-10 || closed[k] != closed[k - 1]);
+    let rest = match last_bad {
+        Some(k) if k + 1 < r.t.len() => Some(r.t[k]),
+        Some(_) => None,
+        None => Some(0.0),
+    };
+    Chatter {
+        switches,
+        amplitude,
+        rest,
+    }
+}
+
+/// The cases of the chattering study: label, scheme, forecast.
+pub fn chattering_cases() -> Vec<(String, SchemeKind, Forecast)> {
+    let mut v: Vec<_> = [0.0, 1.0, 2.0]
+        .iter()
+        .map(|&g| {
+            (
+                format!("Algorithm 1, explicit forecast γ = {g}"),
+                SchemeKind::DirectProjection,
+                Forecast::Explicit { gamma: g },
+            )
+        })
+        .collect();
+    v.push((
+        "Algorithm 1, free forecast".into(),
+        SchemeKind::DirectProjection,
+        Forecast::Free,
+    ));
+    v.push((
+        "Algorithm 2".into(),
+        SchemeKind::CombinedProjection,
+        Forecast::Free,
+    ));
+    v
+}
+
+fn chattering(dir: &Path) -> Result<Vec<String>, Error> {
+    let b = BouncingBall::ballard();
+    let (h, t_end, t0) = (5e-2, 10.0, 3.5);
+    let mut csv = String::from("case,switches_after_3.5,max_abs_v_after_3.5,rest_time\n");
+    let mut verdicts = Vec::new();
+    let mut curves = Vec::new();
+    for (label, kind, forecast) in chattering_cases() {
+        let r = ball_run(&b, &params(kind, forecast), h, t_end)?;
+        let c = chatter(&r, t0);
+        let rest = c.rest.map_or("never".to_string(), |t| format!("{t:.2}"));
+        let _ = writeln!(csv, "{label},{},{},{rest}", c.switches, c.amplitude);
+        verdicts.push(format!(
+            "chattering {label}: {} contact switches after t = 3.5, max |v| {:.2e} m/s, at rest from t = {rest}{}",
+            c.switches,
+            c.amplitude,
+            if c.switches > 0 {
+                " (chatters, as Fig. 4 shows)"
+            } else {
+                " (no chattering)"
+            }
+        ));
+        curves.push(Curve {
+            name: label,
+            points: r.t.iter().copied().zip(r.q.iter().copied()).collect(),
+        });
+    }
+    write_atomic(&dir.join("chattering.csv"), csv.as_bytes())?;
+    lines(
+        &dir.join("chattering"),
+        "Bouncing ball, h = 5e-2: height (Fig. 4)",
+        "time (s)",
+        "q (m)",
+        &curves,
+        false,
+    )?;
+    Ok(verdicts)
+}
+
+/// Energy `½ m v² − f q` along a trajectory.
+fn energies(b: &BouncingBall, r: &Trajectory) -> Vec<(f64, f64, f64)> {
+    (0..r.t.len())
+        .map(|k| {
+            let ke = 0.5 * b.mass * r.v[k] * r.v[k];
+            (r.t[k], ke, -b.force * r.q[k])
+        })
+        .collect()
+}
+
+fn energy(dir: &Path) -> Result<Vec<String>, Error> {
+    let h = 1e-2;
+    let mut csv = String::from("restitution,scheme,time,kinetic,potential,total\n");
+    let mut verdicts = Vec::new();
+    let mut curves = Vec::new();
+    for e in [0.5, 1.0] {
+        let b = BouncingBall {
+            restitution: e,
+            ..BouncingBall::ballard()
+        };
+        let e0 = -b.force * b.q0 + 0.5 * b.mass * b.v0 * b.v0;
+        for (kind, forecast) in [
+            (SchemeKind::MoreauJean, STUDY_FORECAST),
+            (SchemeKind::DirectProjection, STUDY_FORECAST),
+            (SchemeKind::CombinedProjection, Forecast::Free),
+        ] {
+            let r = ball_run(&b, &params(kind, forecast), h, 10.0)?;
+            let en = energies(&b, &r);
+            for (t, ke, pe) in &en {
+                let _ = writeln!(csv, "{e},{},{t},{ke},{pe},{}", kind.name(), ke + pe);
+            }
+            let max_total = en.iter().fold(f64::MIN, |m, x| m.max(x.1 + x.2));
+            verdicts.push(format!(
+                "energy e = {e}, {}: largest total {max_total:.5} J against {e0:.5} J at t = 0 ({:+.3} %){}",
+                kind.name(),
+                100.0 * (max_total / e0 - 1.0),
+                if max_total > e0 * (1.0 + 1e-9) {
+                    ": energy is created"
+                } else {
+                    ""
+                }
+            ));
+            curves.push(Curve {
+                name: format!("e = {e}, {}", kind.name()),
+                points: en.iter().map(|x| (x.0, x.1 + x.2)).collect(),
+            });
+        }
+    }
+    write_atomic(&dir.join("energy.csv"), csv.as_bytes())?;
+    lines(
+        &dir.join("energy"),
+        "Bouncing ball, h = 1e-2: total energy (Figs. 6, 7)",
+        "time (s)",
+        "energy (J)",
+        &curves,
+        false,
+    )?;
+    Ok(verdicts)
+}
+
+/// Runs study `name` into `dir` and returns its verdict lines (also written to
+/// `dir/verdict.txt`).
+pub fn run(name: &str, dir: &Path) -> Result<Vec<String>, Error> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let verdicts = match name {
+        "convergence" => convergence(dir)?,
+        "projection-multiplier" => projection_multiplier(dir)?,
+        "chattering" => chattering(dir)?,
+        "energy" => energy(dir)?,
+        other => {
+            return Err(Error::invalid(
+                "study",
+                other,
+                &format!("unknown study; the studies are {}", NAMES.join(", ")),
+            ));
+        }
+    };
+    write_atomic(
+        &dir.join("verdict.txt"),
+        (verdicts.join("\n") + "\n").as_bytes(),
+    )?;
+    Ok(verdicts)
+}
