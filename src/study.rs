@@ -2,13 +2,14 @@
 //! (`signorini study NAME --out DIR`) that writes a CSV table, a plot (PNG and SVG) and
 //! a verdict line per finding (`verdict.txt`, also returned).
 //!
-//! This first set runs on the bouncing ball of eq. 7 (Ballard's example,
-//! [`BouncingBall::ballard`]) against its closed form:
+//! The studies run on the bouncing ball of eq. 7 (Ballard's example,
+//! [`BouncingBall::ballard`]) and the impacting oscillator of eq. 8
+//! ([`Oscillator::example`]) against their closed forms:
 //! - `convergence`: errors in position and velocity in the uniform, l1 and l2 norms
-//!   against h for Moreau–Jean, Schatzman–Paoli and Algorithm 1, with fitted orders
-//!   (Fig. 2 a, b);
-//! - `projection-multiplier`: max |τ| against h for Algorithm 1 (Fig. 3 a, eq. 37:
-//!   τ = O(h));
+//!   against h for Moreau–Jean, Schatzman–Paoli and Algorithm 1 on both examples, with
+//!   fitted orders (Fig. 2);
+//! - `projection-multiplier`: max |τ| against h for Algorithm 1 on both examples
+//!   (Fig. 3, eq. 37: τ = O(h));
 //! - `chattering`: Algorithm 1 with the explicit forecast γ = 0, 1, 2 (eq. 61) and the
 //!   free forecast (eq. 62), and Algorithm 2, at h = 5e-2: contact switches after the
 //!   accumulation, post-accumulation velocity amplitude, time to rest (Fig. 4);
@@ -18,17 +19,18 @@
 //! Moreau–Jean and Algorithm 1 run with [`STUDY_FORECAST`] in the convergence,
 //! projection-multiplier and energy studies.
 //!
-//! The linear oscillator (eq. 8) and the rocking block (eq. 9–10) are not here yet.
+//! `chattering` and `energy` use the ball; the rocking block (eq. 9–10) is not here yet.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::analytic::ball::BouncingBall;
+use crate::analytic::oscillator::Oscillator;
 use crate::contact::plane::NodesOnPlane;
 use crate::error::Error;
 use crate::integrators::{self, Forecast, SchemeKind, SchemeParams};
 use crate::io::write_atomic;
-use crate::model::point_mass::point_mass;
+use crate::model::point_mass::{oscillator, point_mass};
 use crate::plot::{Curve, lines};
 
 /// The studies `signorini study` knows.
@@ -55,6 +57,35 @@ pub struct Trajectory {
     pub tau: Vec<f64>,
 }
 
+/// An academic example with a closed form.
+#[derive(Clone, Copy, Debug)]
+pub enum Example {
+    /// The bouncing ball (eq. 7).
+    Ball(BouncingBall),
+    /// The impacting oscillator (eq. 8).
+    Oscillator(Oscillator),
+}
+
+impl Example {
+    /// Short name for tables and messages.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Example::Ball(_) => "ball",
+            Example::Oscillator(_) => "oscillator",
+        }
+    }
+    /// The exact state (position, right-limit velocity) at the given times.
+    pub fn exact(&self, t: &[f64]) -> Vec<(f64, f64)> {
+        match self {
+            Example::Ball(b) => t.iter().map(|&t| b.state(t)).collect(),
+            Example::Oscillator(o) => {
+                let f = o.flights(t.last().copied().unwrap_or(0.0) + 1.0);
+                t.iter().map(|&t| f.at(t)).collect()
+            }
+        }
+    }
+}
+
 /// Integrates the ball `b` with `params` and step `h` up to `t_end`.
 pub fn ball_run(
     b: &BouncingBall,
@@ -62,22 +93,43 @@ pub fn ball_run(
     h: f64,
     t_end: f64,
 ) -> Result<Trajectory, Error> {
-    let sys = point_mass(1, b.mass, &[b.force])?;
-    let contact = NodesOnPlane::new(
-        vec![vec![0]],
-        vec![vec![b.q0]],
-        vec![1.0],
-        0.0,
-        b.restitution,
-    )?;
-    let mut integ = integrators::build(params, sys, Box::new(contact), &[0.0], &[b.v0], h)?;
+    example_run(&Example::Ball(*b), params, h, t_end)
+}
+
+/// Integrates example `x` with `params` and step `h` up to `t_end`; the gap is the
+/// height `q`. The ball's dof is its displacement from `q0` (reference position `q0`);
+/// the oscillator's dof is `q` itself, since its spring acts on `q`.
+pub fn example_run(
+    x: &Example,
+    params: &SchemeParams,
+    h: f64,
+    t_end: f64,
+) -> Result<Trajectory, Error> {
+    let (sys, reference, u0, v0, e) = match x {
+        Example::Ball(b) => (
+            point_mass(1, b.mass, &[b.force])?,
+            b.q0,
+            0.0,
+            b.v0,
+            b.restitution,
+        ),
+        Example::Oscillator(o) => (
+            oscillator(o.mass, o.damping, o.stiffness, o.force)?,
+            0.0,
+            o.q0,
+            o.v0,
+            o.restitution,
+        ),
+    };
+    let contact = NodesOnPlane::new(vec![vec![0]], vec![vec![reference]], vec![1.0], 0.0, e)?;
+    let mut integ = integrators::build(params, sys, Box::new(contact), &[u0], &[v0], h)?;
     let steps = (t_end / h).round() as usize;
     let mut r = Trajectory::default();
     for _ in 0..steps {
         integ.step()?;
         let s = integ.state();
         r.t.push(s.time);
-        r.q.push(b.q0 + s.q[0]);
+        r.q.push(reference + s.q[0]);
         r.v.push(s.v[0]);
         r.p.push(s.impulse[0]);
         r.tau.push(s.projection[0]);
@@ -140,6 +192,8 @@ pub const CONVERGENCE_T: f64 = 2.6;
 /// The fitted orders of one scheme: position then velocity, each uniform / l1 / l2.
 #[derive(Clone, Copy, Debug)]
 pub struct Orders {
+    /// Example (`ball` or `oscillator`).
+    pub example: &'static str,
     /// Scheme.
     pub kind: SchemeKind,
     /// Position orders (uniform, l1, l2).
@@ -148,53 +202,55 @@ pub struct Orders {
     pub v: [f64; 3],
 }
 
-/// One row of the convergence table: scheme, h, errors (q uniform, l1, l2, v uniform,
-/// l1, l2).
-pub type ErrorRow = (SchemeKind, f64, [f64; 6]);
+/// One row of the convergence table: example, scheme, h, errors (q uniform, l1, l2,
+/// v uniform, l1, l2).
+pub type ErrorRow = (&'static str, SchemeKind, f64, [f64; 6]);
 
 /// Runs the convergence study; returns the fitted orders and the table rows
 /// (scheme, h, six errors).
 pub fn convergence_orders() -> Result<(Vec<Orders>, Vec<ErrorRow>), Error> {
-    let b = BouncingBall::ballard();
     let hs = convergence_steps();
     let mut rows = Vec::new();
     let mut orders = Vec::new();
-    for kind in [
-        SchemeKind::MoreauJean,
-        SchemeKind::SchatzmanPaoli,
-        SchemeKind::DirectProjection,
+    for x in [
+        Example::Ball(BouncingBall::ballard()),
+        Example::Oscillator(Oscillator::example()),
     ] {
-        let mut errs = Vec::new();
-        for &h in &hs {
-            let r = ball_run(&b, &params(kind, STUDY_FORECAST), h, CONVERGENCE_T)?;
-            let (mut eq, mut ev) = (Vec::new(), Vec::new());
-            for k in 0..r.t.len() {
-                let (q, v) = b.state(r.t[k]);
-                eq.push(r.q[k] - q);
-                ev.push(r.v[k] - v);
+        for kind in [
+            SchemeKind::MoreauJean,
+            SchemeKind::SchatzmanPaoli,
+            SchemeKind::DirectProjection,
+        ] {
+            let mut errs = Vec::new();
+            for &h in &hs {
+                let r = example_run(&x, &params(kind, STUDY_FORECAST), h, CONVERGENCE_T)?;
+                let exact = x.exact(&r.t);
+                let eq: Vec<f64> = (0..r.t.len()).map(|k| r.q[k] - exact[k].0).collect();
+                let ev: Vec<f64> = (0..r.t.len()).map(|k| r.v[k] - exact[k].1).collect();
+                let (nq, nv) = (norms(&eq, h), norms(&ev, h));
+                let e = [nq[0], nq[1], nq[2], nv[0], nv[1], nv[2]];
+                rows.push((x.name(), kind, h, e));
+                errs.push(e);
             }
-            let (nq, nv) = (norms(&eq, h), norms(&ev, h));
-            let e = [nq[0], nq[1], nq[2], nv[0], nv[1], nv[2]];
-            rows.push((kind, h, e));
-            errs.push(e);
+            let col = |i: usize| errs.iter().map(|e| e[i]).collect::<Vec<_>>();
+            orders.push(Orders {
+                example: x.name(),
+                kind,
+                q: [0, 1, 2].map(|i| fit_order(&hs, &col(i))),
+                v: [3, 4, 5].map(|i| fit_order(&hs, &col(i))),
+            });
         }
-        let col = |i: usize| errs.iter().map(|e| e[i]).collect::<Vec<_>>();
-        orders.push(Orders {
-            kind,
-            q: [0, 1, 2].map(|i| fit_order(&hs, &col(i))),
-            v: [3, 4, 5].map(|i| fit_order(&hs, &col(i))),
-        });
     }
     Ok((orders, rows))
 }
 
 fn convergence(dir: &Path) -> Result<Vec<String>, Error> {
     let (orders, rows) = convergence_orders()?;
-    let mut csv = String::from("scheme,h,q_uniform,q_l1,q_l2,v_uniform,v_l1,v_l2\n");
-    for (k, h, e) in &rows {
+    let mut csv = String::from("example,scheme,h,q_uniform,q_l1,q_l2,v_uniform,v_l1,v_l2\n");
+    for (x, k, h, e) in &rows {
         let _ = writeln!(
             csv,
-            "{},{h},{},{},{},{},{},{}",
+            "{x},{},{h},{},{},{},{},{},{}",
             k.name(),
             e[0],
             e[1],
@@ -205,29 +261,29 @@ fn convergence(dir: &Path) -> Result<Vec<String>, Error> {
         );
     }
     write_atomic(&dir.join("convergence.csv"), csv.as_bytes())?;
-    let mut curves = Vec::new();
-    for (i, label) in ["q uniform", "q l1", "v l1", "v l2"].iter().enumerate() {
-        let c = [0, 1, 4, 5][i];
-        for o in &orders {
-            curves.push(Curve {
-                name: format!("{} {label}", o.kind.name()),
-                points: rows
-                    .iter()
-                    .filter(|r| r.0 == o.kind)
-                    .map(|r| (r.1, r.2[c]))
-                    .collect(),
-            });
+    for x in ["ball", "oscillator"] {
+        let mut curves = Vec::new();
+        for (label, c) in [("q uniform", 0), ("q l1", 1), ("v l1", 4), ("v l2", 5)] {
+            for o in orders.iter().filter(|o| o.example == x) {
+                curves.push(Curve {
+                    name: format!("{} {label}", o.kind.name()),
+                    points: rows
+                        .iter()
+                        .filter(|r| r.0 == x && r.1 == o.kind)
+                        .map(|r| (r.2, r.3[c]))
+                        .collect(),
+                });
+            }
         }
+        lines(
+            &dir.join(format!("convergence-{x}")),
+            &format!("{x}: error against h (Fig. 2)"),
+            "h (s)",
+            "error",
+            &curves,
+            true,
+        )?;
     }
-    curves.truncate(12);
-    lines(
-        &dir.join("convergence"),
-        "Bouncing ball: error against h (Fig. 2)",
-        "h (s)",
-        "error",
-        &curves,
-        true,
-    )?;
     // expected (theory, Fig. 2): position order 1 in every norm; velocity order 0 in
     // the uniform norm (a jump missed by one step), 1 in l1 and 1/2 in l2
     let want_q = [1.0, 1.0, 1.0];
@@ -237,8 +293,9 @@ fn convergence(dir: &Path) -> Result<Vec<String>, Error> {
         .iter()
         .map(|o| {
             format!(
-                "convergence {}: position orders {:.2}/{:.2}/{:.2} (uniform/l1/l2; expected 1), \
+                "convergence {} {}: position orders {:.2}/{:.2}/{:.2} (uniform/l1/l2; expected 1), \
                  velocity {:.2}/{:.2}/{:.2} (expected 0/1/0.5): {}",
+                o.example,
                 o.kind.name(),
                 o.q[0],
                 o.q[1],
@@ -256,51 +313,72 @@ fn convergence(dir: &Path) -> Result<Vec<String>, Error> {
         .collect())
 }
 
-/// max |τ| of Algorithm 1 on the ball for each h of [`convergence_steps`] (up to
-/// t = 2.6), and the fitted slope.
-pub fn projection_multipliers() -> Result<(Vec<(f64, f64)>, f64), Error> {
-    let b = BouncingBall::ballard();
+/// One example's projection-multiplier fit: name, points (h, max |τ|), slope.
+pub type TauFit = (&'static str, Vec<(f64, f64)>, f64);
+
+/// max |τ| of Algorithm 1 for each h of [`convergence_steps`] (up to t = 2.6) on the
+/// ball and on the oscillator: per example, its name, the points (h, max |τ|) and the
+/// fitted slope.
+pub fn projection_multipliers() -> Result<Vec<TauFit>, Error> {
     let hs = convergence_steps();
-    let mut pts = Vec::new();
-    for &h in &hs {
-        let r = ball_run(
-            &b,
-            &params(SchemeKind::DirectProjection, STUDY_FORECAST),
-            h,
-            CONVERGENCE_T,
-        )?;
-        pts.push((h, r.tau.iter().fold(0.0f64, |m, x| m.max(x.abs()))));
+    let mut out = Vec::new();
+    for x in [
+        Example::Ball(BouncingBall::ballard()),
+        Example::Oscillator(Oscillator::example()),
+    ] {
+        let mut pts = Vec::new();
+        for &h in &hs {
+            let r = example_run(
+                &x,
+                &params(SchemeKind::DirectProjection, STUDY_FORECAST),
+                h,
+                CONVERGENCE_T,
+            )?;
+            pts.push((h, r.tau.iter().fold(0.0f64, |m, x| m.max(x.abs()))));
+        }
+        let slope = fit_order(&hs, &pts.iter().map(|p| p.1).collect::<Vec<_>>());
+        out.push((x.name(), pts, slope));
     }
-    let slope = fit_order(&hs, &pts.iter().map(|p| p.1).collect::<Vec<_>>());
-    Ok((pts, slope))
+    Ok(out)
 }
 
 fn projection_multiplier(dir: &Path) -> Result<Vec<String>, Error> {
-    let (pts, slope) = projection_multipliers()?;
-    let mut csv = String::from("h,max_abs_tau\n");
-    for (h, t) in &pts {
-        let _ = writeln!(csv, "{h},{t}");
+    let res = projection_multipliers()?;
+    let mut csv = String::from("example,h,max_abs_tau\n");
+    for (x, pts, _) in &res {
+        for (h, t) in pts {
+            let _ = writeln!(csv, "{x},{h},{t}");
+        }
     }
     write_atomic(&dir.join("projection-multiplier.csv"), csv.as_bytes())?;
+    let curves: Vec<Curve> = res
+        .iter()
+        .map(|(x, pts, _)| Curve {
+            name: format!("{x}: max |τ|"),
+            points: pts.clone(),
+        })
+        .collect();
     lines(
         &dir.join("projection-multiplier"),
-        "Bouncing ball, Algorithm 1: max |τ| against h (Fig. 3)",
+        "Algorithm 1: max |τ| against h (Fig. 3)",
         "h (s)",
         "max |τ| (kg·m, M̂⁻¹ metric)",
-        &[Curve {
-            name: "max |τ|".into(),
-            points: pts,
-        }],
+        &curves,
         true,
     )?;
-    Ok(vec![format!(
-        "projection-multiplier: max |τ| = O(h^{slope:.2}) (expected slope 1, eq. 37): {}",
-        if (slope - 1.0).abs() <= 0.15 {
-            "as in Fig. 3"
-        } else {
-            "DIFFERS from Fig. 3"
-        }
-    )])
+    Ok(res
+        .iter()
+        .map(|(x, _, slope)| {
+            format!(
+                "projection-multiplier {x}: max |τ| = O(h^{slope:.2}) (expected slope 1, eq. 37): {}",
+                if (slope - 1.0).abs() <= 0.15 {
+                    "as in Fig. 3"
+                } else {
+                    "DIFFERS from Fig. 3"
+                }
+            )
+        })
+        .collect())
 }
 
 /// Chattering measures of one run after `t0`.

@@ -6,8 +6,10 @@
 //! `−v0` (all its momentum reversed), so the total impulse is `2 ρ S L |v0|`.
 //!
 //! [`ball::BouncingBall`]: the bouncing ball of eq. 7 (Ballard's example).
+//! [`oscillator::Oscillator`]: the impacting linear oscillator of eq. 8.
 
 pub mod ball;
+pub mod oscillator;
 
 /// The analytic impacting bar.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -29,3 +29,20 @@ pub fn point_mass(dim: usize, mass: f64, force: &[f64]) -> Result<LinearSystem, 
         component: super::interleaved_components(dim, dim),
     })
 }
+
+/// Builds the one-dof oscillator of eq. 8: `m q̈ + c q̇ + k q = f`.
+pub fn oscillator(
+    mass: f64,
+    damping: f64,
+    stiffness: f64,
+    force: f64,
+) -> Result<LinearSystem, Error> {
+    crate::error::require_in("stiffness", stiffness, 0.0, f64::MAX)?;
+    crate::error::require_in("damping", damping, 0.0, f64::MAX)?;
+    let mut sys = point_mass(1, mass, &[force])?;
+    let mut ak = Assembler::new(1, 1);
+    ak.add(0, 0, stiffness);
+    sys.stiffness = ak.finish();
+    // C = (c/m) M: Rayleigh with α = c/m
+    sys.with_rayleigh(damping / mass, 0.0)
+}
