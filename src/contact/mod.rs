@@ -9,6 +9,7 @@
 //! Delassus operator once); [`sphere::InsideSphere`] is nonlinear (`G` depends on
 //! `q`, so the Newton loop of eq. 42–51 re-linearizes it every iteration).
 
+pub mod block;
 pub mod plane;
 pub mod sphere;
 

@@ -46,3 +46,25 @@ pub fn oscillator(
     // C = (c/m) M: Rayleigh with α = c/m
     sys.with_rayleigh(damping / mass, 0.0)
 }
+
+/// Builds the rigid 2-D block of eq. 10: `q = [x, y, θ]`, `M = diag(m, m, I)` with
+/// `I = m (l² + L²) / 12`, weight `−m g` on y, no stiffness.
+pub fn rigid_block(mass: f64, length: f64, thickness: f64, g: f64) -> Result<LinearSystem, Error> {
+    require_positive("mass", mass)?;
+    require_positive("length", length)?;
+    require_positive("thickness", thickness)?;
+    crate::error::require_in("gravity", g, 0.0, f64::MAX)?;
+    let inertia = mass * (length * length + thickness * thickness) / 12.0;
+    let mut am = Assembler::new(3, 3);
+    for (i, v) in [mass, mass, inertia].into_iter().enumerate() {
+        am.add(i, i, v);
+    }
+    Ok(LinearSystem {
+        mass: am.finish(),
+        stiffness: Assembler::new(3, 0).finish(),
+        damping: None,
+        force: vec![0.0, -mass * g, 0.0],
+        dofs_per_node: 3,
+        component: vec![0, 1, 2],
+    })
+}
