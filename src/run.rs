@@ -206,16 +206,7 @@ pub fn run_bar(
         out.map(|o| (o, geometry)),
         progress,
     )
-    .and_then(|mut r| {
-        [r.summary.model_seconds, r.summary.integrator_seconds] = setup;
-        if let Some(o) = out {
-            write_summary(&r.summary, o.dir)?;
-            if o.options.plots {
-                crate::plot::plot_run(o.dir)?;
-            }
-        }
-        Ok(r)
-    })
+    .and_then(|r| finish(r, setup, out))
 }
 
 /// Runs a scene file; writes into `out.dir` if given.
@@ -241,16 +232,7 @@ pub fn run_scene(
         out.map(|o| (o, geometry)),
         progress,
     )
-    .and_then(|mut r| {
-        [r.summary.model_seconds, r.summary.integrator_seconds] = setup;
-        if let Some(o) = out {
-            write_summary(&r.summary, o.dir)?;
-            if o.options.plots {
-                crate::plot::plot_run(o.dir)?;
-            }
-        }
-        Ok(r)
-    })
+    .and_then(|r| finish(r, setup, out))
 }
 
 /// Steps `integ` `steps` times, streaming the history and the field frames (when
@@ -415,6 +397,18 @@ pub fn run(
         parameters,
     };
     Ok(RunResult { summary, force })
+}
+
+/// Completes a run: records the set-up times, writes `summary.json` and the plots.
+fn finish(mut r: RunResult, setup: [f64; 2], out: Option<Output>) -> Result<RunResult, Error> {
+    [r.summary.model_seconds, r.summary.integrator_seconds] = setup;
+    if let Some(o) = out {
+        write_summary(&r.summary, o.dir)?;
+        if o.options.plots {
+            crate::plot::plot_run(o.dir)?;
+        }
+    }
+    Ok(r)
 }
 
 /// Writes `summary.json` into `dir` atomically.

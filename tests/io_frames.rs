@@ -1,9 +1,11 @@
 //! Field output (`.vtu` frames + `.pvd`): written, then read back with vtkio (an
 //! independent reader) and compared with analytic values and with the history.
 
-use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
+mod common;
+
+use common::{read_frame, read_pvd};
 use signorini::io::OutputOptions;
 use signorini::io::frames::Encoding;
 use signorini::run::{Output, Quiet, run_bar, run_scene};
@@ -14,58 +16,6 @@ fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("signorini-frames-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
-}
-
-/// One frame as vtkio reads it: points, VTK cell types, point and cell arrays.
-struct Frame {
-    points: Vec<f64>,
-    types: Vec<u8>,
-    point: HashMap<String, Vec<f64>>,
-    cell: HashMap<String, Vec<f64>>,
-}
-
-fn read_frame(path: &Path) -> Frame {
-    use vtkio::model::{Attribute, DataSet};
-    let vtk = vtkio::Vtk::import(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
-        panic!("not an unstructured grid")
-    };
-    let p = pieces
-        .into_iter()
-        .next()
-        .unwrap()
-        .into_loaded_piece_data(None)
-        .unwrap();
-    let arrays = |attrs: Vec<Attribute>| {
-        attrs
-            .into_iter()
-            .filter_map(|a| match a {
-                Attribute::DataArray(d) => Some((d.name.clone(), d.data.cast_into::<f64>()?)),
-                _ => None,
-            })
-            .collect::<HashMap<_, _>>()
-    };
-    Frame {
-        points: p.points.cast_into().unwrap(),
-        types: p.cells.types.iter().map(|t| *t as u8).collect(),
-        point: arrays(p.data.point),
-        cell: arrays(p.data.cell),
-    }
-}
-
-/// (time, file) of every `<DataSet>` in a `.pvd`.
-fn read_pvd(path: &Path) -> Vec<(f64, String)> {
-    let text = std::fs::read_to_string(path).unwrap();
-    text.lines()
-        .filter(|l| l.contains("<DataSet"))
-        .map(|l| {
-            let attr = |k: &str| {
-                let s = &l[l.find(&format!("{k}=\"")).unwrap() + k.len() + 2..];
-                s[..s.find('"').unwrap()].to_string()
-            };
-            (attr("timestep").parse().unwrap(), attr("file"))
-        })
-        .collect()
 }
 
 const FREE_BOX: &str = r#"

@@ -4,6 +4,8 @@
 
 use std::path::PathBuf;
 
+mod common;
+
 use signorini::io::OutputOptions;
 use signorini::run::{Output, Quiet, run_bar};
 use signorini::scene::bar::BarScene;
@@ -12,28 +14,6 @@ fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("signorini-h5-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
-}
-
-fn vtu_point_array(path: &std::path::Path, name: &str) -> Vec<f64> {
-    use vtkio::model::{Attribute, DataSet};
-    let vtk = vtkio::Vtk::import(path).unwrap();
-    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
-        panic!()
-    };
-    let p = pieces
-        .into_iter()
-        .next()
-        .unwrap()
-        .into_loaded_piece_data(None)
-        .unwrap();
-    p.data
-        .point
-        .into_iter()
-        .find_map(|a| match a {
-            Attribute::DataArray(d) if d.name == name => d.data.cast_into::<f64>(),
-            _ => None,
-        })
-        .unwrap()
 }
 
 #[test]
@@ -94,7 +74,7 @@ fn vtkhdf_and_history_hold_what_the_vtu_and_csv_hold() {
         .collect();
     assert_eq!(files.len(), times.len());
     for (k, file) in files.iter().enumerate() {
-        let v = vtu_point_array(&dir.join(file), "displacement");
+        let v = &common::read_frame(&dir.join(file)).point["displacement"];
         let o = offsets[k] as usize * 3;
         assert_eq!(&disp[o..o + 3 * np], &v[..], "frame {k}");
     }
