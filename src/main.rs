@@ -42,6 +42,18 @@ enum Command {
     Run(SceneArgs),
     /// Validate a scene file and print what the model includes and which paths the run takes.
     Check(SceneArgs),
+    /// Run one of the paper's academic examples built in (bouncing-ball, oscillator,
+    /// rocking-block), as its scene file in meshes/ would.
+    Example {
+        /// The example.
+        name: String,
+        /// Output directory (default out/NAME).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Print nothing but errors.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Run one of the paper's studies on its academic examples (convergence,
     /// projection-multiplier, chattering, energy): CSV, plot and verdict lines.
     Study {
@@ -432,6 +444,20 @@ fn run_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     Ok(())
 }
 
+fn run_example(name: &str, out: Option<PathBuf>, quiet: bool) -> Result<(), signorini::Error> {
+    let scene = signorini::scene::example::builtin_scene(name)?;
+    let out = out.unwrap_or_else(|| PathBuf::from("out").join(name));
+    let o = run::Output {
+        dir: &out,
+        options: &scene.output,
+    };
+    let result = run::run_scene(&scene, Some(o), progress_sink(quiet).as_mut())?;
+    if !quiet {
+        print_summary(&result.summary, &out);
+    }
+    Ok(())
+}
+
 fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     let scene = Scene::from_file(&args.scene)?;
     let (model, report) = scene.build()?;
@@ -543,6 +569,7 @@ fn main() -> ExitCode {
         Some(Command::Bar(a)) => run_bar(&a),
         Some(Command::Run(a)) => run_scene(&a),
         Some(Command::Check(a)) => check_scene(&a),
+        Some(Command::Example { name, out, quiet }) => run_example(&name, out, quiet),
         Some(Command::Study { name, out }) => {
             let dir = out.unwrap_or_else(|| PathBuf::from(format!("out/study-{name}")));
             signorini::study::run(&name, &dir).map(|v| {

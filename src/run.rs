@@ -282,7 +282,8 @@ pub fn run(
                 )?),
                 None => hist,
             };
-            let frames = if o.options.fields || o.options.hdf5() {
+            // a model without field geometry (the academic examples) writes no frames
+            let frames = if (o.options.fields || o.options.hdf5()) && !geom.points.is_empty() {
                 let w = FrameWriter::create(
                     o.dir,
                     "fields",

@@ -537,7 +537,14 @@ impl ThetaCore {
                     qn = qn.max(self.q_new[i].abs());
                 }
                 self.q_lin.copy_from_slice(&self.q_new);
-                dq / (inc + 8.0 * f64::EPSILON * qn).max(f64::MIN_POSITIVE)
+                // a change at the round-off level of q is converged: at rest on two
+                // curved contacts the projection otherwise flips τ ~ 1e-17 forever
+                // (the rocking block at rest hit the cap before this floor)
+                if dq <= 16.0 * f64::EPSILON * qn {
+                    0.0
+                } else {
+                    dq / (inc + 8.0 * f64::EPSILON * qn).max(f64::MIN_POSITIVE)
+                }
             };
             stats.newton_residual = r;
             if r <= self.newton.tol {

@@ -59,7 +59,12 @@ pub struct Scene {
     #[serde(default)]
     pub scheme: SchemeParams,
     /// Deformable bodies.
+    #[serde(default)]
     pub bodies: Vec<BodySpec>,
+    /// One of the paper's academic examples instead of bodies (see
+    /// [`crate::scene::example`]).
+    #[serde(default)]
+    pub example: Option<crate::scene::example::ExampleSpec>,
     /// Rigid obstacles.
     #[serde(default)]
     pub obstacles: Vec<ObstacleSpec>,
@@ -337,11 +342,21 @@ impl Scene {
         }
         self.scheme.validate()?;
         self.output.validate().map_err(|e| prefix("output", e))?;
+        if self.example.is_some() {
+            if !self.bodies.is_empty() || !self.contacts.is_empty() || !self.obstacles.is_empty() {
+                return Err(Error::invalid(
+                    "example",
+                    "with bodies, obstacles or contacts",
+                    "an example scene holds only [example], [time], [scheme] and [output]",
+                ));
+            }
+            return Ok(());
+        }
         if self.bodies.is_empty() {
             return Err(Error::invalid(
                 "bodies",
                 "[]",
-                "a scene needs at least one body",
+                "a scene needs at least one body (or an [example])",
             ));
         }
         for (i, b) in self.bodies.iter().enumerate() {
@@ -379,6 +394,20 @@ impl Scene {
 
     /// Meshes and assembles every body, eliminates fixed dofs, and builds the contacts.
     pub fn build(&self) -> Result<(Model, ModelReport), Error> {
+        if let Some(x) = &self.example {
+            let model = x.build()?;
+            let report = ModelReport {
+                dofs: model.system.ndof(),
+                cells: 0,
+                contacts: model.contacts.len(),
+                linear_contacts: model.contacts.is_linear(),
+                damping: model.system.damping.is_some(),
+                gravity: model.system.force.iter().any(|&f| f != 0.0),
+                fixed_dofs: 0,
+            };
+            return Ok((model, report));
+        }
+        self.validate()?;
         let mut systems = Vec::new();
         let mut meshes = Vec::new();
         let mut v0 = Vec::new();

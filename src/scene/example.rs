@@ -1,0 +1,267 @@
+//! The paper's academic examples as scenes (`[example]` in a scene file): the bouncing
+//! ball (eq. 7), the impacting linear oscillator (eq. 8) and the rocking block
+//! (eq. 9–10). Every parameter defaults to the value the paper (or Ballard's example)
+//! uses, so `[example] kind = "rocking-block"` alone reproduces Fig. 9's set-up.
+
+use serde::{Deserialize, Serialize};
+
+use crate::analytic::ball::BouncingBall;
+use crate::analytic::oscillator::Oscillator;
+use crate::contact::block::BlockCorners;
+use crate::contact::plane::NodesOnPlane;
+use crate::error::Error;
+use crate::io::frames::Geometry;
+use crate::model::point_mass::{oscillator, point_mass, rigid_block};
+use crate::scene::Model;
+
+/// `[example]`: one of the paper's academic examples.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum ExampleSpec {
+    /// The bouncing ball (eq. 7); defaults: Ballard's f = −2, m = 1, e = 1/2, q0 = 1.
+    BouncingBall {
+        /// Constant force `f` (N).
+        #[serde(default = "ball_force")]
+        force: f64,
+        /// Mass (kg).
+        #[serde(default = "one")]
+        mass: f64,
+        /// Restitution.
+        #[serde(default = "half")]
+        restitution: f64,
+        /// Initial height (m).
+        #[serde(default = "one")]
+        q0: f64,
+        /// Initial velocity (m/s).
+        #[serde(default)]
+        v0: f64,
+    },
+    /// The impacting oscillator (eq. 8); defaults: m = 1, k = 4π², c = 0.2, f = 0,
+    /// e = 1/2, q0 = 1.
+    Oscillator {
+        /// Mass (kg).
+        #[serde(default = "one")]
+        mass: f64,
+        /// Damping (N·s/m).
+        #[serde(default = "osc_damping")]
+        damping: f64,
+        /// Stiffness (N/m).
+        #[serde(default = "osc_stiffness")]
+        stiffness: f64,
+        /// Constant force (N).
+        #[serde(default)]
+        force: f64,
+        /// Restitution.
+        #[serde(default = "half")]
+        restitution: f64,
+        /// Initial position (m).
+        #[serde(default = "one")]
+        q0: f64,
+        /// Initial velocity (m/s).
+        #[serde(default)]
+        v0: f64,
+    },
+    /// The rocking block (eq. 9–10); defaults: the paper's l = 1.5, L = 1, m = 1,
+    /// e = 1/2, y0 = 1, θ0 = 0.2, ω0 = 0.2, g = 9.81.
+    RockingBlock {
+        /// Length `L` (m), the bottom edge.
+        #[serde(default = "one")]
+        length: f64,
+        /// Thickness `l` (m).
+        #[serde(default = "block_thickness")]
+        thickness: f64,
+        /// Mass (kg).
+        #[serde(default = "one")]
+        mass: f64,
+        /// Restitution.
+        #[serde(default = "half")]
+        restitution: f64,
+        /// Gravity (m/s²).
+        #[serde(default = "gravity")]
+        gravity: f64,
+        /// Initial `[x, y, θ]`.
+        #[serde(default = "block_q0")]
+        q0: [f64; 3],
+        /// Initial `[ẋ, ẏ, θ̇]`.
+        #[serde(default = "block_v0")]
+        v0: [f64; 3],
+    },
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn half() -> f64 {
+    0.5
+}
+fn ball_force() -> f64 {
+    -2.0
+}
+fn osc_damping() -> f64 {
+    0.2
+}
+fn osc_stiffness() -> f64 {
+    4.0 * std::f64::consts::PI * std::f64::consts::PI
+}
+fn block_thickness() -> f64 {
+    1.5
+}
+fn gravity() -> f64 {
+    9.81
+}
+fn block_q0() -> [f64; 3] {
+    [0.0, 1.0, 0.2]
+}
+fn block_v0() -> [f64; 3] {
+    [0.0, 0.0, 0.2]
+}
+
+impl ExampleSpec {
+    /// The built-in example of that name with the paper's parameters:
+    /// `bouncing-ball`, `oscillator` or `rocking-block`.
+    pub fn named(name: &str) -> Result<Self, Error> {
+        let toml = format!("kind = \"{name}\"");
+        toml::from_str(&toml).map_err(|_| {
+            Error::invalid(
+                "example",
+                name,
+                "unknown example; the examples are bouncing-ball, oscillator, rocking-block",
+            )
+        })
+    }
+
+    /// The closed form of the ball or the oscillator (none for the block).
+    pub fn closed_form(&self) -> Option<crate::study::Example> {
+        match *self {
+            ExampleSpec::BouncingBall {
+                force,
+                mass,
+                restitution,
+                q0,
+                v0,
+            } => Some(crate::study::Example::Ball(BouncingBall {
+                q0,
+                v0,
+                force,
+                mass,
+                restitution,
+            })),
+            ExampleSpec::Oscillator {
+                mass,
+                damping,
+                stiffness,
+                force,
+                restitution,
+                q0,
+                v0,
+            } => Some(crate::study::Example::Oscillator(Oscillator {
+                mass,
+                damping,
+                stiffness,
+                force,
+                restitution,
+                q0,
+                v0,
+            })),
+            ExampleSpec::RockingBlock { .. } => None,
+        }
+    }
+
+    /// The model: system, contacts and initial state (no field geometry: the examples
+    /// write their history, summary and plots).
+    pub fn build(&self) -> Result<Model, Error> {
+        let prefix = |e: Error| match e {
+            Error::InvalidParameter {
+                field,
+                value,
+                reason,
+            } => Error::InvalidParameter {
+                field: format!("example.{field}"),
+                value,
+                reason,
+            },
+            e => e,
+        };
+        let build = || -> Result<Model, Error> {
+            Ok(match *self {
+                ExampleSpec::BouncingBall {
+                    force,
+                    mass,
+                    restitution,
+                    q0,
+                    v0,
+                } => {
+                    crate::error::require_in("q0", q0, 0.0, f64::MAX)?;
+                    Model {
+                        system: point_mass(1, mass, &[force])?,
+                        contacts: Box::new(NodesOnPlane::new(
+                            vec![vec![0]],
+                            vec![vec![0.0]],
+                            vec![1.0],
+                            0.0,
+                            restitution,
+                        )?),
+                        q0: vec![q0],
+                        v0: vec![v0],
+                        geometry: Geometry::default(),
+                    }
+                }
+                ExampleSpec::Oscillator {
+                    mass,
+                    damping,
+                    stiffness,
+                    force,
+                    restitution,
+                    q0,
+                    v0,
+                } => {
+                    crate::error::require_in("q0", q0, 0.0, f64::MAX)?;
+                    Model {
+                        system: oscillator(mass, damping, stiffness, force)?,
+                        contacts: Box::new(NodesOnPlane::new(
+                            vec![vec![0]],
+                            vec![vec![0.0]],
+                            vec![1.0],
+                            0.0,
+                            restitution,
+                        )?),
+                        q0: vec![q0],
+                        v0: vec![v0],
+                        geometry: Geometry::default(),
+                    }
+                }
+                ExampleSpec::RockingBlock {
+                    length,
+                    thickness,
+                    mass,
+                    restitution,
+                    gravity,
+                    q0,
+                    v0,
+                } => Model {
+                    system: rigid_block(mass, length, thickness, gravity)?,
+                    contacts: Box::new(BlockCorners::new(length, thickness, restitution)?),
+                    q0: q0.to_vec(),
+                    v0: v0.to_vec(),
+                    geometry: Geometry::default(),
+                },
+            })
+        };
+        build().map_err(prefix)
+    }
+}
+
+/// The built-in example scene `name` (`bouncing-ball`, `oscillator`, `rocking-block`):
+/// the same as `meshes/<name>.toml` (Algorithm 2, the paper's parameters; h = 1e-3 s to
+/// T = 5 s, 1e-3 s to 3 s, and 1e-2 s to 2 s).
+pub fn builtin_scene(name: &str) -> Result<crate::scene::file::Scene, Error> {
+    let spec = ExampleSpec::named(name)?;
+    let (dt, t_end) = match spec {
+        ExampleSpec::BouncingBall { .. } => (1e-3, 5.0),
+        ExampleSpec::Oscillator { .. } => (1e-3, 3.0),
+        ExampleSpec::RockingBlock { .. } => (1e-2, 2.0),
+    };
+    crate::scene::file::Scene::from_toml(&format!(
+        "[example]\nkind = \"{name}\"\n[time]\ndt = {dt:e}\nt_end = {t_end:e}\n"
+    ))
+}
