@@ -190,22 +190,7 @@ impl ExampleSpec {
                     restitution,
                     q0,
                     v0,
-                } => {
-                    crate::error::require_in("q0", q0, 0.0, f64::MAX)?;
-                    Model {
-                        system: point_mass(1, mass, &[force])?,
-                        contacts: Box::new(NodesOnPlane::new(
-                            vec![vec![0]],
-                            vec![vec![0.0]],
-                            vec![1.0],
-                            0.0,
-                            restitution,
-                        )?),
-                        q0: vec![q0],
-                        v0: vec![v0],
-                        geometry: Geometry::default(),
-                    }
-                }
+                } => on_the_line(point_mass(1, mass, &[force])?, q0, v0, restitution)?,
                 ExampleSpec::Oscillator {
                     mass,
                     damping,
@@ -214,22 +199,12 @@ impl ExampleSpec {
                     restitution,
                     q0,
                     v0,
-                } => {
-                    crate::error::require_in("q0", q0, 0.0, f64::MAX)?;
-                    Model {
-                        system: oscillator(mass, damping, stiffness, force)?,
-                        contacts: Box::new(NodesOnPlane::new(
-                            vec![vec![0]],
-                            vec![vec![0.0]],
-                            vec![1.0],
-                            0.0,
-                            restitution,
-                        )?),
-                        q0: vec![q0],
-                        v0: vec![v0],
-                        geometry: Geometry::default(),
-                    }
-                }
+                } => on_the_line(
+                    oscillator(mass, damping, stiffness, force)?,
+                    q0,
+                    v0,
+                    restitution,
+                )?,
                 ExampleSpec::RockingBlock {
                     length,
                     thickness,
@@ -249,6 +224,24 @@ impl ExampleSpec {
         };
         build().map_err(prefix)
     }
+}
+
+/// A one-dof system whose coordinate `q` is the gap to the line `q = 0`.
+fn on_the_line(
+    system: crate::model::LinearSystem,
+    q0: f64,
+    v0: f64,
+    restitution: f64,
+) -> Result<Model, Error> {
+    crate::error::require_in("q0", q0, 0.0, f64::MAX)?;
+    let contact = NodesOnPlane::new(vec![vec![0]], vec![vec![0.0]], vec![1.0], 0.0, restitution)?;
+    Ok(Model {
+        system,
+        contacts: Box::new(contact),
+        q0: vec![q0],
+        v0: vec![v0],
+        geometry: Geometry::default(),
+    })
 }
 
 /// The built-in example scene `name` (`bouncing-ball`, `oscillator`, `rocking-block`):
