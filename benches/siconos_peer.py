@@ -63,7 +63,7 @@ def siconos_run(scheme):
 
 def signorini_run(exe, args, out):
     subprocess.run([exe, "bar", "--elements", str(N), "--dt", str(H), "--t-end", str(T),
-                    "--quiet", "--out", out] + args, check=True)
+                    "--quiet", "--no-fields", "--no-plots", "--out", out] + args, check=True)
     with open(os.path.join(out, "history.csv")) as f:
         r = list(csv.DictReader(f))
     with open(os.path.join(out, "summary.json")) as f:
