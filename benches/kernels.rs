@@ -1,10 +1,10 @@
 //! The kernels of one bar step, timed alone: the sparse Cholesky solve with `M̂`, the
-//! stiffness product `K x`, and the free-velocity computation that combines them.
+//! stiffness product `K x`, the energy's quadratic form `xᵀ K x`, and the free-velocity computation that combines them.
 //! Run: `cargo bench --bench kernels`.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use signorini::assembly::linear_combination;
-use signorini::linalg::{SpdFactor, sym_spmv_add};
+use signorini::linalg::{SpdFactor, quadratic_form, sym_spmv_add};
 use signorini::scene::bar::BarScene;
 
 fn kernels(c: &mut Criterion) {
@@ -23,6 +23,9 @@ fn kernels(c: &mut Criterion) {
         g.throughput(Throughput::Elements(n as u64 + 1));
         g.bench_function(BenchmarkId::new("cholesky_solve", n), |b| {
             b.iter(|| f.solve_in_place(std::hint::black_box(&mut x)))
+        });
+        g.bench_function(BenchmarkId::new("energy_quadratic_form", n), |b| {
+            b.iter(|| quadratic_form(sys.stiffness.as_ref(), std::hint::black_box(&x)))
         });
         g.bench_function(BenchmarkId::new("stiffness_spmv", n), |b| {
             b.iter(|| {

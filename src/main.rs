@@ -499,13 +499,19 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
     println!("scheme              {}", s.scheme);
     println!("path                {}", s.path);
     println!(
-        "steps               {} in {:.3} s ({:.3} µs/step, {:.2} ns/dof/step; output {:.0} %)",
+        "steps               {} in {:.3} s ({:.3} µs/step, {:.2} ns/dof/step; output {:.0} % of it)",
         s.steps,
         s.wall_seconds,
         1e6 * s.seconds_per_step,
         1e9 * s.seconds_per_step / s.dofs as f64,
         100.0 * s.output_seconds / s.wall_seconds.max(1e-12)
     );
+    if s.frames > 0 {
+        println!(
+            "frames              {} written in {:.3} s on the writer thread, alongside the steps (the loop waited {:.3} s for it)",
+            s.frames, s.frame_seconds, s.frame_wait_seconds
+        );
+    }
     println!("max violation       {:.3e} m", s.max_violation);
     println!(
         "iterations          newton {:.3}/{}  projection {:.3}/{}  index-set {:.3}/{}  lcp {:.3}/{} (mean/max); caps hit {}",

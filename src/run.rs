@@ -12,9 +12,13 @@ use serde::Serialize;
 use crate::analytic::ImpactingBar;
 use crate::error::Error;
 use crate::integrators::{Forecast, Integrator, StepStats};
-use crate::io::frames::{FrameWriter, Geometry};
+use crate::io::frames::{FrameStream, FrameWriter, Geometry};
 use crate::io::{HistoryWriter, OutputOptions, write_atomic};
 use crate::scene::bar::BarScene;
+
+/// Snapshots in flight between the run and the frame writer thread: two lets the
+/// writer encode one frame while the run fills the next.
+const FRAME_POOL: usize = 2;
 
 /// Receives progress; the CLI prints it, the library stays silent.
 pub trait Progress {
@@ -99,9 +103,16 @@ pub struct Summary {
     pub wall_seconds: f64,
     /// `wall_seconds / steps`.
     pub seconds_per_step: f64,
-    /// Seconds spent on output: history rows (with their energies) and field frames
-    /// (included in `wall_seconds`, except the first frame, written before the loop).
+    /// Seconds the step loop spent on output (included in `wall_seconds`): history rows
+    /// with their energies, copying states for the frame writer, waiting for it when
+    /// its snapshots were all in flight, and waiting at the end for the last frames.
     pub output_seconds: f64,
+    /// Seconds the background frame writer spent computing, encoding and writing
+    /// frames (overlapped with the steps; not part of `output_seconds`).
+    pub frame_seconds: f64,
+    /// Part of `output_seconds` spent waiting for a free snapshot (the writer fell
+    /// behind: raise `stride` to write fewer frames).
+    pub frame_wait_seconds: f64,
     /// Field frames written (`fields.pvd`).
     pub frames: usize,
     /// Largest penetration over the run (m, ≥ 0).
@@ -303,8 +314,9 @@ pub fn run(
                     Some(f) => w.with_hdf5(f)?,
                     None => w,
                 };
-                let mut w = w;
-                w.write(integ.state(), integ.jacobian(), h)?;
+                let s = integ.state();
+                let mut w = FrameStream::spawn(w, s.q.len(), m, FRAME_POOL);
+                w.push(s, integ.jacobian(), h)?;
                 Some(w)
             } else {
                 None
@@ -356,7 +368,7 @@ pub fn run(
                 if let Some(hw) = history.as_mut() {
                     hw.flush()?;
                 }
-                w.write(s, integ.jacobian(), h)?;
+                w.push(s, integ.jacobian(), h)?;
             }
             output_seconds += t0.elapsed().as_secs_f64();
         }
@@ -364,11 +376,19 @@ pub fn run(
             progress.update(k + 1, steps);
         }
     }
+    let t_fin = Instant::now();
     if let Some(w) = history {
-        let t0 = Instant::now();
         w.finish()?;
-        output_seconds += t0.elapsed().as_secs_f64();
     }
+    let (frame_count, frame_seconds, frame_wait) = match frames {
+        Some(f) => {
+            let wait = f.waited_seconds();
+            let w = f.finish()?;
+            (w.frames().len(), w.busy_seconds(), wait)
+        }
+        None => (0, 0.0, 0.0),
+    };
+    output_seconds += t_fin.elapsed().as_secs_f64();
     let wall = start.elapsed().as_secs_f64();
     let s = integ.state();
     let sys = integ.system();
@@ -385,7 +405,9 @@ pub fn run(
         wall_seconds: wall,
         seconds_per_step: wall / steps.max(1) as f64,
         output_seconds,
-        frames: frames.as_ref().map_or(0, |f| f.frames().len()),
+        frames: frame_count,
+        frame_seconds,
+        frame_wait_seconds: frame_wait,
         max_violation: acc.violation,
         contact,
         iterations: acc.iterations(steps),

@@ -7,7 +7,7 @@ mod common;
 
 use common::{read_frame, read_pvd};
 use signorini::io::OutputOptions;
-use signorini::io::frames::Encoding;
+use signorini::io::frames::{Encoding, FrameStream, FrameWriter};
 use signorini::run::{Output, Quiet, run_bar, run_scene};
 use signorini::scene::bar::BarScene;
 use signorini::scene::file::Scene;
@@ -251,5 +251,109 @@ fn killed_run_leaves_a_valid_collection() {
         complete >= last_step,
         "{complete} rows, last frame at step {last_step}"
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Frames written on the background thread ([`FrameStream`]) are byte for byte the
+/// frames the writer produces when called directly, in the same order, with the same
+/// `.pvd`; and when the writer thread cannot write (its directory vanished), the run
+/// gets an error naming the file instead of a panic or a silent loss.
+#[test]
+fn streamed_frames_equal_direct_frames_and_write_errors_surface() {
+    let scene = BarScene {
+        elements: 50,
+        dt: 2e-6,
+        t_end: 4e-5,
+        gap: 1e-8,
+        ..BarScene::default()
+    };
+    let mut model = scene.build().unwrap();
+    let geom = std::mem::take(&mut model.geometry);
+    let mut integ = model.into_integrator(&scene.scheme, scene.dt).unwrap();
+    let (n, m, h) = (integ.state().q.len(), integ.state().gap.len(), scene.dt);
+    let (d1, d2) = (tmp("direct"), tmp("stream"));
+    let jac = integ.jacobian().clone();
+    let create =
+        |d: &PathBuf| FrameWriter::create(d, "fields", geom.clone(), &jac, Encoding::Zlib).unwrap();
+    let mut direct = create(&d1);
+    let mut stream = FrameStream::spawn(create(&d2), n, m, 2);
+    for _ in 0..scene.steps() {
+        integ.step().unwrap();
+        direct.write(integ.state(), integ.jacobian(), h).unwrap();
+        stream.push(integ.state(), integ.jacobian(), h).unwrap();
+    }
+    let streamed = stream.finish().unwrap();
+    assert_eq!(streamed.frames(), direct.frames());
+    assert_eq!(direct.frames().len(), scene.steps());
+    // the bar is on the wall from the first step on (gap 1e-8 m, contact lasts
+    // 3.85e-4 s): the frames carry a contact force
+    assert!(integ.state().impulse[0] > 0.0);
+    for (_, f) in direct.frames() {
+        let a = std::fs::read(d1.join(f)).unwrap();
+        let b = std::fs::read(d2.join(f)).unwrap();
+        assert!(a == b, "{f} differs");
+    }
+    assert_eq!(
+        std::fs::read(d1.join("fields.pvd")).unwrap(),
+        std::fs::read(d2.join("fields.pvd")).unwrap()
+    );
+
+    let d3 = tmp("vanished");
+    let mut stream = FrameStream::spawn(create(&d3), n, m, 1);
+    std::fs::remove_dir_all(&d3).unwrap();
+    let mut err = None;
+    for _ in 0..3 {
+        if let Err(e) = stream.push(integ.state(), integ.jacobian(), h) {
+            err = Some(e);
+            break;
+        }
+    }
+    let err = match err {
+        Some(e) => e,
+        None => stream
+            .finish()
+            .err()
+            .expect("writing into a removed directory fails"),
+    };
+    let msg = err.to_string();
+    assert!(msg.contains("frame_000000.vtu"), "{msg}");
+    for d in [d1, d2] {
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+}
+
+/// A second, shorter run into the same directory leaves only its own frames: the
+/// first run's extra `frame_*.vtu` are removed when the writer starts.
+#[test]
+fn rerun_into_the_same_directory_leaves_no_stale_frames() {
+    let dir = tmp("rerun");
+    for (t_end, stride) in [(4e-4, 10), (1e-4, 50)] {
+        let scene = BarScene {
+            elements: 20,
+            dt: 1e-6,
+            t_end,
+            ..BarScene::default()
+        };
+        let options = OutputOptions {
+            stride,
+            plots: false,
+            ..OutputOptions::default()
+        };
+        let o = Output {
+            dir: &dir,
+            options: &options,
+        };
+        run_bar(&scene, Some(o), &mut Quiet).unwrap();
+    }
+    let listed: std::collections::BTreeSet<String> = read_pvd(&dir.join("fields.pvd"))
+        .into_iter()
+        .map(|(_, f)| f)
+        .collect();
+    let on_disk: std::collections::BTreeSet<String> = std::fs::read_dir(dir.join("fields"))
+        .unwrap()
+        .map(|e| format!("fields/{}", e.unwrap().file_name().to_string_lossy()))
+        .collect();
+    assert_eq!(listed, on_disk);
+    assert!(listed.len() < 10, "{}", listed.len());
     std::fs::remove_dir_all(&dir).unwrap();
 }
