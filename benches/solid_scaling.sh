@@ -6,6 +6,8 @@
 # assembly), integrator build (AMD + supernodal Cholesky of M̂), mean seconds per step
 # (the first step includes computing the 81 Delassus columns), and peak memory.
 # Usage: bash benches/solid_scaling.sh [n ...]   (from the repository root)
+# With STRIDE=k in the environment the runs also write a field frame every k steps
+# (on the background writer thread) and print the frame columns of summary.json.
 set -euo pipefail
 cargo build --release -q
 dir=target/solid-scaling
@@ -37,7 +39,7 @@ body = "bar"
 nodes = "x0"
 obstacle = "wall"
 [output]
-fields = false
+$( [ -n "${STRIDE:-}" ] && echo "stride = $STRIDE" || echo "fields = false" )
 TOML
   for t in 1 2; do
     out="$dir/out$n-$t"
@@ -49,7 +51,10 @@ out, t = sys.argv[1], sys.argv[2]
 s = json.load(open(out + "/summary.json"))
 rss = int(open(out + ".rss").read().split()[-1]) / 1e6
 print(f"| {s['elements']} | {s['dofs']} | {t} | {s['model_seconds']:.2f} | {s['integrator_seconds']:.2f} "
-      f"| {s['steps']} | {s['seconds_per_step']:.4f} | {rss:.2f} |")
+      f"| {s['steps']} | {s['seconds_per_step']:.4f} | {rss:.2f} |"
+      + (f" frames {s['frames']}: writer {s['frame_seconds']:.3f} s, loop waited "
+         f"{s['frame_wait_seconds']:.3f} s, loop output share "
+         f"{100 * s['output_seconds'] / s['wall_seconds']:.0f} %" if s['frames'] else ""))
 PY
   done
 done
