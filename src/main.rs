@@ -2,6 +2,23 @@
 //! all the work is in the library.
 
 use std::io::IsTerminal;
+
+/// `println!` that ignores write errors: a closed pipe (`signorini check S | head -1`)
+/// must neither panic nor stop a run whose files are still being written.
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
+/// `eprintln!` that ignores write errors (see [`out!`]).
+macro_rules! err {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($t)*);
+    }};
+}
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -353,7 +370,7 @@ impl Progress for CliProgress {
                 let decile = (frac * 10.0).floor() as usize;
                 if decile > *last_decile || step == total {
                     *last_decile = decile;
-                    eprintln!(
+                    err!(
                         "  step {step}/{total} ({:.0} %), {rate:.0} steps/s, ETA {eta:.1} s",
                         100.0 * frac
                     );
@@ -367,7 +384,7 @@ fn run_bar(args: &BarArgs) -> Result<(), signorini::Error> {
     let scene = args.scene();
     scene.validate()?;
     if !args.quiet {
-        eprintln!(
+        err!(
             "signorini bar: {} elements, h = {:e} s, T = {:e} s, {} steps, scheme {}, θ = {}",
             scene.elements,
             scene.dt,
@@ -423,7 +440,7 @@ fn run_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     let scene = Scene::from_file(&args.scene)?;
     let out = scene_out(args, &scene);
     if !args.quiet {
-        eprintln!(
+        err!(
             "signorini run {}: {} steps of {:e} s, scheme {}",
             args.scene.display(),
             scene.steps(),
@@ -462,8 +479,8 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     let scene = Scene::from_file(&args.scene)?;
     let (model, report) = scene.build()?;
     let integ = model.into_integrator(&scene.scheme, scene.time.dt)?;
-    println!("scene               {} (valid)", args.scene.display());
-    println!(
+    out!("scene               {} (valid)", args.scene.display());
+    out!(
         "model               {} bodies, {} cells, {} dofs ({} fixed dofs removed), {} candidate contacts",
         scene.bodies.len(),
         report.cells,
@@ -471,19 +488,19 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
         report.fixed_dofs,
         report.contacts
     );
-    println!(
+    out!(
         "physics             damping {}, gravity {}, friction none (no friction law in the scene: no friction solver)",
         if report.damping { "Rayleigh" } else { "none" },
         if report.gravity { "yes" } else { "none" }
     );
-    println!(
+    out!(
         "time                {} steps of {:e} s, scheme {}, θ = {}",
         scene.steps(),
         scene.time.dt,
         scene.scheme.kind.name(),
         scene.scheme.theta
     );
-    println!(
+    out!(
         "newton              {}",
         if report.linear_contacts {
             "not needed for the dynamics (linear structure, constant G): factor once, never refactor"
@@ -491,14 +508,14 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
             "needed: curved obstacle, G(q) re-linearized every iteration (M̂ still factored once)"
         }
     );
-    println!("path                {}", integ.path());
+    out!("path                {}", integ.path());
     Ok(())
 }
 
 fn print_summary(s: &run::Summary, out: &std::path::Path) {
-    println!("scheme              {}", s.scheme);
-    println!("path                {}", s.path);
-    println!(
+    out!("scheme              {}", s.scheme);
+    out!("path                {}", s.path);
+    out!(
         "steps               {} in {:.3} s ({:.3} µs/step, {:.2} ns/dof/step; output {:.0} % of it)",
         s.steps,
         s.wall_seconds,
@@ -507,13 +524,15 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
         100.0 * s.output_seconds / s.wall_seconds.max(1e-12)
     );
     if s.frames > 0 {
-        println!(
+        out!(
             "frames              {} written in {:.3} s on the writer thread, alongside the steps (the loop waited {:.3} s for it)",
-            s.frames, s.frame_seconds, s.frame_wait_seconds
+            s.frames,
+            s.frame_seconds,
+            s.frame_wait_seconds
         );
     }
-    println!("max violation       {:.3e} m", s.max_violation);
-    println!(
+    out!("max violation       {:.3e} m", s.max_violation);
+    out!(
         "iterations          newton {:.3}/{}  projection {:.3}/{}  index-set {:.3}/{}  lcp {:.3}/{} (mean/max); caps hit {}",
         s.iterations.newton.mean,
         s.iterations.newton.max,
@@ -527,27 +546,27 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
     );
     if let Some(c) = &s.contact {
         let rel = |a: f64, b: f64| 100.0 * (a / b - 1.0);
-        println!("                    measured        analytic        difference");
-        println!(
+        out!("                    measured        analytic        difference");
+        out!(
             "contact force       {:<12.3} N  {:<12.3} N  {:+.3} % (plateau std {:.2} N)",
             c.plateau_force,
             c.analytic_force,
             rel(c.plateau_force, c.analytic_force),
             c.plateau_std
         );
-        println!(
+        out!(
             "contact duration    {:<12.4e} s  {:<12.4e} s  {:+.3} %",
             c.duration,
             c.analytic_duration,
             rel(c.duration, c.analytic_duration)
         );
-        println!(
+        out!(
             "release velocity    {:<12.5} m/s {:<12.5} m/s {:+.3} %",
             c.release_velocity,
             c.analytic_release_velocity,
             rel(c.release_velocity, c.analytic_release_velocity)
         );
-        println!(
+        out!(
             "total impulse       {:<12.5e} Ns {:<12.5e} Ns {:+.3} %",
             c.total_impulse,
             c.analytic_total_impulse,
@@ -562,7 +581,7 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
     if out.join("contact_force.png").exists() {
         frames.push_str(", plots (contact_force, energy, violation .png/.svg)");
     }
-    println!(
+    out!(
         "wrote               {}/summary.json, {}/history.csv{frames}",
         out.display(),
         out.display()
@@ -580,9 +599,9 @@ fn main() -> ExitCode {
             let dir = out.unwrap_or_else(|| PathBuf::from(format!("out/study-{name}")));
             signorini::study::run(&name, &dir).map(|v| {
                 for line in v {
-                    println!("{line}");
+                    out!("{line}");
                 }
-                println!(
+                out!(
                     "wrote {}/{name}.csv, .png, .svg, verdict.txt",
                     dir.display()
                 );
@@ -590,7 +609,7 @@ fn main() -> ExitCode {
         }
         Some(Command::Plot { dir }) => signorini::plot::plot_run(&dir).map(|files| {
             for f in files {
-                println!("wrote {}", f.display());
+                out!("wrote {}", f.display());
             }
         }),
         None => run_bar(&cli.bar),
@@ -598,7 +617,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            err!("error: {e}");
             ExitCode::from(2)
         }
     }
