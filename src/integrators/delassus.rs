@@ -20,13 +20,17 @@
 //!   pool is allocated at construction; when it is full, the column of the contact
 //!   inactive for longest is recomputed on demand, so the step loop never allocates.
 //!
-//! The `Auto` choice takes the dense path while the dense blocks stay under 256 MiB and
+//! The `Auto` choice takes the dense path while the dense blocks stay under 2 GiB and
 //! either `G` is constant (the blocks are formed once, by blocked solves) or there are
 //! at most [`AUTO_DENSE_MAX_CONTACTS`] contacts (a nonlinear `G` re-forms every block at
 //! every linearization); the per-active-column path otherwise. Measured
 //! (`cargo bench --bench solid`, hex8 box pressed on a plane, every contact active):
 //! 10k dofs and 225 contacts, dense 9.7 ms against columns 30.9 ms per step; 98k dofs
 //! and 1024 contacts, dense 1.94 s (805 MB of blocks) against columns 2.23 s.
+//! On the 9.7e5-dof slender hex bar with 81 contacts (`benches/solid_scaling.sh 4000`)
+//! the dense blocks take 1.26 GB and the step 0.54 s, against 5.0 s on the columns path
+//! (each of its corrections is a solve with the 9.7e5-dof factor): the budget is set
+//! to 2 GiB, the same as the column pool's, a twelfth of these machines' memory.
 //! Both give the same iterates (tested to round-off in `tests/regression_delassus_paths.rs`).
 
 use serde::{Deserialize, Serialize};
@@ -40,7 +44,7 @@ use crate::solvers::SolveError;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum DelassusKind {
-    /// Dense while the blocks fit in 256 MiB and `G` is constant (or the contacts are
+    /// Dense while the blocks fit in 2 GiB and `G` is constant (or the contacts are
     /// at most [`AUTO_DENSE_MAX_CONTACTS`]); per-active-column otherwise (default).
     #[default]
     Auto,
@@ -65,7 +69,7 @@ impl DelassusKind {
 /// changes with `q`.
 pub const AUTO_DENSE_MAX_CONTACTS: usize = 64;
 /// Largest dense `n × m` storage [`DelassusKind::Auto`] accepts (bytes).
-const AUTO_DENSE_MAX_BYTES: usize = 256 << 20;
+const AUTO_DENSE_MAX_BYTES: usize = 2 << 30;
 /// Memory budget of the per-active-column pool (bytes): columns of `m` values each.
 const COLUMN_POOL_BYTES: usize = 2 << 30;
 const NONE: usize = usize::MAX;

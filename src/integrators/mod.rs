@@ -244,7 +244,7 @@ pub struct SchemeParams {
     pub lcp: LcpKind,
     /// Newton loop controls.
     pub newton: NewtonParams,
-    /// Delassus storage (default `auto`: dense while the blocks fit in 256 MiB and `G`
+    /// Delassus storage (default `auto`: dense while the blocks fit in 2 GiB and `G`
     /// is constant, per-active-column otherwise; see [`delassus`]).
     pub delassus: delassus::DelassusKind,
     /// Columns the per-active-column Delassus pool holds (0, default: as many as fit
