@@ -71,8 +71,9 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
-    /// Run one of the paper's studies on its academic examples (convergence,
-    /// projection-multiplier, chattering, energy): CSV, plot and verdict lines.
+    /// Run a study: the paper's, on its academic examples (convergence,
+    /// projection-multiplier, chattering, energy), or the impacting bar's
+    /// (speed-accuracy, extremes). Writes CSV, plots and verdict lines.
     Study {
         /// The study.
         name: String,
@@ -601,10 +602,15 @@ fn main() -> ExitCode {
                 for line in v {
                     out!("{line}");
                 }
-                out!(
-                    "wrote {}/{name}.csv, .png, .svg, verdict.txt",
-                    dir.display()
-                );
+                let mut files: Vec<String> = std::fs::read_dir(&dir)
+                    .map(|d| {
+                        d.filter_map(|e| e.ok())
+                            .map(|e| e.file_name().to_string_lossy().into_owned())
+                            .collect()
+                    })
+                    .unwrap_or_default();
+                files.sort();
+                out!("wrote {}/ {{{}}}", dir.display(), files.join(", "));
             })
         }
         Some(Command::Plot { dir }) => signorini::plot::plot_run(&dir).map(|files| {

@@ -22,6 +22,12 @@
 //! projection-multiplier and energy studies.
 //!
 //! `energy` uses the ball.
+//!
+//! The impacting bar has its own studies in [`bar`]: `speed-accuracy` (error against
+//! cost for every scheme, size and Courant number) and `extremes` (stability at the
+//! brief's extremes, 10⁶ elements included).
+
+pub mod bar;
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -37,11 +43,13 @@ use crate::model::point_mass::{oscillator, point_mass, rigid_block};
 use crate::plot::{Curve, lines};
 
 /// The studies `signorini study` knows.
-pub const NAMES: [&str; 4] = [
+pub const NAMES: [&str; 6] = [
     "convergence",
     "projection-multiplier",
     "chattering",
     "energy",
+    "speed-accuracy",
+    "extremes",
 ];
 
 /// A run of the ball: per step the time at the end of the step, height, velocity,
@@ -625,6 +633,8 @@ pub fn run(name: &str, dir: &Path) -> Result<Vec<String>, Error> {
         "projection-multiplier" => projection_multiplier(dir)?,
         "chattering" => chattering(dir)?,
         "energy" => energy(dir)?,
+        "speed-accuracy" => bar::speed_accuracy(dir)?,
+        "extremes" => bar::extremes(dir)?,
         other => {
             return Err(Error::invalid(
                 "study",
