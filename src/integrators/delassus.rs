@@ -257,19 +257,27 @@ impl Delassus {
         if !self.with_d {
             return;
         }
-        for b in 0..m {
-            match self.metric {
-                Metric::Euclidean => {
-                    self.t1.iter_mut().for_each(|x| *x = 0.0);
-                    self.jac.axpy(b, 1.0, &mut self.t1);
+        // K N G column by column: K (Â⁻¹G_b) for the mass metric, K G_b (a combination
+        // of the few columns of K that G_b touches) for the Euclidean one. Sequential:
+        // the products are bound by memory bandwidth, and on two threads the 98k-dof
+        // cube's 1024 columns took 8.7 s against 6.1 s on one.
+        let (cg, jac, metric) = (&self.cg, &self.jac, self.metric);
+        let k = stiffness.as_ref();
+        let column = |b: usize, d: &mut [f64]| match metric {
+            Metric::Euclidean => {
+                d.iter_mut().for_each(|x| *x = 0.0);
+                let (dofs, vals) = jac.col(b);
+                for (&j, &g) in dofs.iter().zip(vals) {
+                    let r = k.col_ptr()[j]..k.col_ptr()[j + 1];
+                    for (&i, &v) in k.row_idx()[r.clone()].iter().zip(&k.val()[r]) {
+                        d[i] += v * g;
+                    }
                 }
-                Metric::Mass => self.t1.copy_from_slice(&self.cg[b * n..(b + 1) * n]),
             }
-            spmv(
-                stiffness.as_ref(),
-                &self.t1,
-                &mut self.d[b * n..(b + 1) * n],
-            );
+            Metric::Mass => spmv(k, &cg[b * n..(b + 1) * n], d),
+        };
+        for (b, d) in self.d.chunks_mut(n).enumerate() {
+            column(b, d);
         }
         self.factor.solve_block_in_place(&mut self.d, m);
         self.column_solves += m;
