@@ -165,6 +165,7 @@ pub struct BlockPivoting {
     active: Vec<bool>,
     idx: Vec<usize>,
     l: Vec<f64>,
+    chol: crate::linalg::DenseCholesky,
     rhs: Vec<f64>,
     /// Rounds before falling back to Lemke.
     pub max_rounds: usize,
@@ -178,6 +179,7 @@ impl BlockPivoting {
             active: vec![false; capacity],
             idx: Vec::with_capacity(capacity),
             l: vec![0.0; capacity * capacity],
+            chol: crate::linalg::DenseCholesky::with_capacity(capacity),
             rhs: vec![0.0; capacity],
             max_rounds: 20,
         }
@@ -205,10 +207,10 @@ impl BlockPivoting {
                 }
                 self.rhs[b] = -q[j];
             }
-            if !crate::linalg::DenseCholesky::factor(&mut self.l, na, na) {
+            if !self.chol.factor(&mut self.l, na, na) {
                 break; // not SPD on this block: let Lemke decide
             }
-            crate::linalg::DenseCholesky::solve(&self.l, na, na, &mut self.rhs[..na]);
+            self.chol.solve(&self.l, na, na, &mut self.rhs[..na], 1);
             z[..k].iter_mut().for_each(|x| *x = 0.0);
             for (a, &i) in self.idx.iter().enumerate() {
                 z[i] = self.rhs[a];

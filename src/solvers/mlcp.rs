@@ -16,6 +16,7 @@ pub struct Mlcp {
     e_idx: Vec<usize>,
     i_idx: Vec<usize>,
     mee: Vec<f64>,
+    chol: DenseCholesky,
     x: Vec<f64>,
     s: Vec<f64>,
     y: Vec<f64>,
@@ -33,6 +34,7 @@ impl Mlcp {
             e_idx: Vec::with_capacity(c),
             i_idx: Vec::with_capacity(c),
             mee: vec![0.0; c * c],
+            chol: DenseCholesky::with_capacity(c),
             x: vec![0.0; c * c],
             s: vec![0.0; c * c],
             y: vec![0.0; c],
@@ -76,21 +78,22 @@ impl Mlcp {
                 self.mee[a + b * ne] = at(i, j);
             }
         }
-        if !DenseCholesky::factor(&mut self.mee, ne, ne) {
+        if !self.chol.factor(&mut self.mee, ne, ne) {
             return Err(SolveError::Singular);
         }
         // y = M_EE⁻¹ q_E ; X = M_EE⁻¹ M_EI (ne × ni)
         for (a, &i) in self.e_idx.iter().enumerate() {
             self.y[a] = q[i];
         }
-        DenseCholesky::solve(&self.mee, ne, ne, &mut self.y[..ne]);
+        self.chol.solve(&self.mee, ne, ne, &mut self.y[..ne], 1);
         for (b, &j) in self.i_idx.iter().enumerate() {
             let col = &mut self.x[b * ne..(b + 1) * ne];
             for (a, &i) in self.e_idx.iter().enumerate() {
                 col[a] = at(i, j);
             }
-            DenseCholesky::solve(&self.mee, ne, ne, col);
         }
+        self.chol
+            .solve(&self.mee, ne, ne, &mut self.x[..ne * ni], ni);
         // S = M_II − M_IE X ; q' = q_I − M_IE y
         for (b, &j) in self.i_idx.iter().enumerate() {
             for (a, &i) in self.i_idx.iter().enumerate() {
