@@ -352,6 +352,23 @@ enum CliProgress {
 }
 
 impl Progress for CliProgress {
+    fn phase(&mut self, what: &str) {
+        match self {
+            CliProgress::Bar(b) => b.suspend(|| err!("  {what}")),
+            CliProgress::Lines { .. } => err!("  {what}"),
+        }
+    }
+
+    fn start(&mut self, total: usize) {
+        match self {
+            CliProgress::Bar(b) => {
+                b.set_length(total as u64);
+                b.reset();
+            }
+            CliProgress::Lines { start, .. } => *start = std::time::Instant::now(),
+        }
+    }
+
     fn update(&mut self, step: usize, total: usize) {
         match self {
             CliProgress::Bar(b) => {

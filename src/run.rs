@@ -24,6 +24,21 @@ const FRAME_POOL: usize = 2;
 pub trait Progress {
     /// Called after `step` of `total` steps.
     fn update(&mut self, step: usize, total: usize);
+    /// Called when a set-up phase starts (building the model, factoring `M̂` and
+    /// condensing the Delassus data, which take tens of seconds on 10⁵–10⁶ dofs).
+    fn phase(&mut self, _what: &str) {}
+    /// Called once right before the first step, with the number of steps (rates and
+    /// ETAs count from here, not from the set-up).
+    fn start(&mut self, _total: usize) {}
+}
+
+/// Announces the integrator build of `model` (dofs and contacts) to `progress`.
+fn announce_integrator(model: &crate::scene::Model, progress: &mut dyn Progress) {
+    progress.phase(&format!(
+        "building the integrator: factoring M̂ ({} dofs) and the Delassus data of {} contact(s)",
+        model.q0.len(),
+        model.contacts.len()
+    ));
 }
 
 /// A progress sink that prints nothing.
@@ -201,8 +216,10 @@ pub fn run_bar(
     progress: &mut dyn Progress,
 ) -> Result<RunResult, Error> {
     let t0 = Instant::now();
+    progress.phase("building the model");
     let mut model = scene.build()?;
     let geometry = std::mem::take(&mut model.geometry);
+    announce_integrator(&model, progress);
     let t1 = Instant::now();
     let mut integ = model.into_integrator(&scene.scheme, scene.dt)?;
     let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
@@ -227,8 +244,10 @@ pub fn run_scene(
     progress: &mut dyn Progress,
 ) -> Result<RunResult, Error> {
     let t0 = Instant::now();
+    progress.phase("building the model (mesh, assembly, contacts)");
     let (mut model, report) = scene.build()?;
     let geometry = std::mem::take(&mut model.geometry);
+    announce_integrator(&model, progress);
     let t1 = Instant::now();
     let mut integ = model.into_integrator(&scene.scheme, scene.time.dt)?;
     let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
@@ -341,6 +360,7 @@ pub fn run(
     let mut closed_before = false;
     let start = Instant::now();
     let report_every = (steps / 1000).max(1);
+    progress.start(steps);
     for k in 0..steps {
         let st = integ.step()?;
         acc.add(&st);

@@ -25,8 +25,8 @@
 //! at most [`AUTO_DENSE_MAX_CONTACTS`] contacts (a nonlinear `G` re-forms every block at
 //! every linearization); the per-active-column path otherwise. Measured
 //! (`cargo bench --bench solid`, hex8 box pressed on a plane, every contact active):
-//! 10k dofs and 225 contacts, dense 9.7 ms against columns 30.9 ms per step; 98k dofs
-//! and 1024 contacts, dense 1.94 s (805 MB of blocks) against columns 2.23 s.
+//! 10k dofs and 225 contacts, dense 5.9 ms against columns 12.4 ms per step; 98k dofs
+//! and 1024 contacts, dense 338 ms (805 MB of blocks) against columns 411 ms.
 //! On the 9.7e5-dof slender hex bar with 81 contacts (`benches/solid_scaling.sh 4000`)
 //! the dense blocks take 1.26 GB and the step 0.54 s, against 5.0 s on the columns path
 //! (each of its corrections is a solve with the 9.7e5-dof factor): the budget is set
