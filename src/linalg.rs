@@ -65,6 +65,8 @@ enum Backend {
 }
 
 struct FaerLlt {
+    /// "AMD" or "nested dissection".
+    ordering: &'static str,
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
     mem: MemBuffer,
@@ -184,6 +186,18 @@ impl SpdFactor {
     /// Factors `a`, picking the backend (see the type doc). `what` names the matrix in
     /// error messages.
     pub fn new(a: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<Self, Error> {
+        Self::with_ordering(a, what, None)
+    }
+
+    /// Like [`SpdFactor::new`], with a candidate fill-reducing order of the unknowns
+    /// (position → unknown, e.g. [`crate::model::ordering::nested_dissection`]): both it
+    /// and AMD are analysed symbolically and the one whose factor has fewer entries is
+    /// kept ([`SpdFactor::backend_name`] says which).
+    pub fn with_ordering(
+        a: SparseColMatRef<'_, usize, f64>,
+        what: &str,
+        ordering: Option<&[usize]>,
+    ) -> Result<Self, Error> {
         if Tridiagonal::is_tridiagonal(a) {
             let t = Tridiagonal::factor(a)
                 .map_err(|i| not_spd(what, format!("pivot {i} of its LDLᵀ is not positive")))?;
@@ -192,11 +206,16 @@ impl SpdFactor {
                 backend: Backend::Tridiagonal(t),
             });
         }
-        Self::new_general(a, what)
+        Self::new_general(a, what, ordering)
     }
 
-    /// Factors `a` with faer's sparse Cholesky whatever its pattern.
-    pub fn new_general(a: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<Self, Error> {
+    /// Factors `a` with faer's sparse Cholesky whatever its pattern (AMD, or
+    /// `ordering` where it fills less).
+    pub fn new_general(
+        a: SparseColMatRef<'_, usize, f64>,
+        what: &str,
+        ordering: Option<&[usize]>,
+    ) -> Result<Self, Error> {
         let n = a.nrows();
         // AMD always: faer 0.24.4's `SymmetricOrdering::Identity` path factors the
         // wrong matrix with `Side::Lower` (a 3×3 tridiagonal [4, −1] gave x = [1.14,
@@ -208,6 +227,29 @@ impl SpdFactor {
             CholeskySymbolicParams::default(),
         )
         .map_err(|e| Error::Numerical(format!("{what}: symbolic Cholesky failed: {e:?}")))?;
+        let mut ordering_name = "AMD";
+        let mut symbolic = symbolic;
+        if let Some(fwd) = ordering.filter(|o| o.len() == n && n > 0) {
+            let mut inv = vec![usize::MAX; n];
+            for (i, &d) in fwd.iter().enumerate() {
+                if d < n {
+                    inv[d] = i;
+                }
+            }
+            if inv.iter().all(|&i| i != usize::MAX) {
+                let perm = faer::perm::PermRef::new_checked(fwd, &inv, n);
+                if let Ok(nd) = factorize_symbolic_cholesky(
+                    a.symbolic(),
+                    Side::Lower,
+                    SymmetricOrdering::Custom(perm),
+                    CholeskySymbolicParams::default(),
+                ) && nd.len_val() < symbolic.len_val()
+                {
+                    symbolic = nd;
+                    ordering_name = "nested dissection";
+                }
+            }
+        }
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::rayon(0), Default::default()),
@@ -217,6 +259,7 @@ impl SpdFactor {
         let mut this = SpdFactor {
             n,
             backend: Backend::Faer(Box::new(FaerLlt {
+                ordering: ordering_name,
                 symbolic,
                 values,
                 mem: MemBuffer::new(req),
@@ -229,13 +272,19 @@ impl SpdFactor {
     }
 
     /// Which backend factored the matrix, for summaries.
-    pub fn backend_name(&self) -> &'static str {
+    pub fn backend_name(&self) -> String {
         match &self.backend {
-            Backend::Tridiagonal(_) => "tridiagonal LDLᵀ",
-            Backend::Faer(f) => match f.simplicial {
-                Some(_) => "faer simplicial LLᵀ, AMD",
-                None => "faer supernodal LLᵀ, AMD",
-            },
+            Backend::Tridiagonal(_) => "tridiagonal LDLᵀ".to_string(),
+            Backend::Faer(f) => format!(
+                "faer {} LLᵀ, {}, nnz(L) = {}",
+                if f.simplicial.is_some() {
+                    "simplicial"
+                } else {
+                    "supernodal"
+                },
+                f.ordering,
+                f.symbolic.len_val()
+            ),
         }
     }
 
@@ -699,7 +748,7 @@ mod tests {
         let a = SparseMatrix::try_new_from_triplets(3, 3, &t).unwrap();
         for mut f in [
             SpdFactor::new(a.as_ref(), "3x3").unwrap(),
-            SpdFactor::new_general(a.as_ref(), "3x3").unwrap(),
+            SpdFactor::new_general(a.as_ref(), "3x3", None).unwrap(),
         ] {
             let mut b = vec![3.0, 2.0, 3.0];
             f.solve_in_place(&mut b);

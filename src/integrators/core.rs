@@ -170,7 +170,11 @@ pub(crate) fn factor_step_matrix(
     if let Some(c) = &sys.damping {
         terms.push((b, c));
     }
-    SpdFactor::new(linear_combination(&terms).as_ref(), what)
+    SpdFactor::with_ordering(
+        linear_combination(&terms).as_ref(),
+        what,
+        sys.ordering.as_deref(),
+    )
 }
 
 /// The [`Integrator`](super::Integrator) accessors of a scheme built on a `core:

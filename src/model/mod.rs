@@ -10,6 +10,7 @@
 //! Submodules build systems: [`rod`] (P1 rod elements, eq. 71) and [`point_mass`].
 
 pub mod generate;
+pub mod ordering;
 pub mod point_mass;
 pub mod rod;
 pub mod solid;
@@ -67,6 +68,10 @@ pub struct LinearSystem {
     pub dofs_per_node: usize,
     /// The displacement component (0 = x, 1 = y, 2 = z) of each dof.
     pub component: Vec<u8>,
+    /// A fill-reducing dof order (position → dof) for the Cholesky of `M̂`, from the
+    /// mesh geometry ([`ordering::nested_dissection`]); the factorization keeps it
+    /// only where it fills less than AMD. `None`: AMD alone.
+    pub ordering: Option<Vec<usize>>,
 }
 
 /// Adds the element mass `me` (dense, `dofs.len()` square) to `asm` as `kind` asks;
@@ -173,6 +178,7 @@ impl LinearSystem {
                 .iter()
                 .flat_map(|p| p.component.iter().copied())
                 .collect(),
+            ordering: None,
         })
     }
 
@@ -221,6 +227,7 @@ impl LinearSystem {
                 .filter(|&i| map[i].is_some())
                 .map(|i| self.component[i])
                 .collect(),
+            ordering: None,
         };
         (sys, map)
     }

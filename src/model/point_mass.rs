@@ -27,6 +27,7 @@ pub fn point_mass(dim: usize, mass: f64, force: &[f64]) -> Result<LinearSystem, 
         force: force.to_vec(),
         dofs_per_node: dim,
         component: super::interleaved_components(dim, dim),
+        ordering: None,
     })
 }
 
@@ -66,5 +67,6 @@ pub fn rigid_block(mass: f64, length: f64, thickness: f64, g: f64) -> Result<Lin
         force: vec![0.0, -mass * g, 0.0],
         dofs_per_node: 3,
         component: vec![0, 1, 2],
+        ordering: None,
     })
 }

@@ -93,6 +93,7 @@ impl Rod {
             force: vec![0.0; n],
             dofs_per_node: 1,
             component: super::interleaved_components(n, 1),
+            ordering: None,
         })
     }
 }

@@ -589,6 +589,7 @@ pub fn assemble_with_contacts(
         force: vec![0.0; n],
         dofs_per_node: dim,
         component: super::interleaved_components(n, dim),
+        ordering: None,
     })
 }
 

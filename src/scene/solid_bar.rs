@@ -140,6 +140,8 @@ impl SolidBarScene {
             dof_of: (0..n).map(Some).collect(),
             outlines: Vec::new(),
         };
+        let mut system = system;
+        system.ordering = Some(crate::model::ordering::nested_dissection(&geometry, n));
         Ok(Model {
             system,
             contacts: Box::new(contacts),
