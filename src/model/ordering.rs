@@ -66,11 +66,12 @@ pub fn nested_dissection(geom: &Geometry, ndof: usize) -> Vec<usize> {
     let mut perm = Vec::with_capacity(ndof);
     for p in order {
         for c in 0..geom.dim {
-            if let Some(Some(d)) = geom.dof_of.get(p * geom.dim + c) {
-                if *d < ndof && !seen[*d] {
-                    seen[*d] = true;
-                    perm.push(*d);
-                }
+            if let Some(&Some(d)) = geom.dof_of.get(p * geom.dim + c)
+                && d < ndof
+                && !seen[d]
+            {
+                seen[d] = true;
+                perm.push(d);
             }
         }
     }
