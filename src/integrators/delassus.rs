@@ -39,6 +39,7 @@ use super::Metric;
 use crate::contact::ContactJacobian;
 use crate::linalg::{SOLVE_BLOCK, SparseMatrix, SpdFactor, spmv};
 use crate::solvers::SolveError;
+use faer::sparse::SparseColMatRef;
 
 /// How the Delassus data are stored (DESIGN.md §4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -97,6 +98,8 @@ pub struct Delassus {
     dense: bool,
     with_d: bool,
     metric: Metric,
+    /// `G` constant: [`Delassus::refresh`] runs once, at construction.
+    linear: bool,
     // dense path: Â⁻¹G and Â⁻¹K N G (n × m), W_N (m × m)
     cg: Vec<f64>,
     d: Vec<f64>,
@@ -167,6 +170,7 @@ impl Delassus {
             dense,
             with_d,
             metric,
+            linear,
             cg: vec![0.0; nm],
             d: vec![0.0; if with_d { nm } else { 0 }],
             wn: vec![0.0; if dense && with_d { m * m } else { 0 }],
@@ -276,8 +280,13 @@ impl Delassus {
             }
             Metric::Mass => spmv(k, &cg[b * n..(b + 1) * n], d),
         };
-        for (b, d) in self.d.chunks_mut(n).enumerate() {
-            column(b, d);
+        if self.linear && metric == Metric::Mass && m >= PRODUCT_TILE {
+            // once, at construction: K times PRODUCT_TILE columns per pass over K
+            k_times_columns(k, cg, &mut self.d, n);
+        } else {
+            for (b, d) in self.d.chunks_mut(n).enumerate() {
+                column(b, d);
+            }
         }
         self.factor.solve_block_in_place(&mut self.d, m);
         self.column_solves += m;
@@ -583,8 +592,81 @@ impl Delassus {
     }
 }
 
+/// Columns per pass of [`k_times_columns`].
+const PRODUCT_TILE: usize = 32;
+
+/// `y = K x` for the `m` columns of `x` (`n × m`, column-major), [`PRODUCT_TILE`]
+/// columns per pass over `K`: each tile is transposed to row-major so that every entry
+/// of `K` updates a contiguous row of the tile. One pass per column streams all of `K`
+/// each time; on the 98 304-dof cube the 1024 products took 5.4 s one column at a time
+/// (bound by memory bandwidth), and the whole set-up 19.1 s against 16.2 s tiled. Allocates its two
+/// tiles (`2 n ×` [`PRODUCT_TILE`] values): called once per integrator, at construction.
+fn k_times_columns(k: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64], n: usize) {
+    const T: usize = PRODUCT_TILE;
+    let mut xt = vec![0.0; n * T];
+    let mut yt = vec![0.0; n * T];
+    let (cp, ri, val) = (k.col_ptr(), k.row_idx(), k.val());
+    for (xs, ys) in x.chunks(n * T).zip(y.chunks_mut(n * T)) {
+        let cols = xs.len() / n;
+        for c in 0..cols {
+            for (j, &v) in xs[c * n..(c + 1) * n].iter().enumerate() {
+                xt[j * T + c] = v;
+            }
+        }
+        yt.iter_mut().for_each(|v| *v = 0.0);
+        for j in 0..n {
+            let xr: [f64; T] = xt[j * T..(j + 1) * T].try_into().expect("tile row");
+            for p in cp[j]..cp[j + 1] {
+                let (i, a) = (ri[p], val[p]);
+                let yr = &mut yt[i * T..(i + 1) * T];
+                for c in 0..T {
+                    yr[c] += a * xr[c];
+                }
+            }
+        }
+        for c in 0..cols {
+            for (i, v) in ys[c * n..(c + 1) * n].iter_mut().enumerate() {
+                *v = yt[i * T + c];
+            }
+        }
+    }
+}
+
 fn axpy(s: f64, x: &[f64], y: &mut [f64]) {
     for (yi, xi) in y.iter_mut().zip(x) {
         *yi += s * xi;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The tiled product equals the column-by-column `spmv` bit for bit (same order
+    /// of additions per entry), for a column count that is not a multiple of the tile.
+    #[test]
+    fn tiled_products_equal_column_products() {
+        use crate::model::MassKind;
+        use crate::model::generate::box_mesh;
+        use crate::model::solid::{CellKind, Formulation, Material, assemble};
+        let mesh = box_mesh(CellKind::Hex8, [4, 3, 3], [1.0, 1.0, 1.0]);
+        let mat = Material {
+            young: 210e9,
+            poisson: 0.3,
+            density: 7800.0,
+        };
+        let sys = assemble(&mesh, &mat, Formulation::Solid, MassKind::Consistent).unwrap();
+        let n = sys.ndof();
+        let m = PRODUCT_TILE + 5;
+        let x: Vec<f64> = (0..n * m)
+            .map(|i| ((i * 7919) % 1000) as f64 - 500.0)
+            .collect();
+        let mut tiled = vec![0.0; n * m];
+        k_times_columns(sys.stiffness.as_ref(), &x, &mut tiled, n);
+        for c in 0..m {
+            let mut y = vec![0.0; n];
+            spmv(sys.stiffness.as_ref(), &x[c * n..(c + 1) * n], &mut y);
+            assert!(y == tiled[c * n..(c + 1) * n], "column {c}");
+        }
     }
 }
