@@ -113,7 +113,7 @@ struct OutputArgs {
     /// Write a history row every K steps (default 1).
     #[arg(long, value_name = "K")]
     history_every: Option<usize>,
-    /// Write no .vtu/.pvd field frames.
+    /// Write no field frames (neither .vtu/.pvd nor, with the hdf5 feature, the VTKHDF grid).
     #[arg(long)]
     no_fields: bool,
     /// Write the .vtu arrays as text instead of zlib-compressed binary.

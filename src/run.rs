@@ -313,7 +313,7 @@ pub fn run(
                 None => hist,
             };
             // a model without field geometry (the academic examples) writes no frames
-            let frames = if (o.options.fields || o.options.hdf5()) && !geom.points.is_empty() {
+            let frames = if o.options.fields && !geom.points.is_empty() {
                 let w = FrameWriter::create(
                     o.dir,
                     "fields",
@@ -321,13 +321,12 @@ pub fn run(
                     integ.jacobian(),
                     o.options.encoding,
                 )?;
-                if o.options.fields && !geom_outlines.is_empty() {
+                if !geom_outlines.is_empty() {
                     crate::io::frames::write_outlines(
                         &o.dir.join("obstacles.vtu"),
                         &geom_outlines,
                     )?;
                 }
-                let w = if o.options.fields { w } else { w.without_vtu() };
                 #[cfg(feature = "hdf5")]
                 let w = match &h5 {
                     Some(f) => w.with_hdf5(f)?,

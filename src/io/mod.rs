@@ -181,7 +181,9 @@ pub struct OutputOptions {
     /// Write a history row every `history_stride` steps (default 1: every step).
     #[serde(default = "one")]
     pub history_stride: usize,
-    /// Write `.vtu` frames and the `.pvd` collection (default true).
+    /// Write field frames (default true): `.vtu` files with the `.pvd` collection and,
+    /// with `hdf5`, the VTKHDF grid. False writes none, and the HDF5 file then holds
+    /// `/history` only.
     #[serde(default = "yes")]
     pub fields: bool,
     /// Array encoding of the `.vtu` files (default zlib-compressed binary).
