@@ -236,8 +236,6 @@ pub struct FrameWriter {
     raw: Vec<u8>,
     zip: Vec<u8>,
     deflate: flate2::Compress,
-    /// write `.vtu` files and the `.pvd`
-    vtu: bool,
     /// seconds spent in `write_snapshot`
     busy: f64,
     #[cfg(feature = "hdf5")]
@@ -291,7 +289,6 @@ impl FrameWriter {
             raw: Vec::new(),
             zip: Vec::new(),
             deflate: flate2::Compress::new(flate2::Compression::fast(), true),
-            vtu: true,
             busy: 0.0,
             #[cfg(feature = "hdf5")]
             h5: None,
@@ -300,12 +297,6 @@ impl FrameWriter {
         };
         w.static_xml = w.encode_static();
         Ok(w)
-    }
-
-    /// Writes no `.vtu` / `.pvd` (when only the HDF5 fields are wanted).
-    pub fn without_vtu(mut self) -> Self {
-        self.vtu = false;
-        self
     }
 
     /// Also appends every frame to the VTKHDF grid of the run's HDF5 file.
@@ -381,10 +372,6 @@ impl FrameWriter {
                 &[&self.disp, &self.vel, &self.force, &self.gap],
                 &[&self.strain, &self.stress, &self.mises],
             )?;
-        }
-        if !self.vtu {
-            self.frames.push((snap.time, String::new()));
-            return Ok(());
         }
         let name = format!("{}/frame_{:06}.vtu", self.stem, self.frames.len());
         let path = self.dir.join(&name);
