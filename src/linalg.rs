@@ -37,8 +37,8 @@ pub const SOLVE_BLOCK: usize = 16;
 /// memory bandwidth, and more right-hand sides per pass cost little more than one:
 /// on the 98 304-dof cube (nnz(L) = 1.9e8) the 1024 columns of `M̂⁻¹G` took 18.7 s in
 /// calls of 16, 15.2 s in calls of 32, 12.9 s in calls of 64 and 13.1 s in calls of
-/// 256 (one thread). With more than one chunk on a large factor, the chunks run on
-/// rayon's pool, each thread with its own scratch: 8.4 s on two threads.
+/// 256 (one thread). [`SpdFactor::solve_block_in_place_par`] spreads the chunks over
+/// rayon's threads, each with its own scratch: 8.4 s on two threads.
 pub const SOLVE_CHUNK: usize = 64;
 
 /// Owned sparse matrix type used throughout (compressed sparse columns, `usize` indices).
@@ -374,8 +374,21 @@ impl SpdFactor {
     }
 
     /// Overwrites the `k` columns of the column-major `n × k` block `x` with `A⁻¹ x`,
-    /// [`SOLVE_BLOCK`] columns at a time. Does not allocate.
+    /// [`SOLVE_CHUNK`] columns per faer call, sequentially. Does not allocate (the step
+    /// loop's path).
     pub fn solve_block_in_place(&mut self, x: &mut [f64], k: usize) {
+        self.solve_block(x, k, false);
+    }
+
+    /// Like [`SpdFactor::solve_block_in_place`], with the chunks spread over rayon's
+    /// threads when there are several and the factor is large ([`PAR_FACTOR_WORK`]);
+    /// each thread gets its own scratch, allocated by this call: for set-ups, not for
+    /// the step loop.
+    pub fn solve_block_in_place_par(&mut self, x: &mut [f64], k: usize) {
+        self.solve_block(x, k, true);
+    }
+
+    fn solve_block(&mut self, x: &mut [f64], k: usize, allow_par: bool) {
         let n = self.n;
         debug_assert_eq!(x.len(), n * k);
         let supernodal = matches!(&self.backend, Backend::Faer(f) if f.simplicial.is_none());
@@ -394,9 +407,8 @@ impl SpdFactor {
             let rhs = MatMut::from_column_major_slice_mut(block, n, cols);
             llt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(mem));
         };
-        if k > SOLVE_CHUNK && par_for(f.symbolic.len_val()) != Par::Seq {
-            // chunks on rayon's pool, each thread with its own scratch (allocated here:
-            // this branch runs only for set-ups of many columns on large factors)
+        if allow_par && k > SOLVE_CHUNK && par_for(f.symbolic.len_val()) != Par::Seq {
+            // chunks on rayon's pool, each thread with its own scratch
             use rayon::prelude::*;
             let req = f
                 .symbolic

@@ -248,7 +248,12 @@ impl Delassus {
             col.iter_mut().for_each(|x| *x = 0.0);
             self.jac.axpy(a, 1.0, col);
         }
-        self.factor.solve_block_in_place(&mut self.cg, m);
+        // once per integrator when G is constant: the set-up may use every thread
+        if self.linear {
+            self.factor.solve_block_in_place_par(&mut self.cg, m);
+        } else {
+            self.factor.solve_block_in_place(&mut self.cg, m);
+        }
         self.column_solves += m;
         for b in 0..m {
             for a in 0..m {
@@ -288,7 +293,11 @@ impl Delassus {
                 column(b, d);
             }
         }
-        self.factor.solve_block_in_place(&mut self.d, m);
+        if self.linear {
+            self.factor.solve_block_in_place_par(&mut self.d, m);
+        } else {
+            self.factor.solve_block_in_place(&mut self.d, m);
+        }
         self.column_solves += m;
         for b in 0..m {
             for a in 0..m {
