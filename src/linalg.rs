@@ -679,6 +679,17 @@ fn small_solve(l: &[f64], ld: usize, k: usize, x: &mut [f64]) {
     }
 }
 
+/// `max |A x − b|`, for the tests of the solvers.
+#[cfg(test)]
+pub(crate) fn max_residual(a: SparseColMatRef<'_, usize, f64>, x: &[f64], b: &[f64]) -> f64 {
+    let mut ax = vec![0.0; b.len()];
+    spmv(a, x, &mut ax);
+    ax.iter()
+        .zip(b)
+        .map(|(p, q)| (p - q).abs())
+        .fold(0.0, f64::max)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -785,13 +796,7 @@ mod tests {
         let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
         let mut x1 = b.clone();
         f.solve_in_place(&mut x1);
-        let mut ax = vec![0.0; n];
-        spmv(a.as_ref(), &x1, &mut ax);
-        let r = ax
-            .iter()
-            .zip(&b)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let r = max_residual(a.as_ref(), &x1, &b);
         // diagonally dominant (κ ≤ 10): residual at rounding level
         assert!(r < 1e-14, "residual {r}");
         // not SPD: a negative pivot is reported, not a NaN solve

@@ -2,6 +2,19 @@
 //! all the work is in the library.
 
 use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use signorini::integrators::delassus::DelassusKind;
+use signorini::integrators::{Forecast, Metric, SchemeKind};
+use signorini::io::OutputOptions;
+use signorini::io::frames::Encoding;
+use signorini::model::MassKind;
+use signorini::run::{self, Progress};
+use signorini::scene::bar::BarScene;
+use signorini::scene::file::Scene;
+use signorini::solvers::LcpKind;
 
 /// `println!` that ignores write errors: a closed pipe (`signorini check S | head -1`)
 /// must neither panic nor stop a run whose files are still being written.
@@ -19,19 +32,6 @@ macro_rules! err {
         let _ = writeln!(std::io::stderr(), $($t)*);
     }};
 }
-use std::path::PathBuf;
-use std::process::ExitCode;
-
-use clap::{Args, Parser, Subcommand, ValueEnum};
-use signorini::integrators::delassus::DelassusKind;
-use signorini::integrators::{Forecast, Metric, SchemeKind};
-use signorini::io::OutputOptions;
-use signorini::io::frames::Encoding;
-use signorini::model::MassKind;
-use signorini::run::{self, Progress};
-use signorini::scene::bar::BarScene;
-use signorini::scene::file::Scene;
-use signorini::solvers::LcpKind;
 
 #[derive(Parser)]
 #[command(

@@ -248,12 +248,7 @@ impl Delassus {
             col.iter_mut().for_each(|x| *x = 0.0);
             self.jac.axpy(a, 1.0, col);
         }
-        // once per integrator when G is constant: the set-up may use every thread
-        if self.linear {
-            self.factor.solve_block_in_place_par(&mut self.cg, m);
-        } else {
-            self.factor.solve_block_in_place(&mut self.cg, m);
-        }
+        solve_columns(&mut self.factor, &mut self.cg, m, self.linear);
         self.column_solves += m;
         for b in 0..m {
             for a in 0..m {
@@ -293,11 +288,7 @@ impl Delassus {
                 column(b, d);
             }
         }
-        if self.linear {
-            self.factor.solve_block_in_place_par(&mut self.d, m);
-        } else {
-            self.factor.solve_block_in_place(&mut self.d, m);
-        }
+        solve_columns(&mut self.factor, &mut self.d, m, self.linear);
         self.column_solves += m;
         for b in 0..m {
             for a in 0..m {
@@ -598,6 +589,17 @@ impl Delassus {
                 self.jac.axpy(a, xa, &mut self.t1);
             }
         }
+    }
+}
+
+/// Solves the `m` columns of a dense `n × m` block of [`Delassus::refresh`]: on every
+/// thread when `G` is constant (`refresh` then runs once, at construction), otherwise
+/// sequentially and without allocating (`refresh` runs inside the step loop).
+fn solve_columns(factor: &mut SpdFactor, x: &mut [f64], m: usize, once: bool) {
+    if once {
+        factor.solve_block_in_place_par(x, m);
+    } else {
+        factor.solve_block_in_place(x, m);
     }
 }
 
