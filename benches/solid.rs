@@ -7,7 +7,7 @@
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use signorini::contact::plane::NodesOnPlane;
-use signorini::integrators::delassus::DelassusKind;
+use signorini::delassus::DelassusKind;
 use signorini::integrators::{self, SchemeParams};
 use signorini::model::MassKind;
 use signorini::model::generate::box_mesh;

@@ -26,6 +26,7 @@
 pub mod analytic;
 pub mod assembly;
 pub mod contact;
+pub mod delassus;
 pub mod error;
 pub mod integrators;
 pub mod io;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use signorini::integrators::delassus::DelassusKind;
+use signorini::delassus::DelassusKind;
 use signorini::integrators::{Forecast, Metric, SchemeKind};
 use signorini::io::OutputOptions;
 use signorini::io::frames::Encoding;
@@ -506,10 +506,28 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
         report.fixed_dofs,
         report.contacts
     );
+    let friction = if report.max_friction > 0.0 {
+        format!(
+            "Coulomb, μ up to {} ({} on the velocity problem of each step: De Saxcé's \
+             cone complementarity, eq. 15; tol {:e}, cap {} sweeps)",
+            report.max_friction,
+            match scene.scheme.friction.solver {
+                signorini::solvers::friction::FrictionSolverKind::Nsgs =>
+                    "NSGS with exact local solves",
+                signorini::solvers::friction::FrictionSolverKind::Prox =>
+                    "proximal point over NSGS",
+            },
+            scene.scheme.friction.tol,
+            scene.scheme.friction.max_iterations
+        )
+    } else {
+        "none (no contact has friction > 0: no friction solver)".to_string()
+    };
     out!(
-        "physics             damping {}, gravity {}, friction none (no friction law in the scene: no friction solver)",
+        "physics             damping {}, gravity {}, friction {}",
         if report.damping { "Rayleigh" } else { "none" },
-        if report.gravity { "yes" } else { "none" }
+        if report.gravity { "yes" } else { "none" },
+        friction
     );
     out!(
         "time                {} steps of {:e} s, scheme {}, θ = {}",

@@ -293,7 +293,8 @@ pub fn run(
             o.options.validate()?;
             let geom_outlines = geom.outlines.clone();
             std::fs::create_dir_all(o.dir).map_err(|e| Error::io(o.dir, e))?;
-            let hist = HistoryWriter::create(&o.dir.join("history.csv"), m)?;
+            let hist =
+                HistoryWriter::create(&o.dir.join("history.csv"), m, integ.state().tangent_dim)?;
             #[cfg(feature = "hdf5")]
             let h5 = if o.options.hdf5() {
                 Some(crate::io::h5::RunFile::create(o.dir)?)

@@ -7,7 +7,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
 use signorini::contact::sphere::InsideSphere;
-use signorini::integrators::delassus::DelassusKind;
+use signorini::delassus::DelassusKind;
 use signorini::integrators::{self, Metric, SchemeKind, SchemeParams};
 use signorini::model::point_mass::point_mass;
 use signorini::scene::bar::BarScene;

@@ -11,7 +11,7 @@
 use signorini::contact::ContactSet;
 use signorini::contact::plane::NodesOnPlane;
 use signorini::contact::sphere::{RoundObstacle, Side};
-use signorini::integrators::delassus::DelassusKind;
+use signorini::delassus::DelassusKind;
 use signorini::integrators::{self, Metric, SchemeKind, SchemeParams};
 use signorini::model::generate::box_mesh;
 use signorini::model::solid::{CellKind, Formulation, Material, assemble};

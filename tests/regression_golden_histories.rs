@@ -13,15 +13,38 @@ use std::process::Command;
 /// (golden file, arguments after the binary).
 const CASES: &[(&str, &[&str])] = &[
     ("bar-moreau-jean", &["bar", "--scheme", "moreau-jean"]),
-    ("bar-schatzman-paoli", &["bar", "--scheme", "schatzman-paoli"]),
-    ("bar-trapezoid-position", &["bar", "--scheme", "trapezoid-position"]),
-    ("bar-direct-projection", &["bar", "--scheme", "direct-projection"]),
-    ("bar-combined-projection", &["bar", "--scheme", "combined-projection"]),
-    ("hex_bar", &["run", "meshes/hex_bar.toml", "--history-every", "10"]),
-    ("ball_drop", &["run", "meshes/ball_drop.toml", "--history-every", "10"]),
+    (
+        "bar-schatzman-paoli",
+        &["bar", "--scheme", "schatzman-paoli"],
+    ),
+    (
+        "bar-trapezoid-position",
+        &["bar", "--scheme", "trapezoid-position"],
+    ),
+    (
+        "bar-direct-projection",
+        &["bar", "--scheme", "direct-projection"],
+    ),
+    (
+        "bar-combined-projection",
+        &["bar", "--scheme", "combined-projection"],
+    ),
+    (
+        "hex_bar",
+        &["run", "meshes/hex_bar.toml", "--history-every", "10"],
+    ),
+    (
+        "ball_drop",
+        &["run", "meshes/ball_drop.toml", "--history-every", "10"],
+    ),
     (
         "block_on_cylinder",
-        &["run", "meshes/block_on_cylinder.toml", "--history-every", "10"],
+        &[
+            "run",
+            "meshes/block_on_cylinder.toml",
+            "--history-every",
+            "10",
+        ],
     ),
 ];
 
@@ -42,7 +65,8 @@ fn read(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 fn frictionless_histories_match_the_golden_files() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     for (name, args) in CASES {
-        let out = std::env::temp_dir().join(format!("signorini-golden-{}-{name}", std::process::id()));
+        let out =
+            std::env::temp_dir().join(format!("signorini-golden-{}-{name}", std::process::id()));
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_signorini"));
         cmd.current_dir(root).args(*args);
         if args[0] == "bar" {

@@ -9,8 +9,12 @@
 //! with gradients `∇g_A = [0, 1, (L/2) cos θ + (l/2) sin θ]` and
 //! `∇g_B = [0, 1, −(L/2) cos θ + (l/2) sin θ]`. Both depend on θ, so `G` changes with
 //! `q` and the Newton loop iterates.
+//!
+//! With friction each corner gets the ground's tangent row (frame of [`super::frame`]:
+//! `t = (−1, 0)`): the corner's abscissa is `x + a cos θ − b sin θ`, so
+//! `G_T = −[1, 0, −a sin θ − b cos θ]` on the dofs `x, θ`.
 
-use super::{ContactJacobian, ContactSet};
+use super::{ContactJacobian, ContactLaw, ContactSet};
 use crate::error::{Error, require_positive};
 
 /// The two bottom corners of a rigid block on the ground `y = 0`.
@@ -18,7 +22,8 @@ use crate::error::{Error, require_positive};
 pub struct BlockCorners {
     length: f64,
     thickness: f64,
-    restitution: [f64; 2],
+    laws: [ContactLaw; 2],
+    dim: usize,
 }
 
 impl BlockCorners {
@@ -30,8 +35,22 @@ impl BlockCorners {
         Ok(BlockCorners {
             length,
             thickness,
-            restitution: [e, e],
+            laws: [ContactLaw {
+                restitution: e,
+                friction: 0.0,
+            }; 2],
+            dim: 1,
         })
+    }
+}
+
+impl BlockCorners {
+    /// Gives both corners the friction coefficient `mu` (two rows each when `mu > 0`).
+    pub fn with_friction(mut self, mu: f64) -> Result<Self, Error> {
+        super::check_friction("friction", mu)?;
+        self.laws.iter_mut().for_each(|l| l.friction = mu);
+        self.dim = if mu > 0.0 { 2 } else { 1 };
+        Ok(self)
     }
 }
 
@@ -42,8 +61,15 @@ impl ContactSet for BlockCorners {
     fn is_linear(&self) -> bool {
         false
     }
+    fn dim(&self, _alpha: usize) -> usize {
+        self.dim
+    }
     fn pattern(&self) -> Vec<Vec<usize>> {
-        vec![vec![1, 2], vec![1, 2]]
+        if self.dim == 1 {
+            vec![vec![1, 2], vec![1, 2]]
+        } else {
+            vec![vec![1, 2], vec![0, 2], vec![1, 2], vec![0, 2]]
+        }
     }
     fn evaluate(&self, q: &[f64], gap: &mut [f64], jac: &mut ContactJacobian) {
         let (y, th) = (q[1], q[2]);
@@ -51,12 +77,20 @@ impl ContactSet for BlockCorners {
         let (s, c) = th.sin_cos();
         gap[0] = y + hl * s - ht * c;
         gap[1] = y - hl * s - ht * c;
+        let d = self.dim;
         jac.col_values_mut(0)
             .copy_from_slice(&[1.0, hl * c + ht * s]);
-        jac.col_values_mut(1)
+        jac.col_values_mut(d)
             .copy_from_slice(&[1.0, -hl * c + ht * s]);
+        if d == 2 {
+            // body coordinates (a, b) = (±L/2, −l/2): dX/dθ = −a sin θ − b cos θ
+            for (col, a) in [(1, hl), (3, -hl)] {
+                jac.col_values_mut(col)
+                    .copy_from_slice(&[-1.0, -(-a * s + ht * c)]);
+            }
+        }
     }
-    fn restitution(&self) -> &[f64] {
-        &self.restitution
+    fn laws(&self) -> &[ContactLaw] {
+        &self.laws
     }
 }

@@ -1,19 +1,61 @@
-//! Contacts: gap functions `g(q)`, their Jacobians `G(q)` (eq. 1, 5) and impact laws.
+//! Contacts as blocks: gap functions `g(q)`, local frames, Jacobian blocks `G_α(q)`
+//! (eq. 1, 5, 11) and contact laws.
 //!
 //! A [`ContactSet`] lists the candidate contacts of a scene. Each contact `α` has a
-//! gap `g^α(q)` (positive when open), a Jacobian column `G_α = ∇g^α` with a fixed
-//! sparsity pattern, and a Newton restitution coefficient `e^α` (eq. 6). The local
-//! velocity is `U = Gᵀ v` and the generalized reaction `r = G λ` (eq. 5).
+//! gap `g^α(q)` (positive when open), a law {restitution `e^α` (eq. 6), friction
+//! coefficient `μ^α` (eq. 12)} ([`ContactLaw`]) and a block of `d_α` Jacobian columns
+//! with a fixed sparsity pattern: `d_α = 1` (the normal `∇g^α`) without friction, and
+//! with friction `d_α = 2` in 2-D (normal, tangent) or 3 in 3-D (normal, two tangents),
+//! the columns of the local orthonormal frame of eq. 11 ([`frame`]). The local velocity
+//! is `U_α = G_αᵀ v ∈ R^{d_α}` and the generalized reaction `r = Σ_α G_α λ_α` (eq. 5).
+//! The rows of all blocks, concatenated contact by contact, are the rows of the Delassus
+//! operator ([`crate::delassus`]); a frictionless scene has one row per contact, the
+//! scalar layer of before.
 //!
 //! [`plane::NodesOnPlane`] is linear (constant `G`, so the integrators precompute the
-//! Delassus operator once); [`sphere::InsideSphere`] is nonlinear (`G` depends on
-//! `q`, so the Newton loop of eq. 42–51 re-linearizes it every iteration).
+//! Delassus operator once); [`sphere::InsideSphere`] is nonlinear (`G` and the frame
+//! depend on `q`, so the Newton loop of eq. 42–51 re-linearizes them every iteration).
 
 pub mod block;
+pub mod frame;
 pub mod plane;
 pub mod sphere;
 
-/// A candidate contact set: the gap functions and Jacobians of eq. 1e.
+/// The law of one contact: Newton's impact law and Coulomb's friction.
+#[derive(Clone, Copy, Debug, PartialEq, Default, serde::Serialize)]
+pub struct ContactLaw {
+    /// Newton restitution coefficient `e` in `[0, 1]` (eq. 6).
+    pub restitution: f64,
+    /// Coulomb friction coefficient `μ ≥ 0` (eq. 12); 0 makes the contact frictionless
+    /// (a block of one row).
+    pub friction: f64,
+}
+
+/// Where a frictional contact is after a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ContactStatus {
+    /// No normal impulse.
+    #[default]
+    Open,
+    /// Closed, tangential velocity zero (inside the cone).
+    Stick,
+    /// Closed, sliding on the boundary of the cone.
+    Slip,
+}
+
+impl ContactStatus {
+    /// The code written to histories and frames: 0 open, 1 stick, 2 slip.
+    pub fn code(self) -> u8 {
+        match self {
+            ContactStatus::Open => 0,
+            ContactStatus::Stick => 1,
+            ContactStatus::Slip => 2,
+        }
+    }
+}
+
+/// A candidate contact set: the gap functions, frames and Jacobian blocks of eq. 1e, 11.
 pub trait ContactSet: Send {
     /// Number of candidate contacts `m`.
     fn len(&self) -> usize;
@@ -21,17 +63,47 @@ pub trait ContactSet: Send {
     fn is_empty(&self) -> bool {
         self.len() == 0
     }
-    /// True when `g` is affine in `q` (then `G` is constant).
+    /// True when `g` is affine in `q` and the frames are fixed (then `G` is constant).
     fn is_linear(&self) -> bool;
-    /// The dofs touched by each Jacobian column (a fixed pattern).
+    /// Rows of contact `alpha`'s block: 1 without friction, the space dimension with it.
+    fn dim(&self, alpha: usize) -> usize;
+    /// The dofs touched by each Jacobian column, row by row (normal first in each block).
     fn pattern(&self) -> Vec<Vec<usize>>;
-    /// Evaluates `g(q)` into `gap` and `G(q)` into `jac` (same pattern as [`ContactSet::pattern`]).
+    /// Evaluates `g(q)` into `gap` (one value per contact) and `G(q)` into `jac` (one
+    /// column per row, pattern as in [`ContactSet::pattern`]).
     fn evaluate(&self, q: &[f64], gap: &mut [f64], jac: &mut ContactJacobian);
-    /// Restitution coefficient of each contact (eq. 6).
-    fn restitution(&self) -> &[f64];
+    /// The law of each contact.
+    fn laws(&self) -> &[ContactLaw];
+    /// Rows over all blocks.
+    fn rows(&self) -> usize {
+        (0..self.len()).map(|a| self.dim(a)).sum()
+    }
+    /// True when some contact has friction.
+    fn has_friction(&self) -> bool {
+        self.laws().iter().any(|l| l.friction > 0.0)
+    }
 }
 
-/// The `n × m` Jacobian `G` stored by columns with a fixed pattern (one column per contact).
+/// Checks a friction coefficient (must be finite and non-negative).
+pub fn check_friction(field: &str, mu: f64) -> Result<f64, crate::error::Error> {
+    crate::error::require_in(field, mu, 0.0, 1e6)
+}
+
+/// The laws of `m` contacts sharing one `{e, μ}`, checked.
+pub fn uniform_laws(m: usize, e: f64, mu: f64) -> Result<Vec<ContactLaw>, crate::error::Error> {
+    check_restitution("restitution", e)?;
+    check_friction("friction", mu)?;
+    Ok(vec![
+        ContactLaw {
+            restitution: e,
+            friction: mu,
+        };
+        m
+    ])
+}
+
+/// The `n × rows` Jacobian `G` stored by columns with a fixed pattern (one column per
+/// row: `d_α` consecutive columns per contact).
 #[derive(Clone, Debug)]
 pub struct ContactJacobian {
     col_ptr: Vec<usize>,
@@ -58,12 +130,12 @@ impl ContactJacobian {
         }
     }
 
-    /// Number of columns (contacts).
+    /// Number of columns (rows of all blocks).
     pub fn ncols(&self) -> usize {
         self.col_ptr.len() - 1
     }
 
-    /// Dofs and values of column `alpha`.
+    /// Dofs and values of column `alpha` (a row of the contact space).
     pub fn col(&self, alpha: usize) -> (&[usize], &[f64]) {
         let r = self.col_ptr[alpha]..self.col_ptr[alpha + 1];
         (&self.dofs[r.clone()], &self.values[r])
@@ -113,10 +185,12 @@ impl ContactJacobian {
     }
 }
 
-/// Several contact sets seen as one (columns concatenated in order).
+/// Several contact sets seen as one (contacts and their blocks concatenated in order).
 pub struct Composite {
     sets: Vec<Box<dyn ContactSet>>,
-    e: Vec<f64>,
+    laws: Vec<ContactLaw>,
+    /// (set, index in the set) of each contact.
+    owner: Vec<(usize, usize)>,
     /// Scratch Jacobians, one per set, so each set writes its own pattern.
     jacs: std::sync::Mutex<Vec<ContactJacobian>>,
 }
@@ -124,14 +198,20 @@ pub struct Composite {
 impl Composite {
     /// Joins `sets`.
     pub fn new(sets: Vec<Box<dyn ContactSet>>) -> Self {
-        let e = sets.iter().flat_map(|s| s.restitution().to_vec()).collect();
+        let laws = sets.iter().flat_map(|s| s.laws().to_vec()).collect();
+        let owner = sets
+            .iter()
+            .enumerate()
+            .flat_map(|(i, s)| (0..s.len()).map(move |a| (i, a)))
+            .collect();
         let jacs = sets
             .iter()
             .map(|s| ContactJacobian::for_set(s.as_ref()))
             .collect();
         Composite {
             sets,
-            e,
+            laws,
+            owner,
             jacs: std::sync::Mutex::new(jacs),
         }
     }
@@ -139,28 +219,33 @@ impl Composite {
 
 impl ContactSet for Composite {
     fn len(&self) -> usize {
-        self.sets.iter().map(|s| s.len()).sum()
+        self.owner.len()
     }
     fn is_linear(&self) -> bool {
         self.sets.iter().all(|s| s.is_linear())
+    }
+    fn dim(&self, alpha: usize) -> usize {
+        let (i, a) = self.owner[alpha];
+        self.sets[i].dim(a)
     }
     fn pattern(&self) -> Vec<Vec<usize>> {
         self.sets.iter().flat_map(|s| s.pattern()).collect()
     }
     fn evaluate(&self, q: &[f64], gap: &mut [f64], jac: &mut ContactJacobian) {
         let mut jacs = self.jacs.lock().expect("contact scratch poisoned");
-        let mut off = 0;
+        let (mut off, mut row) = (0, 0);
         for (s, j) in self.sets.iter().zip(jacs.iter_mut()) {
             let m = s.len();
             s.evaluate(q, &mut gap[off..off + m], j);
-            for a in 0..m {
-                jac.col_values_mut(off + a).copy_from_slice(j.col(a).1);
+            for c in 0..j.ncols() {
+                jac.col_values_mut(row + c).copy_from_slice(j.col(c).1);
             }
             off += m;
+            row += j.ncols();
         }
     }
-    fn restitution(&self) -> &[f64] {
-        &self.e
+    fn laws(&self) -> &[ContactLaw] {
+        &self.laws
     }
 }
 

@@ -1,6 +1,7 @@
-//! Nodes against a fixed rigid plane: `g^α(q) = n·(X_α + u_α) − c` (linear in `q`).
+//! Nodes against a fixed rigid plane: `g^α(q) = n·(X_α + u_α) − c` (linear in `q`), with
+//! the plane's constant frame ([`super::frame`]) as tangential rows when `μ > 0`.
 
-use super::{ContactJacobian, ContactSet, check_restitution};
+use super::{ContactJacobian, ContactLaw, ContactSet, check_friction, check_restitution};
 use crate::error::Error;
 
 /// Nodal contacts of a deformable body with the rigid plane `{x : n·x = c}`; the body
@@ -15,7 +16,9 @@ pub struct NodesOnPlane {
     pub normal: Vec<f64>,
     /// Plane offset `c`.
     pub offset: f64,
-    restitution: Vec<f64>,
+    laws: Vec<ContactLaw>,
+    /// Rows per contact: 1, or the space dimension with friction.
+    dim: usize,
 }
 
 impl NodesOnPlane {
@@ -52,8 +55,24 @@ impl NodesOnPlane {
             reference,
             normal: normal.iter().map(|x| x / norm).collect(),
             offset: offset / norm,
-            restitution: vec![e; m],
+            laws: vec![
+                ContactLaw {
+                    restitution: e,
+                    friction: 0.0
+                };
+                m
+            ],
+            dim: 1,
         })
+    }
+
+    /// Gives every contact the friction coefficient `mu` (blocks of the space dimension
+    /// when `mu > 0`).
+    pub fn with_friction(mut self, mu: f64) -> Result<Self, Error> {
+        check_friction("friction", mu)?;
+        self.laws.iter_mut().for_each(|l| l.friction = mu);
+        self.dim = if mu > 0.0 { self.normal.len() } else { 1 };
+        Ok(self)
     }
 }
 
@@ -64,8 +83,14 @@ impl ContactSet for NodesOnPlane {
     fn is_linear(&self) -> bool {
         true
     }
+    fn dim(&self, _alpha: usize) -> usize {
+        self.dim
+    }
     fn pattern(&self) -> Vec<Vec<usize>> {
-        self.node_dofs.clone()
+        self.node_dofs
+            .iter()
+            .flat_map(|d| std::iter::repeat_n(d.clone(), self.dim))
+            .collect()
     }
     fn evaluate(&self, q: &[f64], gap: &mut [f64], jac: &mut ContactJacobian) {
         for (a, dofs) in self.node_dofs.iter().enumerate() {
@@ -74,10 +99,10 @@ impl ContactSet for NodesOnPlane {
                 g += self.normal[k] * (self.reference[a][k] + q[d]);
             }
             gap[a] = g;
-            jac.col_values_mut(a).copy_from_slice(&self.normal);
+            super::frame::write_nodal_block(&self.normal, self.dim, a * self.dim, jac);
         }
     }
-    fn restitution(&self) -> &[f64] {
-        &self.restitution
+    fn laws(&self) -> &[ContactLaw] {
+        &self.laws
     }
 }

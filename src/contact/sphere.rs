@@ -5,7 +5,7 @@
 //! `G = −d/|d|`. The gap is nonlinear in `q` and `G` turns with the node, so a scheme
 //! that evaluates `G(q_{k+1})` (eq. 18a, 28) iterates (eq. 42–51).
 
-use super::{ContactJacobian, ContactSet, check_restitution};
+use super::{ContactJacobian, ContactLaw, ContactSet, check_friction, check_restitution};
 use crate::error::{Error, require_positive};
 
 /// Which side of the surface is admissible.
@@ -33,7 +33,8 @@ pub struct RoundObstacle {
     pub radius: f64,
     /// Admissible side.
     pub side: Side,
-    restitution: Vec<f64>,
+    laws: Vec<ContactLaw>,
+    dim: usize,
 }
 
 /// The historical name: nodes kept inside a sphere.
@@ -102,8 +103,24 @@ impl RoundObstacle {
             axis,
             radius,
             side,
-            restitution: vec![e; m],
+            laws: vec![
+                ContactLaw {
+                    restitution: e,
+                    friction: 0.0
+                };
+                m
+            ],
+            dim: 1,
         })
+    }
+
+    /// Gives every contact the friction coefficient `mu` (blocks of the space dimension
+    /// when `mu > 0`; the frame turns with the normal).
+    pub fn with_friction(mut self, mu: f64) -> Result<Self, Error> {
+        check_friction("friction", mu)?;
+        self.laws.iter_mut().for_each(|l| l.friction = mu);
+        self.dim = if mu > 0.0 { self.center.len() } else { 1 };
+        Ok(self)
     }
 }
 
@@ -114,12 +131,20 @@ impl ContactSet for RoundObstacle {
     fn is_linear(&self) -> bool {
         false
     }
+    fn dim(&self, _alpha: usize) -> usize {
+        self.dim
+    }
     fn pattern(&self) -> Vec<Vec<usize>> {
-        self.node_dofs.clone()
+        self.node_dofs
+            .iter()
+            .flat_map(|d| std::iter::repeat_n(d.clone(), self.dim))
+            .collect()
     }
     fn evaluate(&self, q: &[f64], gap: &mut [f64], jac: &mut ContactJacobian) {
+        let nd = self.center.len();
         for (a, dofs) in self.node_dofs.iter().enumerate() {
-            let col = jac.col_values_mut(a);
+            let mut buf = [0.0; 3];
+            let col = &mut buf[..nd];
             for (k, &d) in dofs.iter().enumerate() {
                 col[k] = self.reference[a][k] + q[d] - self.center[k];
             }
@@ -140,9 +165,10 @@ impl ContactSet for RoundObstacle {
                 col.iter_mut().for_each(|x| *x = 0.0);
                 col[0] = sign;
             }
+            super::frame::write_nodal_block(col, self.dim, a * self.dim, jac);
         }
     }
-    fn restitution(&self) -> &[f64] {
-        &self.restitution
+    fn laws(&self) -> &[ContactLaw] {
+        &self.laws
     }
 }

@@ -25,14 +25,26 @@
 //! the bar and the academic examples, per-active-column storage (columns computed when
 //! a contact first activates, corrections by one sparse solve) for thousands of
 //! candidates (DESIGN.md §4).
+//!
+//! Contact space is the rows of the contact blocks ([`crate::contact`]): every
+//! contact-space vector here (`U`, `P`, `τ`, the right-hand sides) has one entry per
+//! row, normal row first in each block; gaps, forecasts and the position problem use
+//! the normal rows only (eq. 56–60, 67–70 project the normal part). With friction the
+//! velocity problem of an active set is the Coulomb problem of eq. 15 with Newton's law
+//! on the normal part, `U + e U_k = W P + (U_free − hθ W_D τⁿ + e U_k)`,
+//! `C* ∋ Û ⊥ P ∈ C`, solved by [`crate::solvers::friction`] (warm started from the
+//! previous step's impulse); without friction (every block one row) it is the LCP of
+//! before, operation for operation.
 
-use super::delassus::{Delassus, Op};
 use super::{Forecast, NewtonParams, SchemeParams, State, StepStats};
 use crate::assembly::linear_combination;
-use crate::contact::{ContactJacobian, ContactSet};
+use crate::contact::{ContactJacobian, ContactSet, ContactStatus};
+use crate::delassus::DenseOperator;
+use crate::delassus::{Delassus, Op};
 use crate::error::Error;
 use crate::linalg::{SparseMatrix, SpdFactor, sym_spmv_add};
 use crate::model::LinearSystem;
+use crate::solvers::friction::{Block, FrictionParams, FrictionProblem, FrictionSolver};
 use crate::solvers::lcp::LcpSolver;
 use crate::solvers::mlcp::Mlcp;
 use crate::solvers::{SolveError, SolveInfo};
@@ -64,9 +76,14 @@ pub enum VelocityLaw {
     PositionLevel,
 }
 
-/// Dense sub-problem workspace: gathers a principal sub-block, solves, scatters.
+/// Default cap on the rows of the dense one-step workspaces (4096² values = 128 MiB).
+pub const DEFAULT_MAX_ACTIVE_ROWS: usize = 4096;
+
+/// Dense sub-problem workspace: gathers a principal sub-block, solves, scatters. Sized
+/// for `cap` rows (the active rows of a step), not for the candidates.
 #[derive(Debug)]
 pub(crate) struct Workspace {
+    cap: usize,
     pub idx: Vec<usize>,
     sub: Vec<f64>,
     q: Vec<f64>,
@@ -77,21 +94,45 @@ pub(crate) struct Workspace {
     res: Vec<f64>,
     pub lcp: LcpSolver,
     mlcp: Mlcp,
+    /// Friction blocks of the gathered problem (offsets in the gathered rows).
+    blocks: Vec<Block>,
+    friction: FrictionSolver,
 }
 
 impl Workspace {
-    pub fn new(m: usize, params: &SchemeParams) -> Self {
+    /// Buffers for `rows` contact rows and `contacts` contacts, dense blocks capped at
+    /// `params.max_active_rows` rows (module doc); `friction` adds the friction solver.
+    pub fn new(rows: usize, contacts: usize, params: &SchemeParams, friction: bool) -> Self {
+        let cap = match params.max_active_rows {
+            0 => rows.min(DEFAULT_MAX_ACTIVE_ROWS),
+            c => rows.min(c),
+        };
         Workspace {
-            idx: Vec::with_capacity(m),
-            sub: vec![0.0; m * m],
-            q: vec![0.0; m],
-            z: vec![0.0; m],
-            w: vec![0.0; m],
-            eq: vec![false; m],
-            member: vec![false; m],
-            res: vec![0.0; m],
-            lcp: LcpSolver::new(params.lcp, m),
-            mlcp: Mlcp::with_capacity(m),
+            cap,
+            idx: Vec::with_capacity(rows),
+            sub: vec![0.0; cap * cap],
+            q: vec![0.0; cap],
+            z: vec![0.0; cap],
+            w: vec![0.0; cap],
+            eq: vec![false; cap],
+            member: vec![false; rows],
+            res: vec![0.0; rows],
+            lcp: LcpSolver::new(params.lcp, cap),
+            mlcp: Mlcp::with_capacity(cap),
+            blocks: Vec::with_capacity(if friction { contacts } else { 0 }),
+            friction: FrictionSolver::with_capacity(if friction { cap } else { 0 }),
+        }
+    }
+
+    /// Fails when the gathered rows exceed the workspace.
+    fn check_cap(&self) -> Result<(), SolveError> {
+        if self.idx.len() > self.cap {
+            Err(SolveError::ActiveRows {
+                active: self.idx.len(),
+                cap: self.cap,
+            })
+        } else {
+            Ok(())
         }
     }
 
@@ -105,7 +146,8 @@ impl Workspace {
         rhs: &[f64],
         warm: &[f64],
         eq: impl Fn(usize) -> bool,
-    ) {
+    ) -> Result<(), SolveError> {
+        self.check_cap()?;
         let k = self.idx.len();
         for (b, &j) in self.idx.iter().enumerate() {
             for (a, &i) in self.idx.iter().enumerate() {
@@ -115,6 +157,7 @@ impl Workspace {
             self.z[b] = warm[j];
             self.eq[b] = eq(j);
         }
+        Ok(())
     }
 
     /// Solves the gathered problem (an LCP when no row is an equality).
@@ -139,6 +182,23 @@ impl Workspace {
                 &mut self.w[..k],
             )
         }
+    }
+
+    /// Solves the gathered rows as a Coulomb friction problem over `self.blocks`
+    /// (warm start in `z`).
+    fn solve_friction(
+        &mut self,
+        params: &FrictionParams,
+    ) -> Result<crate::solvers::friction::FrictionInfo, SolveError> {
+        let k = self.idx.len();
+        let op = DenseOperator::new(k, &self.sub[..k * k]);
+        let prob = FrictionProblem {
+            w: &op,
+            q: &self.q[..k],
+            blocks: &self.blocks,
+        };
+        self.friction
+            .solve(prob, params, &mut self.z[..k], &mut self.w[..k])
     }
 
     /// `out[idx] = z`, zero elsewhere.
@@ -207,9 +267,22 @@ pub struct ThetaCore {
     pub(crate) h: f64,
     pub(crate) theta: f64,
     pub(crate) n: usize,
+    /// Contacts.
     pub(crate) m: usize,
+    /// Rows of the contact space (`m` without friction).
+    pub(crate) rows: usize,
+    /// First row of each contact's block (`m + 1` values).
+    pub(crate) off: Vec<usize>,
+    /// Friction coefficient per contact.
+    mu: Vec<f64>,
+    /// Some contact has friction (blocks of more than one row).
+    friction: bool,
+    friction_params: FrictionParams,
+    /// Row is a normal row.
+    normal: Vec<bool>,
     /// `M̂` factored, `G` and the condensed operators.
     pub(crate) del: Delassus,
+    /// Restitution per row (0 on tangential rows).
     pub(crate) e: Vec<f64>,
     with_projection: bool,
     feedback: bool,
@@ -218,14 +291,17 @@ pub struct ThetaCore {
     pub(crate) newton: NewtonParams,
     pub(crate) projection_tolerance: f64,
     pub(crate) state: State,
+    /// `U = Gᵀ v` at the start of the step, all rows.
+    u_rows: Vec<f64>,
     // n-vectors
     pub(crate) v_free: Vec<f64>,
     work: Vec<f64>,
     q_lin: Vec<f64>,
     pub(crate) v_new: Vec<f64>,
     pub(crate) q_new: Vec<f64>,
-    // m-vectors
+    // per contact
     g_at_lin: Vec<f64>,
+    // per row
     pub(crate) u_k: Vec<f64>,
     pub(crate) u_free: Vec<f64>,
     u_new: Vec<f64>,
@@ -273,9 +349,29 @@ impl ThetaCore {
         let n = sys.ndof();
         let m = contacts.len();
         let jac = ContactJacobian::for_set(contacts.as_ref());
-        let e = contacts.restitution().to_vec();
+        let rows = jac.ncols();
+        let mut off = Vec::with_capacity(m + 1);
+        off.push(0);
+        for a in 0..m {
+            off.push(off[a] + contacts.dim(a));
+        }
+        assert_eq!(off[m], rows, "contact blocks and Jacobian columns disagree");
+        let laws = contacts.laws();
+        let mut e = vec![0.0; rows];
+        let mut normal = vec![false; rows];
+        for a in 0..m {
+            e[off[a]] = laws[a].restitution;
+            normal[off[a]] = true;
+        }
+        let mu: Vec<f64> = laws.iter().map(|l| l.friction).collect();
+        let friction = rows > m;
+        let tangent_dim = if friction {
+            (0..m).map(|a| off[a + 1] - off[a] - 1).max().unwrap_or(0)
+        } else {
+            0
+        };
         let linear = contacts.is_linear();
-        let state = State::initial(q0, v0, m);
+        let state = State::with_layout(q0, v0, m, tangent_dim, rows);
         let del = Delassus::new(
             factor,
             jac,
@@ -292,6 +388,12 @@ impl ThetaCore {
             theta,
             n,
             m,
+            rows,
+            off,
+            mu,
+            friction,
+            friction_params: params.friction,
+            normal,
             del,
             e,
             with_projection,
@@ -301,47 +403,56 @@ impl ThetaCore {
             newton: params.newton,
             projection_tolerance: params.projection_tolerance,
             state,
+            u_rows: vec![0.0; rows],
             v_free: vec![0.0; n],
             work: vec![0.0; n],
             q_lin: vec![0.0; n],
             v_new: vec![0.0; n],
             q_new: vec![0.0; n],
             g_at_lin: vec![0.0; m],
-            u_k: vec![0.0; m],
-            u_free: vec![0.0; m],
-            u_new: vec![0.0; m],
-            wp: vec![0.0; m],
-            wt: vec![0.0; m],
-            coupling: vec![0.0; m],
-            a: vec![0.0; m],
-            b: vec![0.0; m],
-            g_lin: vec![0.0; m],
-            p: vec![0.0; m],
-            p_warm: vec![0.0; m],
-            tau: vec![0.0; m],
-            tau_prev: vec![0.0; m],
-            tau_used: vec![0.0; m],
-            dtau: vec![0.0; m],
+            u_k: vec![0.0; rows],
+            u_free: vec![0.0; rows],
+            u_new: vec![0.0; rows],
+            wp: vec![0.0; rows],
+            wt: vec![0.0; rows],
+            coupling: vec![0.0; rows],
+            a: vec![0.0; rows],
+            b: vec![0.0; rows],
+            g_lin: vec![0.0; rows],
+            p: vec![0.0; rows],
+            p_warm: vec![0.0; rows],
+            tau: vec![0.0; rows],
+            tau_prev: vec![0.0; rows],
+            tau_used: vec![0.0; rows],
+            dtau: vec![0.0; rows],
             vel_mask: vec![false; m],
             pos_mask: vec![false; m],
-            ws: Workspace::new(m, params),
+            ws: Workspace::new(rows, m, params, friction),
         };
         core.contacts
             .evaluate(&core.state.q, &mut core.state.gap, &mut core.del.jac);
         core.del.refresh(&core.sys.stiffness);
-        core.del
-            .jac
-            .transpose_mul(&core.state.v, &mut core.state.local_velocity);
+        core.del.jac.transpose_mul(&core.state.v, &mut core.u_rows);
+        core.scatter_local_velocity();
         Ok(core)
     }
 
     /// A description of the linear-algebra path, for summaries.
     pub fn path(&self) -> String {
         format!(
-            "M̂ = M + hθC + h²θ²K factored once ({}, n = {}); {} contact(s), {}; {}{}",
+            "M̂ = M + hθC + h²θ²K factored once ({}, n = {}); {} contact(s){}, {}; {}{}",
             self.del.factor.backend_name(),
             self.n,
             self.m,
+            if self.friction {
+                format!(
+                    " with Coulomb friction ({} rows; {} on the velocity problem)",
+                    self.rows,
+                    self.friction_params.solver.name()
+                )
+            } else {
+                String::new()
+            },
             if self.linear {
                 "linear gap: G and W constant (condensed once), one sparse solve per step; \
                  Newton iterations only re-solve the contact-space problem (eq. 56a)"
@@ -384,7 +495,7 @@ impl ThetaCore {
         for ((vf, v), w) in self.v_free.iter_mut().zip(&s.v).zip(&self.work) {
             *vf = v + w;
         }
-        self.u_k.copy_from_slice(&s.local_velocity);
+        self.u_k.copy_from_slice(&self.u_rows);
         self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
         self.del.next_epoch();
         self.q_lin.copy_from_slice(&self.state.q);
@@ -396,9 +507,10 @@ impl ThetaCore {
         let (h, th) = (self.h, self.theta);
         for a in 0..self.m {
             let g = self.state.gap[a];
+            let i = self.off[a];
             let gbar = match f {
-                Forecast::Explicit { gamma } => g + gamma * h * self.u_k[a],
-                Forecast::Free => g + h * (th * self.u_free[a] + (1.0 - th) * self.u_k[a]),
+                Forecast::Explicit { gamma } => g + gamma * h * self.u_k[i],
+                Forecast::Free => g + h * (th * self.u_free[i] + (1.0 - th) * self.u_k[i]),
             };
             self.vel_mask[a] = gbar <= 0.0;
         }
@@ -413,7 +525,7 @@ impl ThetaCore {
         rule: PositionRule,
         stats: &mut StepStats,
     ) -> Result<(), Error> {
-        let (h, th, m) = (self.h, self.theta, self.m);
+        let (h, th, m, rows) = (self.h, self.theta, self.m, self.rows);
         if !self.linear && !self.jac_at_qk {
             self.contacts
                 .evaluate(&self.state.q, &mut self.g_at_lin, &mut self.del.jac);
@@ -448,15 +560,16 @@ impl ThetaCore {
                 self.del
                     .mul_add(Op::Wd, h * th, &self.tau_prev, &mut self.coupling);
             }
-            for a in 0..m {
+            for a in 0..rows {
                 self.a[a] = self.u_free[a] - self.coupling[a] + self.e[a] * self.u_k[a];
             }
-            // linearized gaps without contact impulse or projection (eq. 51)
-            for a in 0..m {
+            // linearized gaps without contact impulse or projection (eq. 51), normal rows
+            for c in 0..m {
+                let a = self.off[c];
                 self.g_lin[a] = if self.linear || !relinearized {
-                    self.state.gap[a] + h * (1.0 - th) * self.u_k[a]
+                    self.state.gap[c] + h * (1.0 - th) * self.u_k[a]
                 } else {
-                    self.g_at_lin[a]
+                    self.g_at_lin[c]
                         + self.del.jac.dot(a, &self.state.q)
                         + h * (1.0 - th) * self.del.jac.dot(a, &self.state.v)
                         - self.del.jac.dot(a, &self.q_lin)
@@ -464,21 +577,55 @@ impl ThetaCore {
             }
             match law {
                 VelocityLaw::Impact => {
-                    // velocity LCP (eq. 57) on the active set
+                    // velocity LCP (eq. 57), or the Coulomb problem (eq. 15), on the
+                    // rows of the active set
                     self.ws.idx.clear();
-                    self.ws.idx.extend((0..m).filter(|&a| self.vel_mask[a]));
+                    self.ws.blocks.clear();
+                    let mut frictional = false;
+                    for c in (0..m).filter(|&c| self.vel_mask[c]) {
+                        let (o, d) = (self.off[c], self.off[c + 1] - self.off[c]);
+                        if self.friction {
+                            self.ws.blocks.push(Block {
+                                offset: self.ws.idx.len(),
+                                dim: d,
+                                mu: self.mu[c],
+                            });
+                            frictional |= d > 1;
+                        }
+                        self.ws.idx.extend(o..o + d);
+                    }
                     if !self.ws.idx.is_empty() {
                         self.del
                             .ensure_all(&self.ws.idx, &self.sys.stiffness)
                             .map_err(|e| fail(&self.state, "Delassus columns", e))?;
+                        // friction: warm start from the previous step's impulse
+                        let warm = if frictional && it == 1 {
+                            &self.state.impulse_rows
+                        } else {
+                            &self.p
+                        };
                         self.ws
-                            .gather(&self.del, Op::W, 1.0, &self.a, &self.p, |_| false);
-                        let info = self
-                            .ws
-                            .solve()
-                            .map_err(|e| fail(&self.state, "velocity LCP", e))?;
-                        stats.lcp_iterations += info.iterations;
-                        stats.lcp_residual = stats.lcp_residual.max(info.residual);
+                            .gather(&self.del, Op::W, 1.0, &self.a, warm, |_| false)
+                            .map_err(|e| fail(&self.state, "velocity problem", e))?;
+                        if frictional {
+                            let info = self
+                                .ws
+                                .solve_friction(&self.friction_params)
+                                .map_err(|e| fail(&self.state, "friction problem", e))?;
+                            stats.friction_solves += 1;
+                            stats.friction_iterations += info.iterations;
+                            stats.friction_residual = stats.friction_residual.max(info.residual);
+                            if !info.converged {
+                                stats.caps_hit += 1;
+                            }
+                        } else {
+                            let info = self
+                                .ws
+                                .solve()
+                                .map_err(|e| fail(&self.state, "velocity LCP", e))?;
+                            stats.lcp_iterations += info.iterations;
+                            stats.lcp_residual = stats.lcp_residual.max(info.residual);
+                        }
                         self.ws.scatter(&mut self.p);
                     } else {
                         self.p.iter_mut().for_each(|x| *x = 0.0);
@@ -486,6 +633,7 @@ impl ThetaCore {
                 }
                 VelocityLaw::PositionLevel => {
                     // 0 ≤ g_base + hθ (U_free + W P) ⊥ P ≥ 0 on every contact
+                    // (frictionless only: one row per contact)
                     for a in 0..m {
                         self.a[a] = self.g_lin[a] + h * th * self.u_free[a];
                     }
@@ -498,7 +646,7 @@ impl ThetaCore {
                         &self.a,
                         &self.p_warm,
                         &mut self.p,
-                        0.0,
+                        (0.0, &self.normal),
                         stats,
                     )
                     .map_err(|e| fail(&self.state, "position-level LCP", e))?;
@@ -506,8 +654,11 @@ impl ThetaCore {
             }
             self.wp.iter_mut().for_each(|x| *x = 0.0);
             self.del.mul_add(Op::W, 1.0, &self.p, &mut self.wp);
-            for a in 0..m {
+            for a in 0..rows {
                 self.u_new[a] = self.u_free[a] + self.wp[a] - self.coupling[a];
+            }
+            for c in 0..m {
+                let a = self.off[c];
                 self.b[a] = self.g_lin[a] + h * th * self.u_new[a];
             }
             // position problem
@@ -519,11 +670,12 @@ impl ThetaCore {
             if self.with_projection {
                 self.del.mul_add(Op::Wn, 1.0, &self.tau, &mut self.wt);
             }
-            for a in 0..m {
+            for c in 0..m {
+                let a = self.off[c];
                 self.g_lin[a] = self.b[a] + self.wt[a];
             }
             self.tau_used.copy_from_slice(&self.tau_prev);
-            for a in 0..m {
+            for a in 0..rows {
                 self.dtau[a] = self.tau[a] - self.tau_prev[a];
             }
             self.tau_prev.copy_from_slice(&self.tau);
@@ -570,15 +722,17 @@ impl ThetaCore {
         self.del
             .ensure_support(&self.dtau, &self.sys.stiffness)
             .map_err(|e| fail(&self.state, "Delassus columns", e))?;
-        let (h, th, m) = (self.h, self.theta, self.m);
+        let (h, th, rows) = (self.h, self.theta, self.rows);
         let mut s_v: f64 = 0.0;
         let mut s_g: f64 = 0.0;
-        for a in 0..m {
+        for a in 0..rows {
             s_v = s_v
                 .max(self.u_free[a].abs())
                 .max(self.u_k[a].abs())
                 .max(self.u_new[a].abs());
-            s_g = s_g.max(self.b[a].abs());
+        }
+        for c in 0..self.m {
+            s_g = s_g.max(self.b[self.off[c]].abs());
         }
         self.wp.iter_mut().for_each(|x| *x = 0.0);
         self.wt.iter_mut().for_each(|x| *x = 0.0);
@@ -586,9 +740,11 @@ impl ThetaCore {
         self.del.mul_add(Op::Wn, 1.0, &self.dtau, &mut self.wt);
         let mut dv: f64 = 0.0;
         let mut dg: f64 = 0.0;
-        for a in 0..m {
+        for a in 0..rows {
             dv = dv.max(h * th * self.wp[a].abs());
-            dg = dg.max(self.wt[a].abs());
+        }
+        for c in 0..self.m {
+            dg = dg.max(self.wt[self.off[c]].abs());
         }
         // Rounding floor: 8 ulps of the quantities the iterate is built from.
         let fv = 8.0 * f64::EPSILON * s_v;
@@ -625,7 +781,7 @@ impl ThetaCore {
                     &self.b,
                     &self.tau_prev,
                     &mut self.tau,
-                    ptol,
+                    (ptol, &self.normal),
                     stats,
                 )
                 .map_err(|e| fail(&self.state, "position LCP", e))?;
@@ -636,14 +792,17 @@ impl ThetaCore {
                 let (p, b) = (&self.p, &self.b);
                 let eq = |a: usize| project_all || p[a] > 0.0;
                 self.ws.idx.clear();
-                self.ws.idx.extend((0..m).filter(|&a| {
-                    self.pos_mask[a]
-                        && if eq(a) {
-                            b[a].abs() > ptol || (ptol == 0.0 && b[a] != 0.0)
-                        } else {
-                            b[a] < -ptol
-                        }
-                }));
+                self.ws
+                    .idx
+                    .extend((0..m).map(|c| (c, self.off[c])).filter_map(|(c, a)| {
+                        (self.pos_mask[c]
+                            && if eq(a) {
+                                b[a].abs() > ptol || (ptol == 0.0 && b[a] != 0.0)
+                            } else {
+                                b[a] < -ptol
+                            })
+                        .then_some(a)
+                    }));
                 if self.ws.idx.is_empty() {
                     self.tau.iter_mut().for_each(|x| *x = 0.0);
                 } else {
@@ -651,7 +810,8 @@ impl ThetaCore {
                         .ensure_all(&self.ws.idx, &self.sys.stiffness)
                         .map_err(|e| fail(&self.state, "Delassus columns", e))?;
                     self.ws
-                        .gather(&self.del, Op::Wn, 1.0, b, &self.tau_prev, eq);
+                        .gather(&self.del, Op::Wn, 1.0, b, &self.tau_prev, eq)
+                        .map_err(|e| fail(&self.state, "position MLCP", e))?;
                     let info = self
                         .ws
                         .solve()
@@ -699,8 +859,11 @@ impl ThetaCore {
         }
         std::mem::swap(&mut self.state.q, &mut self.q_new);
         std::mem::swap(&mut self.state.v, &mut self.v_new);
-        self.state.impulse.copy_from_slice(&self.p);
-        self.state.projection.copy_from_slice(&self.tau);
+        self.state.impulse_rows.copy_from_slice(&self.p);
+        for c in 0..self.m {
+            self.state.impulse[c] = self.p[self.off[c]];
+            self.state.projection[c] = self.tau[self.off[c]];
+        }
         self.state.step += 1;
         self.state.time = self.state.step as f64 * self.h;
         self.contacts
@@ -709,10 +872,50 @@ impl ThetaCore {
             self.del.refresh(&self.sys.stiffness);
             self.jac_at_qk = true;
         }
-        self.del
-            .jac
-            .transpose_mul(&self.state.v, &mut self.state.local_velocity);
+        self.del.jac.transpose_mul(&self.state.v, &mut self.u_rows);
+        self.scatter_local_velocity();
         stats.max_violation = self.state.gap.iter().fold(0.0_f64, |acc, &g| acc.max(-g));
+    }
+
+    /// Copies the normal and tangential parts of `u_rows` and of the impulse into the
+    /// state and classifies each frictional contact: open without normal impulse, stick
+    /// when `‖U_T‖` is below 1e-9 of the step's velocity scale (or the impulse strictly
+    /// inside the cone), slip otherwise.
+    fn scatter_local_velocity(&mut self) {
+        let td = self.state.tangent_dim;
+        let vs = self
+            .u_free
+            .iter()
+            .chain(&self.u_rows)
+            .fold(0.0_f64, |s, x| s.max(x.abs()));
+        for c in 0..self.m {
+            let (o, e) = (self.off[c], self.off[c + 1]);
+            self.state.local_velocity[c] = self.u_rows[o];
+            if td == 0 {
+                continue;
+            }
+            let mut ut2 = 0.0;
+            let mut pt2 = 0.0;
+            for t in 0..td {
+                let (ut, pt) = if o + 1 + t < e {
+                    (self.u_rows[o + 1 + t], self.p[o + 1 + t])
+                } else {
+                    (0.0, 0.0)
+                };
+                self.state.tangent_velocity[c * td + t] = ut;
+                self.state.tangent_impulse[c * td + t] = pt;
+                ut2 += ut * ut;
+                pt2 += pt * pt;
+            }
+            let pn = self.p[o];
+            self.state.status[c] = if pn <= 0.0 {
+                ContactStatus::Open
+            } else if ut2.sqrt() <= 1e-9 * vs || pt2.sqrt() < (1.0 - 1e-9) * self.mu[c] * pn {
+                ContactStatus::Stick
+            } else {
+                ContactStatus::Slip
+            };
+        }
     }
 }
 
@@ -726,11 +929,11 @@ pub(crate) fn fail(state: &State, what: &str, e: SolveError) -> Error {
     }
 }
 
-/// Solves `0 ≤ rhs + scale·op z ⊥ z ≥ 0` over all `m` rows by solving on the rows
-/// violated at `z = 0` (`rhs < −tol`) and adding any row the solution leaves violated,
-/// until none is: the result then solves the full LCP, with work (and Delassus
-/// columns) proportional to the rows that matter. At most `m` growth rounds (a cap
-/// counted in `stats`).
+/// Solves `0 ≤ rhs + scale·op z ⊥ z ≥ 0` over the rows flagged in `rows` (the normal
+/// rows) by solving on the rows violated at `z = 0` (`rhs < −tol`) and adding any row
+/// the solution leaves violated, until none is: the result then solves the full LCP,
+/// with work (and Delassus columns) proportional to the rows that matter. At most `m`
+/// growth rounds (a cap counted in `stats`).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn grow_solve(
     ws: &mut Workspace,
@@ -740,18 +943,18 @@ pub(crate) fn grow_solve(
     rhs: &[f64],
     warm: &[f64],
     out: &mut [f64],
-    tol: f64,
+    (tol, rows): (f64, &[bool]),
     stats: &mut StepStats,
 ) -> Result<(), SolveError> {
     let m = del.len();
     ws.idx.clear();
-    ws.idx.extend((0..m).filter(|&a| rhs[a] < -tol));
+    ws.idx.extend((0..m).filter(|&a| rows[a] && rhs[a] < -tol));
     out.iter_mut().for_each(|x| *x = 0.0);
     let mut rounds = 0;
     while !ws.idx.is_empty() {
         rounds += 1;
         del.ensure_all(&ws.idx, stiffness)?;
-        ws.gather(del, op, scale, rhs, warm, |_| false);
+        ws.gather(del, op, scale, rhs, warm, |_| false)?;
         let info = ws.solve()?;
         stats.lcp_iterations += info.iterations;
         stats.lcp_residual = stats.lcp_residual.max(info.residual);
@@ -764,7 +967,7 @@ pub(crate) fn grow_solve(
         ws.res.copy_from_slice(rhs);
         del.mul_add(op, scale, out, &mut ws.res);
         for a in 0..m {
-            if !ws.member[a] && ws.res[a] < -tol {
+            if rows[a] && !ws.member[a] && ws.res[a] < -tol {
                 ws.idx.push(a);
             }
         }

@@ -25,7 +25,6 @@
 
 pub mod combined_projection;
 pub mod core;
-pub mod delassus;
 pub mod direct_projection;
 pub mod moreau_jean;
 pub mod schatzman_paoli;
@@ -33,12 +32,19 @@ pub mod trapezoid;
 
 use serde::{Deserialize, Serialize};
 
-use crate::contact::ContactSet;
+use crate::contact::{ContactSet, ContactStatus};
 use crate::error::Error;
 use crate::model::LinearSystem;
 use crate::solvers::LcpKind;
 
 /// Positions, velocities and contact quantities at time `t_k`.
+///
+/// Contact quantities are per contact for the normal part (`gap`, `local_velocity`,
+/// `impulse`, `projection`) and, in frictional scenes, per contact and tangent for the
+/// tangential part (`tangent_velocity`, `tangent_impulse`, `tangent_dim` values per
+/// contact, zero for frictionless contacts), with a [`ContactStatus`] per contact.
+/// `impulse_rows` is the whole impulse in the rows of `G` (block by block, normal
+/// first), so that `G impulse_rows / h` is the contact force in dof space.
 #[derive(Clone, Debug, Default)]
 pub struct State {
     /// Index of the last completed step (0 before the first step).
@@ -51,19 +57,36 @@ pub struct State {
     pub v: Vec<f64>,
     /// Gaps `g(q_k)` per contact (m; negative means penetration).
     pub gap: Vec<f64>,
-    /// Local normal velocities `U_k = G(q_k)ᵀ v_k` per contact (m/s).
+    /// Local normal velocities `U_N = G_Nᵀ v_k` per contact (m/s).
     pub local_velocity: Vec<f64>,
-    /// Contact impulse `P` over the last step per contact (N·s); force = `P/h`.
+    /// Normal contact impulse `P_N` over the last step per contact (N·s); force = `P/h`.
     pub impulse: Vec<f64>,
     /// Position projection multiplier `τ` of the last step per contact (eq. 28; units
     /// of the projection metric: m for Euclidean, kg·m for `M̂⁻¹`).
     pub projection: Vec<f64>,
+    /// Tangents per contact in `tangent_velocity` and `tangent_impulse`: 0 in a
+    /// frictionless scene, 1 in 2-D, 2 in 3-D.
+    pub tangent_dim: usize,
+    /// Tangential (slip) velocities `U_T` per contact (m/s), `tangent_dim` each.
+    pub tangent_velocity: Vec<f64>,
+    /// Tangential impulses `P_T` over the last step (N·s), `tangent_dim` each.
+    pub tangent_impulse: Vec<f64>,
+    /// Open / stick / slip per contact (frictional scenes; empty otherwise).
+    pub status: Vec<ContactStatus>,
+    /// The impulse in the rows of `G` (normal and tangential parts).
+    pub impulse_rows: Vec<f64>,
 }
 
 impl State {
-    /// The state at `t = 0` with `m` contacts (contact quantities zero until the
-    /// integrator evaluates them).
+    /// The state at `t = 0` with `m` frictionless contacts (contact quantities zero
+    /// until the integrator evaluates them).
     pub fn initial(q0: &[f64], v0: &[f64], m: usize) -> Self {
+        State::with_layout(q0, v0, m, 0, m)
+    }
+
+    /// The state at `t = 0` with `m` contacts of `tangent_dim` tangents each in the
+    /// state arrays and `rows` rows of `G` in all.
+    pub fn with_layout(q0: &[f64], v0: &[f64], m: usize, tangent_dim: usize, rows: usize) -> Self {
         State {
             step: 0,
             time: 0.0,
@@ -73,6 +96,11 @@ impl State {
             local_velocity: vec![0.0; m],
             impulse: vec![0.0; m],
             projection: vec![0.0; m],
+            tangent_dim,
+            tangent_velocity: vec![0.0; m * tangent_dim],
+            tangent_impulse: vec![0.0; m * tangent_dim],
+            status: vec![ContactStatus::Open; if tangent_dim > 0 { m } else { 0 }],
+            impulse_rows: vec![0.0; rows],
         }
     }
 }
@@ -96,6 +124,12 @@ pub struct StepStats {
     pub max_violation: f64,
     /// Number of iteration caps hit in this step (Newton, activation, growth).
     pub caps_hit: usize,
+    /// Friction problems solved in the step (0 in a frictionless scene).
+    pub friction_solves: usize,
+    /// NSGS sweeps over all friction problems of the step.
+    pub friction_iterations: usize,
+    /// Largest final friction residual of the step (Siconos' natural-map error).
+    pub friction_residual: f64,
 }
 
 /// A time integrator for a linear structure with contacts.
@@ -174,25 +208,7 @@ pub enum Forecast {
     Free,
 }
 
-/// Position projection metric `N` (eq. 58 and remark 3, eq. 59–60).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Metric {
-    /// `N = I`: `q ← q + G τ` (eq. 58). Kicks only the contact dofs.
-    Euclidean,
-    /// `N = M̂⁻¹`: `q ← q + M̂⁻¹ G τ` (eq. 60); the same matrix as the velocity LCP.
-    Mass,
-}
-
-impl Metric {
-    /// The command-line name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Metric::Euclidean => "euclidean",
-            Metric::Mass => "mass",
-        }
-    }
-}
+pub use crate::delassus::Metric;
 
 /// Newton loop controls shared by every scheme.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -245,13 +261,20 @@ pub struct SchemeParams {
     /// Newton loop controls.
     pub newton: NewtonParams,
     /// Delassus storage (default `auto`: dense while the blocks fit in 2 GiB and `G`
-    /// is constant, per-active-column otherwise; see [`delassus`]).
-    pub delassus: delassus::DelassusKind,
+    /// is constant, per-active-column otherwise; see [`crate::delassus`]).
+    pub delassus: crate::delassus::DelassusKind,
     /// Columns the per-active-column Delassus pool holds (0, default: as many as fit
     /// in 2 GiB, capped at the contact count). When full, the column of the contact
     /// inactive for longest is recomputed on demand; more contacts active in one step
     /// than the pool holds is an error.
     pub delassus_pool: usize,
+    /// Rows of the contact space the one-step solvers' dense workspaces hold (0,
+    /// default: all rows up to 4096, i.e. 128 MiB per dense block). The workspaces grow
+    /// with the active contacts, never with the square of the candidates; more rows
+    /// active in one step than this is an error naming the parameter.
+    pub max_active_rows: usize,
+    /// Coulomb friction solver controls (used only when some contact has `μ > 0`).
+    pub friction: crate::solvers::friction::FrictionParams,
 }
 
 impl Default for SchemeParams {
@@ -266,8 +289,10 @@ impl Default for SchemeParams {
             projection_tolerance: 0.0,
             lcp: LcpKind::Auto,
             newton: NewtonParams::default(),
-            delassus: delassus::DelassusKind::Auto,
+            delassus: crate::delassus::DelassusKind::Auto,
             delassus_pool: 0,
+            max_active_rows: 0,
+            friction: crate::solvers::friction::FrictionParams::default(),
         }
     }
 }
@@ -293,6 +318,7 @@ impl SchemeParams {
                 "must be at least 1",
             ));
         }
+        self.friction.validate("friction.")?;
         if let LcpKind::Pgs { tol, max_sweeps } = self.lcp {
             crate::error::require_positive("lcp.tol", tol)?;
             if max_sweeps == 0 {
@@ -315,6 +341,22 @@ pub fn build(
 ) -> Result<Box<dyn Integrator>, Error> {
     params.validate()?;
     crate::error::require_positive("dt", h)?;
+    if contacts.has_friction()
+        && matches!(
+            params.kind,
+            SchemeKind::SchatzmanPaoli | SchemeKind::TrapezoidPosition
+        )
+    {
+        // Schatzman–Paoli (eq. 20–22) and the position-level trapezoid state the contact
+        // at position level, where Coulomb's law (a velocity-level law, eq. 12–15) has
+        // no discrete counterpart in the paper.
+        return Err(Error::invalid(
+            "scheme.kind",
+            params.kind.name(),
+            "does not support Coulomb friction (a contact has friction > 0); use \
+             moreau-jean, direct-projection or combined-projection",
+        ));
+    }
     Ok(match params.kind {
         SchemeKind::MoreauJean => Box::new(moreau_jean::MoreauJean::new(
             params, system, contacts, q0, v0, h,

@@ -17,9 +17,9 @@
 //! The reported impulse is `P/h` (N·s), comparable with the velocity-level schemes.
 
 use super::core::{Workspace, factor_step_matrix, fail, grow_solve};
-use super::delassus::{Delassus, Op};
 use super::{Integrator, Metric, NewtonParams, SchemeParams, State, StepStats};
 use crate::contact::{ContactJacobian, ContactSet};
+use crate::delassus::{Delassus, Op};
 use crate::error::Error;
 use crate::linalg::{SpdFactor, spmv_add};
 use crate::model::LinearSystem;
@@ -48,6 +48,8 @@ pub struct SchatzmanPaoli {
     rhs: Vec<f64>,
     p: Vec<f64>,
     p_warm: Vec<f64>,
+    /// Every row is a normal row (frictionless only).
+    all_rows: Vec<bool>,
     ws: Workspace,
 }
 
@@ -88,7 +90,7 @@ impl SchatzmanPaoli {
             .map(|i| q0[i] - h * v0[i] + 0.5 * h * h * a0[i])
             .collect();
         let jac = ContactJacobian::for_set(contacts.as_ref());
-        let e = contacts.restitution().to_vec();
+        let e: Vec<f64> = contacts.laws().iter().map(|l| l.restitution).collect();
         let linear = contacts.is_linear();
         let del = Delassus::new(
             factor,
@@ -121,7 +123,8 @@ impl SchatzmanPaoli {
             rhs: vec![0.0; m],
             p: vec![0.0; m],
             p_warm: vec![0.0; m],
-            ws: Workspace::new(m, params),
+            all_rows: vec![true; m],
+            ws: Workspace::new(m, m, params, false),
         };
         sp.contacts
             .evaluate(&sp.q_prev, &mut sp.g_prev, &mut sp.del.jac);
@@ -201,7 +204,7 @@ impl Integrator for SchatzmanPaoli {
                 &self.rhs,
                 &self.p_warm,
                 &mut self.p,
-                0.0,
+                (0.0, &self.all_rows),
                 &mut st,
             )
             .map_err(|e| fail(&self.state, "Schatzman–Paoli LCP", e))?;
@@ -238,6 +241,7 @@ impl Integrator for SchatzmanPaoli {
         std::mem::swap(&mut self.state.q, &mut self.q_new);
         for a in 0..m {
             self.state.impulse[a] = self.p[a] / h;
+            self.state.impulse_rows[a] = self.p[a] / h;
         }
         self.state.step += 1;
         self.state.time = self.state.step as f64 * h;

@@ -670,7 +670,8 @@ impl Snapshot {
         self.v.copy_from_slice(&state.v);
         self.gap.copy_from_slice(&state.gap);
         self.reaction.iter_mut().for_each(|r| *r = 0.0);
-        for (a, &p) in state.impulse.iter().enumerate().take(jac.ncols()) {
+        // every row of G: the normal and, with friction, the tangential impulses
+        for (a, &p) in state.impulse_rows.iter().enumerate().take(jac.ncols()) {
             if p != 0.0 {
                 jac.axpy(a, p / h, &mut self.reaction);
             }

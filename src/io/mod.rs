@@ -64,8 +64,12 @@ impl HistoryWriter {
     /// Rows buffered before an explicit flush.
     const FLUSH_EVERY: usize = 4096;
 
-    /// Creates `path.part` and writes the header for `m` contacts.
-    pub fn create(path: &Path, m: usize) -> Result<Self, Error> {
+    /// Creates `path.part` and writes the header for `m` contacts with `tangent_dim`
+    /// tangents each (0 in a frictionless scene: the columns of before, unchanged).
+    /// Frictional scenes add per contact `tangent_impulse_{c}_{t}` (N·s),
+    /// `slip_velocity_{c}_{t}` (m/s) and `status_{c}` (0 open, 1 stick, 2 slip), and per
+    /// row `friction_iterations`, `friction_residual`.
+    pub fn create(path: &Path, m: usize, tangent_dim: usize) -> Result<Self, Error> {
         let tmp = part_path(path);
         let f = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
         let mut out = BufWriter::with_capacity(1 << 16, f);
@@ -75,6 +79,15 @@ impl HistoryWriter {
         );
         for c in 0..m {
             header.push_str(&format!(",gap_{c},velocity_{c},impulse_{c},projection_{c}"));
+            for t in 0..tangent_dim {
+                header.push_str(&format!(",tangent_impulse_{c}_{t},slip_velocity_{c}_{t}"));
+            }
+            if tangent_dim > 0 {
+                header.push_str(&format!(",status_{c}"));
+            }
+        }
+        if tangent_dim > 0 {
+            header.push_str(",friction_iterations,friction_residual");
         }
         writeln!(out, "{header}").map_err(|e| Error::io(&tmp, e))?;
         Ok(HistoryWriter {
@@ -125,6 +138,23 @@ impl HistoryWriter {
                     o.write_all(b",")?;
                     o.write_all(fmt_f64(&mut buf, x))?;
                 }
+                let td = state.tangent_dim;
+                for t in 0..td {
+                    for x in [
+                        state.tangent_impulse[c * td + t],
+                        state.tangent_velocity[c * td + t],
+                    ] {
+                        o.write_all(b",")?;
+                        o.write_all(fmt_f64(&mut buf, x))?;
+                    }
+                }
+                if td > 0 {
+                    write!(o, ",{}", state.status[c].code())?;
+                }
+            }
+            if state.tangent_dim > 0 {
+                write!(o, ",{},", stats.friction_iterations)?;
+                o.write_all(fmt_f64(&mut buf, stats.friction_residual))?;
             }
             o.write_all(b"\n")
         })();

@@ -26,6 +26,7 @@
 //! nodes = "x0"                 # a node set of the body's mesh
 //! obstacle = "wall"
 //! restitution = 0.0
+//! friction = 0.0               # Coulomb μ; > 0 adds tangential rows and the friction solver
 //! ```
 //!
 //! Mesh generators: `box` (hex8 or tet4), `rectangle` (quad4 or tri3), `rod` (the
@@ -263,6 +264,9 @@ pub struct ContactSpec {
     /// Newton restitution coefficient.
     #[serde(default)]
     pub restitution: f64,
+    /// Coulomb friction coefficient μ (default 0: frictionless, no friction solver).
+    #[serde(default)]
+    pub friction: f64,
 }
 
 /// `[loads]`.
@@ -285,6 +289,8 @@ pub struct ModelReport {
     pub contacts: usize,
     /// Whether every gap is linear in q (G constant).
     pub linear_contacts: bool,
+    /// Largest friction coefficient over the contacts (0: frictionless).
+    pub max_friction: f64,
     /// Whether Rayleigh damping is present.
     pub damping: bool,
     /// Whether a body force is applied.
@@ -383,6 +389,7 @@ impl Scene {
                 &format!("contacts[{i}].restitution"),
                 c.restitution,
             )?;
+            crate::contact::check_friction(&format!("contacts[{i}].friction"), c.friction)?;
         }
         Ok(())
     }
@@ -401,6 +408,7 @@ impl Scene {
                 cells: 0,
                 contacts: model.contacts.len(),
                 linear_contacts: model.contacts.is_linear(),
+                max_friction: 0.0,
                 damping: model.system.damping.is_some(),
                 gravity: model.system.force.iter().any(|&f| f != 0.0),
                 fixed_dofs: 0,
@@ -590,7 +598,7 @@ impl Scene {
                 refs.push(mesh.points[v][..dim].to_vec());
             }
             let mut set = self
-                .obstacle_set(obstacle, dofs, refs, c.restitution)
+                .obstacle_set(obstacle, dofs, refs, (c.restitution, c.friction))
                 .map_err(at)?;
             if let Some(d) = c.within {
                 require_positive("within", d).map_err(at)?;
@@ -620,7 +628,7 @@ impl Scene {
                     )));
                 }
                 set = self
-                    .obstacle_set(obstacle, dofs, refs, c.restitution)
+                    .obstacle_set(obstacle, dofs, refs, (c.restitution, c.friction))
                     .map_err(at)?;
             }
             sets.push(set);
@@ -640,6 +648,11 @@ impl Scene {
             cells,
             contacts: contacts.len(),
             linear_contacts: contacts.is_linear(),
+            max_friction: contacts
+                .laws()
+                .iter()
+                .map(|l| l.friction)
+                .fold(0.0, f64::max),
             damping: system.damping.is_some(),
             gravity: self.loads.gravity.is_some(),
             fixed_dofs,
@@ -666,7 +679,7 @@ impl Scene {
         o: &ObstacleSpec,
         dofs: Vec<Vec<usize>>,
         refs: Vec<Vec<f64>>,
-        e: f64,
+        (e, mu): (f64, f64),
     ) -> Result<Box<dyn ContactSet>, Error> {
         Ok(match o {
             ObstacleSpec::Plane { point, normal, .. } => {
@@ -680,37 +693,37 @@ impl Scene {
                     ));
                 }
                 let _ = norm;
-                Box::new(NodesOnPlane::new(dofs, refs, normal.clone(), offset, e)?)
+                Box::new(
+                    NodesOnPlane::new(dofs, refs, normal.clone(), offset, e)?.with_friction(mu)?,
+                )
             }
             ObstacleSpec::Sphere {
                 center,
                 radius,
                 side,
                 ..
-            } => Box::new(RoundObstacle::general(
-                dofs,
-                refs,
-                center.clone(),
-                None,
-                *radius,
-                *side,
-                e,
-            )?),
+            } => Box::new(
+                RoundObstacle::general(dofs, refs, center.clone(), None, *radius, *side, e)?
+                    .with_friction(mu)?,
+            ),
             ObstacleSpec::Cylinder {
                 point,
                 axis,
                 radius,
                 side,
                 ..
-            } => Box::new(RoundObstacle::general(
-                dofs,
-                refs,
-                point.clone(),
-                Some(axis.clone()),
-                *radius,
-                *side,
-                e,
-            )?),
+            } => Box::new(
+                RoundObstacle::general(
+                    dofs,
+                    refs,
+                    point.clone(),
+                    Some(axis.clone()),
+                    *radius,
+                    *side,
+                    e,
+                )?
+                .with_friction(mu)?,
+            ),
         })
     }
 }

@@ -15,6 +15,7 @@
 //! Each returns its iteration count and complementarity residual
 //! `max_i |min(z_i, w_i)|` as data.
 
+pub mod friction;
 pub mod lcp;
 pub mod mlcp;
 
@@ -46,7 +47,7 @@ pub enum SolveError {
     #[error("equality block of the MLCP is not positive definite")]
     Singular,
     /// More contacts are active in one step than the per-active-column Delassus pool
-    /// holds (see [`crate::integrators::delassus`]).
+    /// holds (see [`crate::delassus`]).
     #[error(
         "more than {cap} contacts active in one step: the per-active-column Delassus pool \
          is full (raise `delassus_pool`, use `delassus = \"dense\"` or fewer candidates)"
@@ -55,6 +56,20 @@ pub enum SolveError {
         /// Columns the pool holds.
         cap: usize,
     },
+    /// More contact rows are active in one step than the dense workspaces hold.
+    #[error(
+        "{active} contact rows active in one step, more than the one-step workspace holds \
+         ({cap}; raise `scheme.max_active_rows`)"
+    )]
+    ActiveRows {
+        /// Rows needed.
+        active: usize,
+        /// Rows the workspace holds.
+        cap: usize,
+    },
+    /// The problem data are not finite.
+    #[error("the one-step problem has non-finite data")]
+    NonFinite,
 }
 
 /// Which LCP algorithm the schemes use.

@@ -1,8 +1,16 @@
-//! Condensed Delassus data (DESIGN.md §4): the contact-space operators
-//! `W = GᵀÂ⁻¹G`, `W_D = GᵀÂ⁻¹K N G` and `W_N = GᵀNG` of eq. 56–60, and the
-//! `n`-space corrections `Â⁻¹G x`, `Â⁻¹K N G x`, `N G x` that turn contact impulses
-//! back into velocities and positions. `Â` is the scheme's factored step matrix
-//! (`M̂ = M + hθC + h²θ²K` of eq. 47, or Schatzman–Paoli's `M + h²θK + (hθ/2)C`).
+//! The Delassus operator of the contact rows (DESIGN.md §4, §8): `W = GᵀÂ⁻¹G`,
+//! `W_D = GᵀÂ⁻¹K N G` and `W_N = GᵀNG` of eq. 56–60, and the `n`-space corrections
+//! `Â⁻¹G x`, `Â⁻¹K N G x`, `N G x` that turn contact impulses back into velocities and
+//! positions. `Â` is the scheme's factored step matrix (`M̂ = M + hθC + h²θ²K` of
+//! eq. 47, or Schatzman–Paoli's `M + h²θK + (hθ/2)C`).
+//!
+//! The operator is indexed by *rows*: a contact `α` of dimension `d_α` (1 frictionless,
+//! 2 or 3 with Coulomb friction, eq. 11) owns `d_α` consecutive columns of `G`, normal
+//! first, and the block `W_αβ = G_αᵀÂ⁻¹G_β` is the `d_α × d_β` sub-block of rows
+//! `α` and columns `β`. Frictionless scenes have one row per contact, exactly the
+//! scalar operator of before. The solvers of [`crate::solvers`] see it only through
+//! [`DelassusOperator`] (entries, column products, products), implemented here for the
+//! gathered dense sub-problems ([`DenseOperator`]); they never import an integrator.
 //!
 //! Two storage paths, chosen by [`DelassusKind`]:
 //!
@@ -35,11 +43,103 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::Metric;
 use crate::contact::ContactJacobian;
 use crate::linalg::{SOLVE_BLOCK, SparseMatrix, SpdFactor, spmv};
 use crate::solvers::SolveError;
 use faer::sparse::SparseColMatRef;
+
+/// Position projection metric `N` (eq. 58 and remark 3, eq. 59–60).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Metric {
+    /// `N = I`: `q ← q + G τ` (eq. 58). Kicks only the contact dofs.
+    Euclidean,
+    /// `N = M̂⁻¹`: `q ← q + M̂⁻¹ G τ` (eq. 60); the same matrix as the velocity LCP.
+    Mass,
+}
+
+impl Metric {
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Metric::Euclidean => "euclidean",
+            Metric::Mass => "mass",
+        }
+    }
+}
+
+/// What the contact solvers need of a Delassus operator (rows `0..size()`).
+pub trait DelassusOperator {
+    /// Number of rows.
+    fn size(&self) -> usize;
+    /// Entry `(i, j)`.
+    fn entry(&self, i: usize, j: usize) -> f64;
+    /// `out += s · W x`.
+    fn mul_add(&self, s: f64, x: &[f64], out: &mut [f64]) {
+        for (j, &xj) in x.iter().enumerate() {
+            if xj != 0.0 {
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o += s * xj * self.entry(i, j);
+                }
+            }
+        }
+    }
+    /// `out += s · W_{:,j}`; `scratch` has `size()` values for operators that form the
+    /// column first.
+    fn column_add(&self, j: usize, s: f64, scratch: &mut [f64], out: &mut [f64]) {
+        let _ = scratch;
+        for (i, o) in out.iter_mut().enumerate() {
+            *o += s * self.entry(i, j);
+        }
+    }
+}
+
+/// A dense column-major `k × k` operator (the gathered active sub-problem of a step, or
+/// a problem read from a file).
+#[derive(Clone, Copy, Debug)]
+pub struct DenseOperator<'a> {
+    k: usize,
+    a: &'a [f64],
+}
+
+impl<'a> DenseOperator<'a> {
+    /// Wraps the column-major `k × k` matrix `a` (leading dimension `k`).
+    pub fn new(k: usize, a: &'a [f64]) -> Self {
+        assert!(
+            a.len() >= k * k,
+            "dense operator: {} values for {k}×{k}",
+            a.len()
+        );
+        DenseOperator { k, a }
+    }
+}
+
+impl DelassusOperator for DenseOperator<'_> {
+    fn size(&self) -> usize {
+        self.k
+    }
+    #[inline]
+    fn entry(&self, i: usize, j: usize) -> f64 {
+        self.a[i + j * self.k]
+    }
+    fn mul_add(&self, s: f64, x: &[f64], out: &mut [f64]) {
+        let k = self.k;
+        for (j, &xj) in x.iter().enumerate().take(k) {
+            if xj != 0.0 {
+                let f = s * xj;
+                for (o, &c) in out.iter_mut().zip(&self.a[j * k..(j + 1) * k]) {
+                    *o += f * c;
+                }
+            }
+        }
+    }
+    fn column_add(&self, j: usize, s: f64, _scratch: &mut [f64], out: &mut [f64]) {
+        let k = self.k;
+        for (o, &c) in out.iter_mut().zip(&self.a[j * k..(j + 1) * k]) {
+            *o += s * c;
+        }
+    }
+}
 
 /// How the Delassus data are stored (DESIGN.md §4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]

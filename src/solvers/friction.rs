@@ -1,0 +1,737 @@
+//! One-step Coulomb friction problems (eq. 11–15): find `r` and `u = W r + q` with
+//! `C* ∋ û ⊥ r ∈ C`, `û = u + μ‖u_T‖ e_N` (De Saxcé's modified velocity, eq. 13), block
+//! by block in the local frames (normal first, then one or two tangents). Newton's
+//! impact law enters through `q`: the integrators put `U_free + e U_k` in its normal
+//! rows, so `u_N` is `U_{k+1} + e U_k` (eq. 18d with friction).
+//!
+//! Two solvers, as Siconos' fc2d/fc3d and LMGC90's NLGS offer them:
+//!
+//! * [`FrictionSolverKind::Nsgs`]: nonsmooth Gauss–Seidel over the contacts (Jean–Moreau
+//!   NLGS), each block solved exactly with the others frozen: `r_N = max(0, −q_N/W_NN)`
+//!   for a frictionless block; the closed form of the 2-D law (open, stick, slip left,
+//!   slip right: the one consistent case of the four); in 3-D a semismooth Newton on
+//!   the Alart–Curnier function with an Armijo line search, and the projected
+//!   fixed point `r ← P_C(r − ρ û)` as fallback. Warm started by the caller's `r`.
+//!   The method of choice for the few contacts per step of the schemes, and for full-rank
+//!   finite-element problems.
+//! * [`FrictionSolverKind::Prox`]: the proximal-point method: NSGS on the regularized
+//!   problems `(W + σI, q − σ r_j)` until `r_{j+1} = r_j`. Every regularized block is
+//!   positive definite even when `W` is rank deficient (rigid multibody problems), which
+//!   is where plain NSGS stalls (FCLIB's `local_problem_test`, Siconos' NSGS included).
+//!
+//! The residual is the one Siconos reports (`fc3d_compute_error`):
+//! `‖r − P_C(r − û)‖ / max(‖q‖, ‖r‖, ‖u‖)`, with `u` recomputed from scratch as `W r + q`.
+//! Tolerance, iteration caps, the iterations and the residual are data
+//! ([`FrictionParams`], [`FrictionInfo`]); a cap hit is flagged in
+//! [`FrictionInfo::converged`] with the residual reached, never a silent stop.
+//!
+//! All buffers are sized once ([`FrictionSolver::with_capacity`]); solving does not
+//! allocate. The operator is any [`DelassusOperator`]: the solvers never see an
+//! integrator. Written here rather than taken from a crate: no Rust crate offers
+//! Coulomb-cone complementarity solvers (checked on crates.io and docs.rs, 2026-12).
+
+use serde::{Deserialize, Serialize};
+
+use super::SolveError;
+use crate::delassus::DelassusOperator;
+
+/// One contact block of a friction problem.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Block {
+    /// First row of the block in `r`, `u`, `q` and the operator.
+    pub offset: usize,
+    /// Rows: 1 (frictionless), 2 (2-D: normal, tangent) or 3 (3-D: normal, two tangents).
+    pub dim: usize,
+    /// Friction coefficient μ ≥ 0.
+    pub mu: f64,
+}
+
+/// Which friction solver runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FrictionSolverKind {
+    /// Nonsmooth Gauss–Seidel with exact local solves (default).
+    #[default]
+    Nsgs,
+    /// Proximal point with NSGS inside (rank-deficient `W`).
+    Prox,
+}
+
+impl FrictionSolverKind {
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            FrictionSolverKind::Nsgs => "nsgs",
+            FrictionSolverKind::Prox => "prox",
+        }
+    }
+}
+
+/// Controls of the friction solvers, with the defaults the schemes use.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FrictionParams {
+    /// Which solver (default NSGS).
+    pub solver: FrictionSolverKind,
+    /// Stop when the residual (module doc) is at most this (default 1e-12: the schemes
+    /// need the impulses to near round-off for gaps of 1e-12 m and stick of 1e-9 m).
+    pub tol: f64,
+    /// Cap on NSGS sweeps (in total over the proximal iterations for PROX; default 10 000).
+    pub max_iterations: usize,
+    /// Cap on the local Newton iterations of a 3-D block (default 50).
+    pub local_max_iterations: usize,
+}
+
+impl Default for FrictionParams {
+    fn default() -> Self {
+        FrictionParams {
+            solver: FrictionSolverKind::Nsgs,
+            tol: 1e-12,
+            max_iterations: 10_000,
+            local_max_iterations: 50,
+        }
+    }
+}
+
+impl FrictionParams {
+    /// Checks the ranges; errors name the field under `prefix`.
+    pub fn validate(&self, prefix: &str) -> Result<(), crate::Error> {
+        crate::error::require_in(&format!("{prefix}tol"), self.tol, 0.0, 1.0)?;
+        if self.max_iterations == 0 {
+            return Err(crate::Error::invalid(
+                &format!("{prefix}max_iterations"),
+                0,
+                "must be at least 1",
+            ));
+        }
+        if self.local_max_iterations == 0 {
+            return Err(crate::Error::invalid(
+                &format!("{prefix}local_max_iterations"),
+                0,
+                "must be at least 1",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What a friction solve reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct FrictionInfo {
+    /// NSGS sweeps (summed over the proximal iterations for PROX).
+    pub iterations: usize,
+    /// Final residual (module doc).
+    pub residual: f64,
+    /// Proximal iterations (0 for NSGS).
+    pub prox_iterations: usize,
+    /// The residual reached the tolerance (false: the cap was hit; `r` is the last iterate).
+    pub converged: bool,
+}
+
+/// Projection of `x = (x_N, x_T)` on the cone `‖x_T‖ ≤ μ x_N` (in place).
+pub fn project_on_cone(x: &mut [f64], mu: f64) {
+    let xn = x[0];
+    if x.len() == 1 || mu == 0.0 {
+        x[0] = xn.max(0.0);
+        x[1..].iter_mut().for_each(|t| *t = 0.0);
+        return;
+    }
+    let nt = norm(&x[1..]);
+    if nt <= mu * xn {
+        return;
+    }
+    if mu * nt <= -xn {
+        x.iter_mut().for_each(|t| *t = 0.0);
+        return;
+    }
+    let rn = (mu * nt + xn) / (1.0 + mu * mu);
+    let s = mu * rn / nt;
+    x[0] = rn;
+    x[1..].iter_mut().for_each(|t| *t *= s);
+}
+
+fn norm(x: &[f64]) -> f64 {
+    x.iter().map(|v| v * v).sum::<f64>().sqrt()
+}
+
+/// Squared natural-map error of one block: `‖r − P_C(r − û)‖²`.
+fn block_error2(r: &[f64], u: &[f64], mu: f64) -> f64 {
+    let d = r.len();
+    let mut x = [0.0; 3];
+    let ut = norm(&u[1..d]);
+    x[0] = r[0] - (u[0] + mu * ut);
+    for i in 1..d {
+        x[i] = r[i] - u[i];
+    }
+    project_on_cone(&mut x[..d], mu);
+    (0..d).map(|i| (r[i] - x[i]).powi(2)).sum()
+}
+
+/// Siconos' residual `‖r − P_C(r − û)‖ / max(‖q‖, ‖r‖, ‖u‖)` for `u` already equal to
+/// `W r + q`.
+pub fn residual(blocks: &[Block], q: &[f64], r: &[f64], u: &[f64]) -> f64 {
+    let e2: f64 = blocks
+        .iter()
+        .map(|b| {
+            let s = b.offset..b.offset + b.dim;
+            block_error2(&r[s.clone()], &u[s], b.mu)
+        })
+        .sum();
+    let k = blocks.last().map_or(0, |b| b.offset + b.dim);
+    let scale = norm(&q[..k]).max(norm(&r[..k])).max(norm(&u[..k]));
+    if scale <= f64::EPSILON {
+        e2.sqrt()
+    } else {
+        e2.sqrt() / scale
+    }
+}
+
+/// A friction problem `u = W r + q` over `blocks` (rows `0..k` of `w` and `q`).
+pub struct FrictionProblem<'a, W: DelassusOperator + ?Sized> {
+    /// The operator (its rows `0..k` in the order of `blocks`).
+    pub w: &'a W,
+    /// The constant term.
+    pub q: &'a [f64],
+    /// The contact blocks, contiguous from row 0.
+    pub blocks: &'a [Block],
+}
+
+impl<W: DelassusOperator + ?Sized> Clone for FrictionProblem<'_, W> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<W: DelassusOperator + ?Sized> Copy for FrictionProblem<'_, W> {}
+
+/// Workspace of the friction solvers, sized once.
+#[derive(Clone, Debug)]
+pub struct FrictionSolver {
+    capacity: usize,
+    /// Diagonal blocks `W_αα` (3×3 each, row-major, padded).
+    diag: Vec<[f64; 9]>,
+    col: Vec<f64>,
+    qreg: Vec<f64>,
+    rprev: Vec<f64>,
+}
+
+impl FrictionSolver {
+    /// Buffers for problems of up to `capacity` rows.
+    pub fn with_capacity(capacity: usize) -> Self {
+        FrictionSolver {
+            capacity,
+            diag: vec![[0.0; 9]; capacity],
+            col: vec![0.0; capacity],
+            qreg: vec![0.0; capacity],
+            rprev: vec![0.0; capacity],
+        }
+    }
+
+    /// Rows this workspace holds.
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// Solves `prob` with `params`; `r` holds the warm start on entry and the solution
+    /// on exit, `u` the velocity `W r + q`.
+    pub fn solve<W: DelassusOperator + ?Sized>(
+        &mut self,
+        prob: FrictionProblem<'_, W>,
+        params: &FrictionParams,
+        r: &mut [f64],
+        u: &mut [f64],
+    ) -> Result<FrictionInfo, SolveError> {
+        let k = prob.blocks.last().map_or(0, |b| b.offset + b.dim);
+        if k > self.capacity {
+            return Err(SolveError::ActiveRows {
+                active: k,
+                cap: self.capacity,
+            });
+        }
+        if prob.q[..k].iter().any(|x| !x.is_finite()) {
+            return Err(SolveError::NonFinite);
+        }
+        for b in prob.blocks {
+            let mut d = [0.0; 9];
+            for i in 0..b.dim {
+                for j in 0..b.dim {
+                    d[3 * i + j] = prob.w.entry(b.offset + i, b.offset + j);
+                }
+            }
+            self.diag[b.offset] = d;
+        }
+        match params.solver {
+            FrictionSolverKind::Nsgs => {
+                let (it, res) =
+                    self.nsgs(prob, 0.0, params, params.tol, params.max_iterations, r, u);
+                Ok(FrictionInfo {
+                    iterations: it,
+                    residual: res,
+                    prox_iterations: 0,
+                    converged: res <= params.tol,
+                })
+            }
+            FrictionSolverKind::Prox => self.prox(prob, params, k, r, u),
+        }
+    }
+
+    /// Proximal point: NSGS on `(W + σI, q − σ r_j)`, σ shrinking while the outer
+    /// iterates converge.
+    fn prox<W: DelassusOperator + ?Sized>(
+        &mut self,
+        prob: FrictionProblem<'_, W>,
+        params: &FrictionParams,
+        k: usize,
+        r: &mut [f64],
+        u: &mut [f64],
+    ) -> Result<FrictionInfo, SolveError> {
+        let wmax = prob
+            .blocks
+            .iter()
+            .flat_map(|b| (0..b.dim).map(move |i| b.offset + i))
+            .map(|i| prob.w.entry(i, i).abs())
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let mut sigma = wmax;
+        let mut total = 0;
+        let mut outer = 0;
+        let mut res = self.full_residual(prob, r, u);
+        while res > params.tol && total < params.max_iterations {
+            outer += 1;
+            self.rprev[..k].copy_from_slice(&r[..k]);
+            for i in 0..k {
+                self.qreg[i] = prob.q[i] - sigma * r[i];
+            }
+            // inner tolerance: two orders below the current outer residual
+            let inner_tol = (1e-2 * res).max(0.1 * params.tol);
+            let budget = params.max_iterations - total;
+            let (it, _) = self.nsgs_reg(prob, sigma, inner_tol, budget, r, u);
+            total += it;
+            res = self.full_residual(prob, r, u);
+            let step: f64 = (0..k)
+                .map(|i| (r[i] - self.rprev[i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            // the closer the iterates, the smaller σ can be without hurting NSGS
+            if step <= 0.5 * norm(&r[..k]).max(f64::MIN_POSITIVE) {
+                sigma = (sigma * 0.5).max(1e-8 * wmax);
+            }
+        }
+        Ok(FrictionInfo {
+            iterations: total,
+            residual: res,
+            prox_iterations: outer,
+            converged: res <= params.tol,
+        })
+    }
+
+    /// `u = W r + q` from scratch and the residual.
+    fn full_residual<W: DelassusOperator + ?Sized>(
+        &self,
+        prob: FrictionProblem<'_, W>,
+        r: &[f64],
+        u: &mut [f64],
+    ) -> f64 {
+        let k = prob.blocks.last().map_or(0, |b| b.offset + b.dim);
+        u[..k].copy_from_slice(&prob.q[..k]);
+        prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
+        residual(prob.blocks, prob.q, r, u)
+    }
+
+    /// NSGS on `(W + σI, qreg)` where `qreg` is already in `self.qreg`; returns the
+    /// sweeps and the residual of the regularized problem.
+    fn nsgs_reg<W: DelassusOperator + ?Sized>(
+        &mut self,
+        prob: FrictionProblem<'_, W>,
+        sigma: f64,
+        tol: f64,
+        cap: usize,
+        r: &mut [f64],
+        u: &mut [f64],
+    ) -> (usize, f64) {
+        let k = prob.blocks.last().map_or(0, |b| b.offset + b.dim);
+        let qreg = std::mem::take(&mut self.qreg);
+        let p = FrictionProblem {
+            w: prob.w,
+            q: &qreg[..k],
+            blocks: prob.blocks,
+        };
+        let params = FrictionParams {
+            tol,
+            max_iterations: cap.max(1),
+            ..FrictionParams::default()
+        };
+        let out = self.nsgs(p, sigma, &params, tol, cap.max(1), r, u);
+        self.qreg = qreg;
+        out
+    }
+
+    /// NSGS sweeps on `(W + σI, q)`; returns the sweeps done and the residual.
+    #[allow(clippy::too_many_arguments)]
+    fn nsgs<W: DelassusOperator + ?Sized>(
+        &mut self,
+        prob: FrictionProblem<'_, W>,
+        sigma: f64,
+        params: &FrictionParams,
+        tol: f64,
+        cap: usize,
+        r: &mut [f64],
+        u: &mut [f64],
+    ) -> (usize, f64) {
+        let k = prob.blocks.last().map_or(0, |b| b.offset + b.dim);
+        // u = (W + σI) r + q
+        u[..k].copy_from_slice(&prob.q[..k]);
+        prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
+        for i in 0..k {
+            u[i] += sigma * r[i];
+        }
+        let mut res = residual(prob.blocks, prob.q, r, u);
+        if res <= tol {
+            return (0, res);
+        }
+        let mut sweeps = 0;
+        while sweeps < cap {
+            sweeps += 1;
+            for b in prob.blocks {
+                let (o, d) = (b.offset, b.dim);
+                let mut wl = self.diag[o];
+                for i in 0..d {
+                    wl[3 * i + i] += sigma;
+                }
+                // local constant term: u_α without the block's own contribution
+                let mut ql = [0.0; 3];
+                for i in 0..d {
+                    let mut own = 0.0;
+                    for j in 0..d {
+                        own += wl[3 * i + j] * r[o + j];
+                    }
+                    ql[i] = u[o + i] - own;
+                }
+                let mut rl = [0.0; 3];
+                rl[..d].copy_from_slice(&r[o..o + d]);
+                solve_local(&wl, &ql, b.mu, d, params.local_max_iterations, &mut rl);
+                let mut delta = [0.0; 3];
+                let mut changed = false;
+                for i in 0..d {
+                    delta[i] = rl[i] - r[o + i];
+                    changed |= delta[i] != 0.0;
+                }
+                if changed {
+                    for j in 0..d {
+                        if delta[j] != 0.0 {
+                            prob.w
+                                .column_add(o + j, delta[j], &mut self.col[..k], &mut u[..k]);
+                            u[o + j] += sigma * delta[j];
+                        }
+                    }
+                    r[o..o + d].copy_from_slice(&rl[..d]);
+                }
+            }
+            res = residual(prob.blocks, prob.q, r, u);
+            if res <= tol {
+                // confirm on u recomputed from scratch (the updates accumulate rounding)
+                u[..k].copy_from_slice(&prob.q[..k]);
+                prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
+                for i in 0..k {
+                    u[i] += sigma * r[i];
+                }
+                res = residual(prob.blocks, prob.q, r, u);
+                if res <= tol {
+                    break;
+                }
+            }
+        }
+        (sweeps, res)
+    }
+}
+
+/// Solves one block exactly: `u = W r + q` (W is `d × d`, row-major in a 3×3 array)
+/// with `C* ∋ û ⊥ r ∈ C`. `r` holds the warm start (used by the 3-D Newton).
+pub fn solve_local(w: &[f64; 9], q: &[f64; 3], mu: f64, d: usize, max_it: usize, r: &mut [f64; 3]) {
+    match d {
+        1 => {
+            r[0] = if q[0] >= 0.0 || w[0] <= 0.0 {
+                0.0
+            } else {
+                -q[0] / w[0]
+            };
+        }
+        2 => solve_local_2d(w, q, mu, r),
+        _ => solve_local_3d(w, q, mu, max_it, r),
+    }
+}
+
+/// The 2-D law in closed form: the first consistent case of open, stick, slip with
+/// `u_T > 0` (`r_T = −μ r_N`), slip with `u_T < 0` (`r_T = μ r_N`).
+fn solve_local_2d(w: &[f64; 9], q: &[f64; 3], mu: f64, r: &mut [f64; 3]) {
+    let (wnn, wnt, wtn, wtt) = (w[0], w[1], w[3], w[4]);
+    let (qn, qt) = (q[0], q[1]);
+    r[2] = 0.0;
+    if qn >= 0.0 {
+        r[0] = 0.0;
+        r[1] = 0.0;
+        return;
+    }
+    // stick: W r = −q
+    let det = wnn * wtt - wnt * wtn;
+    if det > 0.0 {
+        let rn = (-qn * wtt + qt * wnt) / det;
+        let rt = (-qt * wnn + qn * wtn) / det;
+        if rn >= 0.0 && rt.abs() <= mu * rn {
+            r[0] = rn;
+            r[1] = rt;
+            return;
+        }
+    }
+    // slip: r_T = −s μ r_N with s = sign(u_T)
+    let mut best = (f64::INFINITY, 0.0, 0.0);
+    for s in [1.0, -1.0] {
+        let den = wnn - s * mu * wnt;
+        if den <= 0.0 {
+            continue;
+        }
+        let rn = -qn / den;
+        let rt = -s * mu * rn;
+        let ut = wtn * rn + wtt * rt + qt;
+        if rn >= 0.0 && s * ut >= 0.0 {
+            r[0] = rn;
+            r[1] = rt;
+            return;
+        }
+        // keep the least inconsistent case (round-off on a sign)
+        let viol = (-s * ut).max(0.0);
+        if viol < best.0 {
+            best = (viol, rn, rt);
+        }
+    }
+    r[0] = best.1;
+    r[1] = best.2;
+}
+
+/// The Alart–Curnier function of a 3-D block and (optionally) one element of its
+/// generalized Jacobian (row-major 3×3), with `ρ_N = 1/W_NN`, `ρ_T = 2/(W_T1T1 + W_T2T2)`.
+fn alart_curnier(
+    w: &[f64; 9],
+    q: &[f64; 3],
+    mu: f64,
+    rho: (f64, f64),
+    r: &[f64; 3],
+    jac: Option<&mut [f64; 9]>,
+) -> [f64; 3] {
+    let mut u = [0.0; 3];
+    for i in 0..3 {
+        u[i] = q[i] + w[3 * i] * r[0] + w[3 * i + 1] * r[1] + w[3 * i + 2] * r[2];
+    }
+    let (rn_, rt_) = rho;
+    let xn = r[0] - rn_ * u[0];
+    let pn = xn.max(0.0);
+    let xt = [r[1] - rt_ * u[1], r[2] - rt_ * u[2]];
+    let nx = (xt[0] * xt[0] + xt[1] * xt[1]).sqrt();
+    let rad = mu * pn;
+    let inside = nx <= rad;
+    let (pt0, pt1) = if inside {
+        (xt[0], xt[1])
+    } else {
+        (rad * xt[0] / nx, rad * xt[1] / nx)
+    };
+    let phi = [r[0] - pn, r[1] - pt0, r[2] - pt1];
+    if let Some(j) = jac {
+        // dΦ_N
+        if xn > 0.0 {
+            for c in 0..3 {
+                j[c] = rn_ * w[c];
+            }
+        } else {
+            j[0] = 1.0;
+            j[1] = 0.0;
+            j[2] = 0.0;
+        }
+        // dx_T/dr = [0 I] − ρ_T W_T
+        let mut dxt = [[0.0; 3]; 2];
+        for a in 0..2 {
+            for c in 0..3 {
+                dxt[a][c] = -rt_ * w[3 * (a + 1) + c];
+            }
+            dxt[a][a + 1] += 1.0;
+        }
+        if inside {
+            for a in 0..2 {
+                for c in 0..3 {
+                    j[3 * (a + 1) + c] = -dxt[a][c];
+                }
+                j[3 * (a + 1) + a + 1] += 1.0;
+            }
+        } else {
+            // dR/dr = μ dp_N/dr
+            let mut dr = [0.0; 3];
+            if xn > 0.0 {
+                for c in 0..3 {
+                    dr[c] = -mu * rn_ * w[c];
+                }
+                dr[0] += mu;
+            }
+            let xh = [xt[0] / nx, xt[1] / nx];
+            let f = rad / nx;
+            for a in 0..2 {
+                for c in 0..3 {
+                    let mut proj = 0.0;
+                    for b in 0..2 {
+                        let pab = if a == b { 1.0 } else { 0.0 } - xh[a] * xh[b];
+                        proj += pab * dxt[b][c];
+                    }
+                    j[3 * (a + 1) + c] = -xh[a] * dr[c] - f * proj;
+                }
+                j[3 * (a + 1) + a + 1] += 1.0;
+            }
+        }
+    }
+    phi
+}
+
+/// Semismooth Newton on Alart–Curnier with an Armijo line search on `½‖Φ‖²`, then
+/// the projected fixed point if Newton did not reach round-off.
+fn solve_local_3d(w: &[f64; 9], q: &[f64; 3], mu: f64, max_it: usize, r: &mut [f64; 3]) {
+    if q[0] >= 0.0 {
+        // û_N ≥ u_N = q_N ≥ 0 at r = 0: the block opens
+        *r = [0.0; 3];
+        return;
+    }
+    let rho = (
+        1.0 / w[0].max(f64::MIN_POSITIVE),
+        2.0 / (w[4] + w[8]).max(f64::MIN_POSITIVE),
+    );
+    let scale = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt() * rho.0.max(rho.1);
+    let target = 1e-15 * scale.max(f64::MIN_POSITIVE);
+    let mut jac = [0.0; 9];
+    let mut phi = alart_curnier(w, q, mu, rho, r, Some(&mut jac));
+    let mut f = 0.5 * (phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]);
+    for _ in 0..max_it {
+        if f.sqrt() <= target {
+            return;
+        }
+        let Some(dx) = solve3(&jac, &[-phi[0], -phi[1], -phi[2]]) else {
+            break;
+        };
+        let mut t = 1.0;
+        let mut accepted = false;
+        for _ in 0..30 {
+            let trial = [r[0] + t * dx[0], r[1] + t * dx[1], r[2] + t * dx[2]];
+            let p = alart_curnier(w, q, mu, rho, &trial, None);
+            let ft = 0.5 * (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+            if ft <= (1.0 - 1e-4 * t) * f {
+                *r = trial;
+                accepted = true;
+                break;
+            }
+            t *= 0.5;
+        }
+        if !accepted {
+            break;
+        }
+        phi = alart_curnier(w, q, mu, rho, r, Some(&mut jac));
+        f = 0.5 * (phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]);
+    }
+    if f.sqrt() <= target {
+        return;
+    }
+    // fallback: r ← P_C(r − ρ û), ρ = 1/λmax estimate (the largest Gershgorin bound)
+    let lam = (0..3)
+        .map(|i| (0..3).map(|j| w[3 * i + j].abs()).sum::<f64>())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let rho = 1.0 / lam;
+    for _ in 0..20 * max_it {
+        let mut u = [0.0; 3];
+        for i in 0..3 {
+            u[i] = q[i] + w[3 * i] * r[0] + w[3 * i + 1] * r[1] + w[3 * i + 2] * r[2];
+        }
+        let ut = (u[1] * u[1] + u[2] * u[2]).sqrt();
+        let mut x = [
+            r[0] - rho * (u[0] + mu * ut),
+            r[1] - rho * u[1],
+            r[2] - rho * u[2],
+        ];
+        project_on_cone(&mut x, mu);
+        let step = ((x[0] - r[0]).powi(2) + (x[1] - r[1]).powi(2) + (x[2] - r[2]).powi(2)).sqrt();
+        *r = x;
+        if step <= 1e-16 * (r[0].abs() + r[1].abs() + r[2].abs()).max(f64::MIN_POSITIVE) {
+            break;
+        }
+    }
+}
+
+/// Solves the 3×3 system `a x = b` (row-major) by Gaussian elimination with partial
+/// pivoting; `None` when singular.
+fn solve3(a: &[f64; 9], b: &[f64; 3]) -> Option<[f64; 3]> {
+    let mut m = [
+        [a[0], a[1], a[2], b[0]],
+        [a[3], a[4], a[5], b[1]],
+        [a[6], a[7], a[8], b[2]],
+    ];
+    let amax = a.iter().fold(0.0_f64, |s, x| s.max(x.abs()));
+    for c in 0..3 {
+        let p = (c..3)
+            .max_by(|&i, &j| m[i][c].abs().total_cmp(&m[j][c].abs()))
+            .expect("rows");
+        if m[p][c].abs() <= 1e-14 * amax {
+            return None;
+        }
+        m.swap(c, p);
+        for i in c + 1..3 {
+            let f = m[i][c] / m[c][c];
+            for j in c..4 {
+                m[i][j] -= f * m[c][j];
+            }
+        }
+    }
+    let mut x = [0.0; 3];
+    for i in (0..3).rev() {
+        let mut s = m[i][3];
+        for j in i + 1..3 {
+            s -= m[i][j] * x[j];
+        }
+        x[i] = s / m[i][i];
+    }
+    Some(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::delassus::DenseOperator;
+
+    /// A single 3-D contact pressed with a tangential load below the cone sticks, above
+    /// it slides with `‖r_T‖ = μ r_N` and `r_T` against `u_T`.
+    #[test]
+    fn one_contact_stick_and_slip() {
+        let w = [2.0, 0.1, 0.0, 0.1, 1.5, 0.2, 0.0, 0.2, 1.0];
+        let op = DenseOperator::new(3, &w);
+        let blocks = [Block {
+            offset: 0,
+            dim: 3,
+            mu: 0.5,
+        }];
+        let mut s = FrictionSolver::with_capacity(3);
+        for (qt, sticks) in [(0.1, true), (2.0, false)] {
+            let q = [-1.0, qt, 0.0];
+            let (mut r, mut u) = ([0.0; 3], [0.0; 3]);
+            let p = FrictionProblem {
+                w: &op,
+                q: &q,
+                blocks: &blocks,
+            };
+            let info = s
+                .solve(p, &FrictionParams::default(), &mut r, &mut u)
+                .unwrap();
+            assert!(info.residual <= 1e-12, "{info:?}");
+            let rt = (r[1] * r[1] + r[2] * r[2]).sqrt();
+            let ut = (u[1] * u[1] + u[2] * u[2]).sqrt();
+            assert!(r[0] > 0.0 && u[0].abs() < 1e-12);
+            if sticks {
+                assert!(ut < 1e-12 && rt < 0.5 * r[0]);
+            } else {
+                assert!((rt - 0.5 * r[0]).abs() < 1e-12 && ut > 1e-3);
+                assert!(r[1] * u[1] + r[2] * u[2] < 0.0);
+            }
+        }
+    }
+}
