@@ -580,6 +580,17 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
         s.iterations.lcp.max,
         s.caps_hit
     );
+    if let Some(f) = &s.friction {
+        out!(
+            "friction            {} solves, {:.2} sweeps each (max {} in a step), residual mean {:.2e} max {:.2e}; caps hit {}",
+            f.solves,
+            f.sweeps_mean,
+            f.sweeps_max_per_step,
+            f.residual_mean,
+            f.residual_max,
+            f.caps_hit
+        );
+    }
     if let Some(c) = &s.contact {
         let rel = |a: f64, b: f64| 100.0 * (a / b - 1.0);
         out!("                    measured        analytic        difference");

@@ -70,6 +70,23 @@ pub struct Iterations {
     pub lcp: MeanMax,
 }
 
+/// Friction solver statistics over the run (frictional scenes only).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct FrictionSummary {
+    /// Friction problems solved (over all steps, Newton iterations and index-set rounds).
+    pub solves: usize,
+    /// NSGS sweeps per solve: mean and maximum.
+    pub sweeps_mean: f64,
+    /// Largest sweeps of one step.
+    pub sweeps_max_per_step: usize,
+    /// Mean over the steps with a friction solve of the step's largest final residual.
+    pub residual_mean: f64,
+    /// Largest final residual (Siconos' natural-map error).
+    pub residual_max: f64,
+    /// Solves that hit the sweep cap (counted in `caps_hit` too).
+    pub caps_hit: usize,
+}
+
 /// Measured contact response with its analytic counterpart.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct ContactSummary {
@@ -138,6 +155,9 @@ pub struct Summary {
     pub iterations: Iterations,
     /// Total iteration caps hit.
     pub caps_hit: usize,
+    /// Friction solver statistics (absent in a frictionless scene).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<FrictionSummary>,
     /// Largest LCP complementarity residual met.
     pub max_lcp_residual: f64,
     /// Energy (kinetic + potential) at the start and at the end (J).
@@ -167,6 +187,13 @@ struct Acc {
     caps: usize,
     lcp_res: f64,
     violation: f64,
+    fr_solves: usize,
+    fr_sweeps: usize,
+    fr_sweeps_max: usize,
+    fr_res_sum: f64,
+    fr_res_max: f64,
+    fr_steps: usize,
+    fr_caps: usize,
 }
 
 impl Acc {
@@ -182,8 +209,27 @@ impl Acc {
             self.max[i] = self.max[i].max(v[i]);
         }
         self.caps += s.caps_hit;
+        if s.friction_solves > 0 {
+            self.fr_solves += s.friction_solves;
+            self.fr_sweeps += s.friction_iterations;
+            self.fr_sweeps_max = self.fr_sweeps_max.max(s.friction_iterations);
+            self.fr_res_sum += s.friction_residual;
+            self.fr_res_max = self.fr_res_max.max(s.friction_residual);
+            self.fr_steps += 1;
+            self.fr_caps += s.friction_caps;
+        }
         self.lcp_res = self.lcp_res.max(s.lcp_residual);
         self.violation = self.violation.max(s.max_violation);
+    }
+    fn friction(&self, frictional: bool) -> Option<FrictionSummary> {
+        frictional.then(|| FrictionSummary {
+            solves: self.fr_solves,
+            sweeps_mean: self.fr_sweeps as f64 / self.fr_solves.max(1) as f64,
+            sweeps_max_per_step: self.fr_sweeps_max,
+            residual_mean: self.fr_res_sum / self.fr_steps.max(1) as f64,
+            residual_max: self.fr_res_max,
+            caps_hit: self.fr_caps,
+        })
     }
     fn iterations(&self, steps: usize) -> Iterations {
         let mm = |i: usize| MeanMax {
@@ -432,6 +478,7 @@ pub fn run(
         contact,
         iterations: acc.iterations(steps),
         caps_hit: acc.caps,
+        friction: acc.friction(s.tangent_dim > 0),
         max_lcp_residual: acc.lcp_res,
         energy: [energy0, energy1],
         path: integ.path(),

@@ -218,3 +218,60 @@ fn schatzman_paoli_and_the_trapezoid_refuse_friction() {
         );
     }
 }
+
+/// x-momentum `1ₓᵀ M v` and x-mass of an integrator's state.
+fn momentum_x(integ: &dyn Integrator) -> (f64, f64) {
+    let sys = integ.system();
+    let mut mv = vec![0.0; sys.ndof()];
+    let ones: Vec<f64> = sys
+        .component
+        .iter()
+        .map(|&c| if c == 0 { 1.0 } else { 0.0 })
+        .collect();
+    signorini::linalg::spmv(sys.mass.as_ref(), &integ.state().v, &mut mv);
+    let p: f64 = mv.iter().zip(&ones).map(|(a, b)| a * b).sum();
+    signorini::linalg::spmv(sys.mass.as_ref(), &ones, &mut mv);
+    let m: f64 = mv.iter().zip(&ones).map(|(a, b)| a * b).sum();
+    (p, m)
+}
+
+/// The elastic hex8 block of `meshes/sliding_block.toml`: its centre of mass stops
+/// after `v0/(μ g)` and `v0²/(2 μ g)` within 1 % under the three schemes (stop: first
+/// step with `v_G ≤ 1e-3 v0`, a step of 2e-4 s is 0.06 % of the stop time).
+#[test]
+fn elastic_hex8_block_sliding_on_a_plane_stops_at_v0_over_mu_g() {
+    use signorini::scene::file::Scene;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/sliding_block.toml");
+    let (mu, v0) = (0.3, 1.0);
+    let (t_ref, d_ref) = (v0 / (mu * G), v0 * v0 / (2.0 * mu * G));
+    for kind in SCHEMES {
+        let mut scene = Scene::from_file(&path).unwrap();
+        scene.scheme.kind = kind;
+        let (model, _) = scene.build().unwrap();
+        let mut integ = model.into_integrator(&scene.scheme, scene.time.dt).unwrap();
+        let h = integ.dt();
+        let (p0, mass) = momentum_x(integ.as_ref());
+        assert!((p0 / mass - v0).abs() < 1e-12);
+        let (mut x, mut v, mut caps, mut viol) = (0.0, v0, 0, 0.0_f64);
+        let stop = loop {
+            let st = integ.step().unwrap();
+            caps += st.caps_hit;
+            viol = viol.max(st.max_violation);
+            let vn = momentum_x(integ.as_ref()).0 / mass;
+            x += 0.5 * (v + vn) * h;
+            v = vn;
+            if v <= 1e-3 * v0 {
+                break integ.state().time - 0.5 * h;
+            }
+            assert!(integ.state().time < 2.0 * t_ref, "{kind:?}: no stop");
+        };
+        assert_eq!(caps, 0, "{kind:?}");
+        assert!(
+            (stop / t_ref - 1.0).abs() < 0.01 && (x / d_ref - 1.0).abs() < 0.01,
+            "{kind:?}: stop {stop} s (analytic {t_ref}), distance {x} m (analytic {d_ref})"
+        );
+        if kind != SchemeKind::MoreauJean {
+            assert!(viol <= 1e-12, "{kind:?}: violation {viol:e} m");
+        }
+    }
+}

@@ -57,7 +57,7 @@ impl Integrator for CombinedProjection {
             // activation (eq. 66)
             let mut grew = false;
             for a in 0..c.m {
-                if !c.vel_mask[a] && c.g_lin[a] <= 0.0 {
+                if !c.vel_mask[a] && c.g_lin[c.off[a]] <= 0.0 {
                     c.vel_mask[a] = true;
                     grew = true;
                 }

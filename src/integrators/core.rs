@@ -321,6 +321,11 @@ pub struct ThetaCore {
     pub(crate) vel_mask: Vec<bool>,
     /// Contacts projected this round (Algorithm 2).
     pub(crate) pos_mask: Vec<bool>,
+    /// Rows projected with `g = 0` in this Newton loop (Algorithm 2: `P > 0` at some
+    /// iterate). The set only grows within a loop, so the decoupled iteration cannot
+    /// cycle between two equality sets (with friction, a lifting contact's `P_N`
+    /// alternated between 0 and > 0 every iteration until the cap).
+    eq_rows: Vec<bool>,
     pub(crate) ws: Workspace,
 }
 
@@ -427,6 +432,7 @@ impl ThetaCore {
             dtau: vec![0.0; rows],
             vel_mask: vec![false; m],
             pos_mask: vec![false; m],
+            eq_rows: vec![false; rows],
             ws: Workspace::new(rows, m, params, friction),
         };
         core.contacts
@@ -535,6 +541,7 @@ impl ThetaCore {
         }
         self.tau_prev.iter_mut().for_each(|x| *x = 0.0);
         self.p.iter_mut().for_each(|x| *x = 0.0);
+        self.eq_rows.iter_mut().for_each(|x| *x = false);
         self.q_lin.copy_from_slice(&self.state.q);
         self.g_at_lin.copy_from_slice(&self.state.gap);
         let mut relinearized = false;
@@ -617,6 +624,7 @@ impl ThetaCore {
                             stats.friction_residual = stats.friction_residual.max(info.residual);
                             if !info.converged {
                                 stats.caps_hit += 1;
+                                stats.friction_caps += 1;
                             }
                         } else {
                             let info = self
@@ -789,8 +797,14 @@ impl ThetaCore {
             PositionRule::Combined { project_all } => {
                 // eq. 68: equality where P > 0 (eq. 69/70), complementarity elsewhere
                 // in the active set; rows already within the tolerance are dropped.
-                let (p, b) = (&self.p, &self.b);
-                let eq = |a: usize| project_all || p[a] > 0.0;
+                for c in 0..m {
+                    let a = self.off[c];
+                    if self.pos_mask[c] && self.p[a] > 0.0 {
+                        self.eq_rows[a] = true;
+                    }
+                }
+                let (b, eq_rows) = (&self.b, &self.eq_rows);
+                let eq = |a: usize| project_all || eq_rows[a];
                 self.ws.idx.clear();
                 self.ws
                     .idx
@@ -803,9 +817,14 @@ impl ThetaCore {
                             })
                         .then_some(a)
                     }));
-                if self.ws.idx.is_empty() {
-                    self.tau.iter_mut().for_each(|x| *x = 0.0);
-                } else {
+                self.tau.iter_mut().for_each(|x| *x = 0.0);
+                // The rows are chosen at τ = 0; the projection of the equality rows can
+                // push a complementarity row of the active set below zero (seen with
+                // friction: a lifting node next to projected ones). Such rows join and
+                // the problem is solved again, as in `grow_solve`: at most m rounds.
+                let mut rounds = 0;
+                while !self.ws.idx.is_empty() {
+                    rounds += 1;
                     self.del
                         .ensure_all(&self.ws.idx, &self.sys.stiffness)
                         .map_err(|e| fail(&self.state, "Delassus columns", e))?;
@@ -819,6 +838,31 @@ impl ThetaCore {
                     stats.lcp_iterations += info.iterations;
                     stats.lcp_residual = stats.lcp_residual.max(info.residual);
                     self.ws.scatter(&mut self.tau);
+                    // complementarity rows of the active set left out and now violated
+                    let before = self.ws.idx.len();
+                    self.ws.member.iter_mut().for_each(|x| *x = false);
+                    for &a in &self.ws.idx {
+                        self.ws.member[a] = true;
+                    }
+                    self.ws.res.iter_mut().for_each(|x| *x = 0.0);
+                    self.del.mul_add(Op::Wn, 1.0, &self.tau, &mut self.ws.res);
+                    for c in 0..m {
+                        let a = self.off[c];
+                        if self.pos_mask[c]
+                            && !eq(a)
+                            && !self.ws.member[a]
+                            && b[a] + self.ws.res[a] < -ptol
+                        {
+                            self.ws.idx.push(a);
+                        }
+                    }
+                    if self.ws.idx.len() == before {
+                        break;
+                    }
+                    if rounds > m {
+                        stats.caps_hit += 1;
+                        break;
+                    }
                 }
             }
         }

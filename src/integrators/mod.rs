@@ -130,6 +130,8 @@ pub struct StepStats {
     pub friction_iterations: usize,
     /// Largest final friction residual of the step (Siconos' natural-map error).
     pub friction_residual: f64,
+    /// Friction solves of the step that hit the sweep cap (also in `caps_hit`).
+    pub friction_caps: usize,
 }
 
 /// A time integrator for a linear structure with contacts.
