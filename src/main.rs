@@ -87,6 +87,31 @@ enum Command {
         /// The run's output directory.
         dir: PathBuf,
     },
+    /// Solve a one-step frictional contact problem read from a file: FCLIB HDF5 (local or
+    /// global, with the `hdf5` feature) or Siconos' .dat text format (2-D and 3-D).
+    /// Exit code 1 when the solver stops at its cap above the tolerance.
+    Fclib(FclibArgs),
+}
+
+#[derive(Args)]
+struct FclibArgs {
+    /// The problem file (.hdf5, .h5 or .dat).
+    file: PathBuf,
+    /// The friction solver.
+    #[arg(long, value_enum, default_value = "nsgs")]
+    solver: signorini::solvers::friction::FrictionSolverKind,
+    /// Residual to reach (Siconos' natural-map error, relative).
+    #[arg(long, default_value_t = 1e-8)]
+    tol: f64,
+    /// Cap on NSGS sweeps (over all proximal iterations for prox).
+    #[arg(long, default_value_t = 20000)]
+    max_iter: usize,
+    /// Start from the file's /guesses/1/r instead of r = 0.
+    #[arg(long)]
+    warm: bool,
+    /// Write r, u, residual, iterations and seconds as JSON.
+    #[arg(long, value_name = "OUT.json")]
+    solution: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -493,6 +518,65 @@ fn run_example(name: &str, out: Option<PathBuf>, quiet: bool) -> Result<(), sign
     Ok(())
 }
 
+/// `signorini fclib`: reads, solves, prints one line per quantity; `Ok(false)` when the
+/// cap was hit above the tolerance.
+fn fclib(a: &FclibArgs) -> Result<bool, signorini::Error> {
+    use signorini::solvers::friction::FrictionParams;
+    let params = FrictionParams {
+        solver: a.solver,
+        tol: a.tol,
+        max_iterations: a.max_iter,
+        ..FrictionParams::default()
+    };
+    params.validate_ranges("--")?;
+    let prob = signorini::io::fclib::read(&a.file)?;
+    let sol = signorini::io::fclib::solve(&prob, &params, a.warm)?;
+    out!("problem             {} ({})", a.file.display(), prob.form);
+    out!(
+        "size                {} contacts in {}-D, {} rows; μ in [{}, {}]; W asymmetry {:.1e}",
+        prob.contacts(),
+        prob.dim,
+        prob.rows(),
+        prob.mu.iter().cloned().fold(f64::INFINITY, f64::min),
+        prob.mu.iter().cloned().fold(0.0, f64::max),
+        prob.asymmetry
+    );
+    out!(
+        "solver              {} (tol {:e}, cap {} sweeps{})",
+        sol.solver,
+        a.tol,
+        a.max_iter,
+        if a.warm && prob.guess.is_some() {
+            ", warm start from /guesses/1"
+        } else {
+            ""
+        }
+    );
+    out!(
+        "result              {} after {} sweeps{}: residual {:.3e}, {:.3e} s",
+        if sol.converged {
+            "converged"
+        } else {
+            "NOT converged (cap hit)"
+        },
+        sol.iterations,
+        if sol.prox_iterations > 0 {
+            format!(" ({} proximal iterations)", sol.prox_iterations)
+        } else {
+            String::new()
+        },
+        sol.residual,
+        sol.seconds
+    );
+    if let Some(p) = &a.solution {
+        let json = serde_json::to_vec_pretty(&sol)
+            .map_err(|e| signorini::Error::Numerical(format!("serializing the solution: {e}")))?;
+        signorini::io::write_atomic(p, &json)?;
+        out!("wrote               {}", p.display());
+    }
+    Ok(sol.converged)
+}
+
 fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     let scene = Scene::from_file(&args.scene)?;
     let (model, report) = scene.build()?;
@@ -511,12 +595,7 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
             "Coulomb, μ up to {} ({} on the velocity problem of each step: De Saxcé's \
              cone complementarity, eq. 15; tol {:e}, cap {} sweeps)",
             report.max_friction,
-            match scene.scheme.friction.solver {
-                signorini::solvers::friction::FrictionSolverKind::Nsgs =>
-                    "NSGS with exact local solves",
-                signorini::solvers::friction::FrictionSolverKind::Prox =>
-                    "proximal point over NSGS",
-            },
+            scene.scheme.friction.solver.describe(),
             scene.scheme.friction.tol,
             scene.scheme.friction.max_iterations
         )
@@ -664,6 +743,11 @@ fn main() -> ExitCode {
                 out!("wrote {}", f.display());
             }
         }),
+        Some(Command::Fclib(a)) => match fclib(&a) {
+            Ok(true) => Ok(()),
+            Ok(false) => return ExitCode::from(1),
+            Err(e) => Err(e),
+        },
         None => run_bar(&cli.bar),
     };
     match result {

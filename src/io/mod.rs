@@ -6,6 +6,7 @@
 //! and renamed into place when complete, so a killed run never leaves a truncated file
 //! under the final name and keeps every flushed row in the `.part` file.
 
+pub mod fclib;
 pub mod frames;
 #[cfg(feature = "hdf5")]
 pub mod h5;

@@ -19,6 +19,13 @@
 //!   positive definite even when `W` is rank deficient (rigid multibody problems), which
 //!   is where plain NSGS stalls (FCLIB's `local_problem_test`, Siconos' NSGS included).
 //!
+//! * [`FrictionSolverKind::Newton`]: the same proximal loop around a global semismooth
+//!   Newton method on the Alart–Curnier function `Φ(r) = 0` of all blocks at once
+//!   (generalized Jacobian `J = A + B (W + σI)` with `A`, `B` block diagonal, dense LU,
+//!   Armijo line search on `½‖Φ‖²`), as Siconos' PROX with its inner Newton: quadratic
+//!   convergence where NSGS crawls. It forms an `n × n` matrix per iteration, so it is
+//!   for one-step problems (`signorini fclib`), not for the step loop.
+//!
 //! The residual is the one Siconos reports (`fc3d_compute_error`):
 //! `‖r − P_C(r − û)‖ / max(‖q‖, ‖r‖, ‖u‖)`, with `u` recomputed from scratch as `W r + q`.
 //! Tolerance, iteration caps, the iterations and the residual are data
@@ -47,7 +54,7 @@ pub struct Block {
 }
 
 /// Which friction solver runs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum FrictionSolverKind {
     /// Nonsmooth Gauss–Seidel with exact local solves (default).
@@ -55,6 +62,9 @@ pub enum FrictionSolverKind {
     Nsgs,
     /// Proximal point with NSGS inside (rank-deficient `W`).
     Prox,
+    /// Proximal point with a global semismooth Newton on Alart–Curnier inside (dense
+    /// Jacobian and LU: hard one-step problems; allocates, so not in the step loop).
+    Newton,
 }
 
 impl FrictionSolverKind {
@@ -63,6 +73,16 @@ impl FrictionSolverKind {
         match self {
             FrictionSolverKind::Nsgs => "nsgs",
             FrictionSolverKind::Prox => "prox",
+            FrictionSolverKind::Newton => "newton",
+        }
+    }
+
+    /// One phrase for `signorini check`.
+    pub fn describe(self) -> &'static str {
+        match self {
+            FrictionSolverKind::Nsgs => "NSGS with exact local solves",
+            FrictionSolverKind::Prox => "proximal point over NSGS",
+            FrictionSolverKind::Newton => "proximal point over a global Alart–Curnier Newton",
         }
     }
 }
@@ -96,6 +116,20 @@ impl Default for FrictionParams {
 impl FrictionParams {
     /// Checks the ranges; errors name the field under `prefix`.
     pub fn validate(&self, prefix: &str) -> Result<(), crate::Error> {
+        self.validate_ranges(prefix)?;
+        if self.solver == FrictionSolverKind::Newton {
+            return Err(crate::Error::invalid(
+                &format!("{prefix}solver"),
+                "newton",
+                "is for one-step problems (signorini fclib): it forms a dense Jacobian per \
+                 iteration, and the step loop does not allocate; use nsgs or prox",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks the ranges only (any solver; one-step problems).
+    pub fn validate_ranges(&self, prefix: &str) -> Result<(), crate::Error> {
         crate::error::require_in(&format!("{prefix}tol"), self.tol, 0.0, 1.0)?;
         if self.max_iterations == 0 {
             return Err(crate::Error::invalid(
@@ -271,6 +305,7 @@ impl FrictionSolver {
                 })
             }
             FrictionSolverKind::Prox => self.prox(prob, params, k, r, u),
+            FrictionSolverKind::Newton => Ok(prox_newton(prob, params, k, r, u)),
         }
     }
 
@@ -692,6 +727,233 @@ fn solve3(a: &[f64; 9], b: &[f64; 3]) -> Option<[f64; 3]> {
         x[i] = s / m[i][i];
     }
     Some(x)
+}
+
+/// `A_α` and `B_α` (row-major `d × d`) of the Alart–Curnier Jacobian of one block,
+/// `dΦ_α = A_α dr_α + B_α du_α`, and `Φ_α`, at `(r_α, u_α)`.
+fn ac_block(
+    r: &[f64],
+    u: &[f64],
+    mu: f64,
+    rho: (f64, f64),
+    a: &mut [f64; 9],
+    b: &mut [f64; 9],
+    phi: &mut [f64],
+) {
+    let d = r.len();
+    *a = [0.0; 9];
+    *b = [0.0; 9];
+    let (rn, rt) = rho;
+    let xn = r[0] - rn * u[0];
+    let pn = xn.max(0.0);
+    phi[0] = r[0] - pn;
+    if xn > 0.0 {
+        b[0] = rn;
+    } else {
+        a[0] = 1.0;
+    }
+    if d == 1 {
+        return;
+    }
+    let mut xt = [0.0; 2];
+    for t in 0..d - 1 {
+        xt[t] = r[1 + t] - rt * u[1 + t];
+    }
+    let nx = xt[..d - 1].iter().map(|x| x * x).sum::<f64>().sqrt();
+    let rad = mu * pn;
+    if nx <= rad {
+        for t in 0..d - 1 {
+            phi[1 + t] = rt * u[1 + t];
+            b[(1 + t) * d + 1 + t] = rt;
+        }
+        return;
+    }
+    let f = rad / nx;
+    let mut xh = [0.0; 2];
+    for t in 0..d - 1 {
+        xh[t] = xt[t] / nx;
+        phi[1 + t] = r[1 + t] - rad * xh[t];
+    }
+    for t in 0..d - 1 {
+        let row = 1 + t;
+        // −x̂ dR with dR = μ [x_N > 0] (dr_N − ρ_N du_N)
+        if xn > 0.0 {
+            a[row * d] -= xh[t] * mu;
+            b[row * d] += xh[t] * mu * rn;
+        }
+        // dr_T − f (I − x̂x̂ᵀ)(dr_T − ρ_T du_T)
+        a[row * d + row] += 1.0;
+        for s in 0..d - 1 {
+            let pts = if s == t { 1.0 } else { 0.0 } - xh[t] * xh[s];
+            a[row * d + 1 + s] -= f * pts;
+            b[row * d + 1 + s] += f * pts * rt;
+        }
+    }
+}
+
+/// `Φ` of all blocks at `r` for `(W + σI, q̃)`; returns `½‖Φ‖²`; `u` gets `(W + σI) r + q̃`.
+#[allow(clippy::too_many_arguments)]
+fn ac_all<W: DelassusOperator + ?Sized>(
+    prob: &FrictionProblem<'_, W>,
+    q: &[f64],
+    sigma: f64,
+    rho: &[(f64, f64)],
+    r: &[f64],
+    u: &mut [f64],
+    phi: &mut [f64],
+    jac: Option<(&mut [f64], &[f64])>,
+) -> f64 {
+    let k = q.len();
+    u.copy_from_slice(q);
+    prob.w.mul_add(1.0, r, u);
+    for i in 0..k {
+        u[i] += sigma * r[i];
+    }
+    let (mut a, mut b) = ([0.0; 9], [0.0; 9]);
+    let mut jac = jac;
+    for (bi, blk) in prob.blocks.iter().enumerate() {
+        let (o, d) = (blk.offset, blk.dim);
+        ac_block(
+            &r[o..o + d],
+            &u[o..o + d],
+            blk.mu,
+            rho[bi],
+            &mut a,
+            &mut b,
+            &mut phi[o..o + d],
+        );
+        if let Some((j, wd)) = jac.as_mut() {
+            // rows o..o+d of J = A + B (W + σI), column-major k × k
+            for c in 0..k {
+                for i in 0..d {
+                    let mut v = 0.0;
+                    for l in 0..d {
+                        v += b[i * d + l]
+                            * (wd[o + l + c * k] + if o + l == c { sigma } else { 0.0 });
+                    }
+                    if c >= o && c < o + d {
+                        v += a[i * d + (c - o)];
+                    }
+                    j[o + i + c * k] = v;
+                }
+            }
+        }
+    }
+    0.5 * phi.iter().map(|x| x * x).sum::<f64>()
+}
+
+/// Proximal point around a global semismooth Newton on Alart–Curnier (module doc).
+fn prox_newton<W: DelassusOperator + ?Sized>(
+    prob: FrictionProblem<'_, W>,
+    params: &FrictionParams,
+    k: usize,
+    r: &mut [f64],
+    u: &mut [f64],
+) -> FrictionInfo {
+    use faer::linalg::solvers::Solve;
+    let mut wd = vec![0.0; k * k];
+    for c in 0..k {
+        for i in 0..k {
+            wd[i + c * k] = prob.w.entry(i, c);
+        }
+    }
+    let rho: Vec<(f64, f64)> = prob
+        .blocks
+        .iter()
+        .map(|b| {
+            let o = b.offset;
+            let wnn = wd[o + o * k].abs().max(f64::MIN_POSITIVE);
+            let wtt = if b.dim > 1 {
+                (1..b.dim).map(|t| wd[o + t + (o + t) * k]).sum::<f64>() / (b.dim - 1) as f64
+            } else {
+                wnn
+            };
+            (1.0 / wnn, 1.0 / wtt.abs().max(f64::MIN_POSITIVE))
+        })
+        .collect();
+    let wmax = (0..k)
+        .map(|i| wd[i + i * k].abs())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let (mut phi, mut jac, mut qt, mut trial, mut ut, mut center) = (
+        vec![0.0; k],
+        vec![0.0; k * k],
+        vec![0.0; k],
+        vec![0.0; k],
+        vec![0.0; k],
+        vec![0.0; k],
+    );
+    let full = |r: &[f64], u: &mut [f64]| {
+        u.copy_from_slice(&prob.q[..k]);
+        prob.w.mul_add(1.0, r, u);
+        residual(prob.blocks, prob.q, r, u)
+    };
+    let mut res = full(&r[..k], &mut u[..k]);
+    let mut sigma = 1e-2 * wmax;
+    let (mut newton_its, mut outer) = (0, 0);
+    while res > params.tol && newton_its < params.max_iterations {
+        outer += 1;
+        center.copy_from_slice(&r[..k]);
+        for i in 0..k {
+            qt[i] = prob.q[i] - sigma * center[i];
+        }
+        // inner Newton on (W + σI, q − σ r_j)
+        for _ in 0..50 {
+            newton_its += 1;
+            let f = ac_all(
+                &prob,
+                &qt,
+                sigma,
+                &rho,
+                &r[..k],
+                &mut ut,
+                &mut phi,
+                Some((&mut jac, &wd)),
+            );
+            // the regularized problem's own relative residual (u = ut here)
+            if f == 0.0 || residual(prob.blocks, &qt, &r[..k], &ut) <= 0.1 * params.tol {
+                break;
+            }
+            let mut rhs = faer::Mat::from_fn(k, 1, |i, _| -phi[i]);
+            faer::MatRef::from_column_major_slice(&jac, k, k)
+                .partial_piv_lu()
+                .solve_in_place(rhs.as_mut());
+            let mut t = 1.0;
+            let mut accepted = false;
+            for _ in 0..40 {
+                for i in 0..k {
+                    trial[i] = r[i] + t * rhs[(i, 0)];
+                }
+                let ft = ac_all(&prob, &qt, sigma, &rho, &trial, &mut ut, &mut phi, None);
+                if ft.is_finite() && ft <= (1.0 - 1e-4 * t) * f {
+                    r[..k].copy_from_slice(&trial);
+                    accepted = true;
+                    break;
+                }
+                t *= 0.5;
+            }
+            if !accepted || newton_its >= params.max_iterations {
+                break;
+            }
+        }
+        res = full(&r[..k], &mut u[..k]);
+        let step = (0..k)
+            .map(|i| (r[i] - center[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        if step <= 0.5 * norm(&r[..k]).max(f64::MIN_POSITIVE) {
+            sigma = (sigma * 0.1).max(1e-12 * wmax);
+        }
+        if outer > 10_000 {
+            break;
+        }
+    }
+    FrictionInfo {
+        iterations: newton_its,
+        residual: res,
+        prox_iterations: outer,
+        converged: res <= params.tol,
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,489 @@
+//! Readers of one-step frictional contact problems: FCLIB's HDF5 files (Acary, Brémond,
+//! Koziara, Pérignon, INRIA RT-0444, 2014; layout of `fclib.h`), local and global, and
+//! Siconos' `.dat` text files (2-D and 3-D), into the dense local form
+//! `u = W r + q`, `C* ∋ û ⊥ r ∈ C` that [`crate::solvers::friction`] solves.
+//!
+//! - Local problems (`/fclib_local`): `W` sparse (CSC `nz = −1`, CSR `nz = −2` or
+//!   triplets `nz ≥ 0`; triplets store `i` = row and `p` = column, CSparse's convention,
+//!   whatever `fclib.h`'s comment says), `q`, `μ`, `spacedim`.
+//! - Global problems (`/fclib_global`): `M v = H r + f`, `u = Hᵀ v + w`, condensed here to
+//!   `W = Hᵀ M⁻¹ H`, `q = Hᵀ M⁻¹ f + w` with a dense LU of `M` (faer), because LMGC90's
+//!   `M` is not always symmetric (the Cholesky of the time-stepping path would not do).
+//! - `.dat`: `d`, the contact count, a dense NumericsMatrix (storage 0, sizes, sizes
+//!   again, values column by column), `q`, `μ` — whitespace-separated tokens.
+//!
+//! The contact frame is (N, T1, T2), as ours. `/guesses/1/{r, u}` is kept as a warm start
+//! when present; `/solution` groups are placeholders in the files we know and are
+//! ignored. Counts are checked against the file before anything is allocated, and the
+//! dense `W` is limited to [`MAX_ROWS`] rows (2 GiB).
+
+use std::path::Path;
+
+use crate::error::Error;
+
+/// Largest problem (rows of `W`) read into dense storage: 16384² values = 2 GiB.
+pub const MAX_ROWS: usize = 16384;
+/// Largest `.dat` file read (bytes).
+const MAX_DAT_BYTES: u64 = 1 << 30;
+
+/// A one-step frictional contact problem in local (condensed) form.
+#[derive(Clone, Debug)]
+pub struct FrictionContactProblem {
+    /// Space dimension: rows per contact (2 or 3).
+    pub dim: usize,
+    /// `W`, dense column-major `n × n` (`n = dim × contacts`).
+    pub w: Vec<f64>,
+    /// `q` (n values).
+    pub q: Vec<f64>,
+    /// `μ` per contact.
+    pub mu: Vec<f64>,
+    /// A warm start `r` from the file (`/guesses/1/r`), if any.
+    pub guess: Option<Vec<f64>>,
+    /// "local", "global (condensed)" or "dat".
+    pub form: &'static str,
+    /// `max |W − Wᵀ| / max |W|`.
+    pub asymmetry: f64,
+}
+
+impl FrictionContactProblem {
+    /// Number of contacts.
+    pub fn contacts(&self) -> usize {
+        self.mu.len()
+    }
+    /// Rows `n`.
+    pub fn rows(&self) -> usize {
+        self.q.len()
+    }
+
+    fn finish(mut self, path: &Path) -> Result<Self, Error> {
+        let n = self.q.len();
+        let at = |what: &str, reason: String| {
+            Error::invalid(&format!("{}: {what}", path.display()), "", &reason)
+        };
+        if !(self.dim == 2 || self.dim == 3) {
+            return Err(at("spacedim", format!("is {}, expected 2 or 3", self.dim)));
+        }
+        if n != self.dim * self.mu.len() || self.w.len() != n * n {
+            return Err(at(
+                "sizes",
+                format!(
+                    "q has {n} values, μ {} and W {} for dimension {}: expected q of d·contacts and W of its square",
+                    self.mu.len(),
+                    self.w.len(),
+                    self.dim
+                ),
+            ));
+        }
+        if let Some(i) = self.w.iter().position(|x| !x.is_finite()) {
+            return Err(at(
+                "W",
+                format!("entry {i} is {} (must be finite)", self.w[i]),
+            ));
+        }
+        if let Some(i) = self.q.iter().position(|x| !x.is_finite()) {
+            return Err(at(
+                "q",
+                format!("entry {i} is {} (must be finite)", self.q[i]),
+            ));
+        }
+        if let Some(i) = self.mu.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
+            return Err(at(
+                "mu",
+                format!("entry {i} is {} (must be ≥ 0)", self.mu[i]),
+            ));
+        }
+        let wmax = self.w.iter().fold(0.0_f64, |s, x| s.max(x.abs()));
+        let mut asym: f64 = 0.0;
+        for j in 0..n {
+            for i in 0..j {
+                asym = asym.max((self.w[i + j * n] - self.w[j + i * n]).abs());
+            }
+        }
+        self.asymmetry = if wmax > 0.0 { asym / wmax } else { 0.0 };
+        if let Some(g) = &self.guess
+            && (g.len() != n || g.iter().any(|x| !x.is_finite()))
+        {
+            self.guess = None;
+        }
+        Ok(self)
+    }
+}
+
+/// Reads a problem by its extension: `.dat` (Siconos text), `.hdf5`/`.h5` (FCLIB; needs
+/// the `hdf5` feature).
+pub fn read(path: &Path) -> Result<FrictionContactProblem, Error> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("dat") => read_dat(path),
+        Some("hdf5" | "h5") => read_hdf5(path),
+        other => Err(Error::invalid(
+            &path.display().to_string(),
+            format!("{other:?}"),
+            "unknown extension: expected .dat (Siconos) or .hdf5/.h5 (FCLIB)",
+        )),
+    }
+}
+
+/// Reads Siconos' `.dat` text format (module doc).
+pub fn read_dat(path: &Path) -> Result<FrictionContactProblem, Error> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if meta.len() > MAX_DAT_BYTES {
+        return Err(Error::invalid(
+            &path.display().to_string(),
+            format!("{} bytes", meta.len()),
+            "larger than the 1 GiB a .dat problem may have",
+        ));
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let mut tok = text.split_whitespace().enumerate();
+    let file = path.display().to_string();
+    let mut next = |what: &str| -> Result<&str, Error> {
+        tok.next().map(|(_, t)| t).ok_or_else(|| {
+            Error::invalid(&file, "end of file", &format!("truncated: expected {what}"))
+        })
+    };
+    let int = |t: &str, what: &str| -> Result<usize, Error> {
+        t.parse::<usize>().map_err(|_| {
+            Error::invalid(
+                &format!("{}: {what}", path.display()),
+                t,
+                "expected a non-negative integer",
+            )
+        })
+    };
+    let real = |t: &str, what: &str| -> Result<f64, Error> {
+        t.parse::<f64>().map_err(|_| {
+            Error::invalid(
+                &format!("{}: {what}", path.display()),
+                t,
+                "expected a number",
+            )
+        })
+    };
+    let dim = int(next("the dimension")?, "dimension")?;
+    let nc = int(next("the contact count")?, "contact count")?;
+    let storage = int(next("the matrix storage type")?, "storage type")?;
+    if storage != 0 {
+        return Err(Error::invalid(
+            &format!("{}: storage type", path.display()),
+            storage,
+            "only dense matrices (0) are read",
+        ));
+    }
+    let s0 = int(next("the matrix rows")?, "matrix rows")?;
+    let s1 = int(next("the matrix columns")?, "matrix columns")?;
+    let r0 = int(next("the matrix rows (repeated)")?, "matrix rows")?;
+    let r1 = int(next("the matrix columns (repeated)")?, "matrix columns")?;
+    let n = nc.saturating_mul(dim);
+    if s0 != n || s1 != n || r0 != n || r1 != n {
+        return Err(Error::invalid(
+            &format!("{}: matrix size", path.display()),
+            format!("{s0}×{s1} ({r0}×{r1})"),
+            &format!("expected {n}×{n} for {nc} contacts in dimension {dim}"),
+        ));
+    }
+    // every value needs at least two bytes (digit and separator)
+    let needed = n.saturating_mul(n).saturating_add(n).saturating_add(nc);
+    if n > MAX_ROWS || needed.saturating_mul(2) as u64 > meta.len() {
+        return Err(Error::invalid(
+            &format!("{}: contact count", path.display()),
+            nc,
+            &format!(
+                "needs {needed} values, more than the file holds (or than {MAX_ROWS} dense rows)"
+            ),
+        ));
+    }
+    let mut w = vec![0.0; n * n];
+    for (k, x) in w.iter_mut().enumerate() {
+        *x = real(next("W values")?, &format!("W value {k}"))?;
+    }
+    let mut q = vec![0.0; n];
+    for (k, x) in q.iter_mut().enumerate() {
+        *x = real(next("q values")?, &format!("q value {k}"))?;
+    }
+    let mut mu = vec![0.0; nc];
+    for (k, x) in mu.iter_mut().enumerate() {
+        *x = real(next("μ values")?, &format!("mu value {k}"))?;
+    }
+    FrictionContactProblem {
+        dim,
+        w,
+        q,
+        mu,
+        guess: None,
+        form: "dat",
+        asymmetry: 0.0,
+    }
+    .finish(path)
+}
+
+#[cfg(not(feature = "hdf5"))]
+/// FCLIB HDF5 files need the `hdf5` feature.
+pub fn read_hdf5(path: &Path) -> Result<FrictionContactProblem, Error> {
+    Err(Error::invalid(
+        &path.display().to_string(),
+        "HDF5",
+        "FCLIB files need the `hdf5` feature (cargo build --release --features hdf5, with libhdf5-dev)",
+    ))
+}
+
+#[cfg(feature = "hdf5")]
+/// Reads an FCLIB HDF5 file, local or global (condensed; module doc).
+pub fn read_hdf5(path: &Path) -> Result<FrictionContactProblem, Error> {
+    hdf5_impl::read(path)
+}
+
+#[cfg(feature = "hdf5")]
+mod hdf5_impl {
+    use super::*;
+
+    fn h5err(path: &Path, what: &str, e: impl std::fmt::Display) -> Error {
+        Error::invalid(
+            &format!("{}: {what}", path.display()),
+            "",
+            &format!("cannot be read: {e}"),
+        )
+    }
+
+    fn ints(f: &hdf5::File, path: &Path, name: &str) -> Result<Vec<i64>, Error> {
+        f.dataset(name)
+            .and_then(|d| d.read_raw::<i64>())
+            .map_err(|e| h5err(path, name, e))
+    }
+    fn int(f: &hdf5::File, path: &Path, name: &str) -> Result<i64, Error> {
+        ints(f, path, name)?
+            .first()
+            .copied()
+            .ok_or_else(|| h5err(path, name, "empty"))
+    }
+    fn reals(f: &hdf5::File, path: &Path, name: &str) -> Result<Vec<f64>, Error> {
+        f.dataset(name)
+            .and_then(|d| d.read_raw::<f64>())
+            .map_err(|e| h5err(path, name, e))
+    }
+
+    /// A sparse matrix of the file as dense column-major `rows × cols`.
+    fn matrix(
+        f: &hdf5::File,
+        path: &Path,
+        g: &str,
+        limit: usize,
+    ) -> Result<(usize, usize, Vec<f64>), Error> {
+        let at = |k: &str| format!("{g}/{k}");
+        let m = int(f, path, &at("m"))?;
+        let n = int(f, path, &at("n"))?;
+        let nz = int(f, path, &at("nz"))?;
+        let bad = |what: String| Error::invalid(&format!("{}: {g}", path.display()), "", &what);
+        if m < 0 || n < 0 || m as u64 > limit as u64 || n as u64 > limit as u64 {
+            return Err(bad(format!(
+                "size {m}×{n}: expected 0..={limit} rows and columns"
+            )));
+        }
+        let (m, n) = (m as usize, n as usize);
+        let p = ints(f, path, &at("p"))?;
+        let i = ints(f, path, &at("i"))?;
+        let x = reals(f, path, &at("x"))?;
+        let mut a = vec![0.0; m * n];
+        let idx = |v: i64, lim: usize, what: &str| -> Result<usize, Error> {
+            if v < 0 || v as u64 >= lim as u64 {
+                Err(bad(format!("{what} index {v} outside 0..{lim}")))
+            } else {
+                Ok(v as usize)
+            }
+        };
+        match nz {
+            -1 | -2 => {
+                // compressed: p over the major dimension
+                let major = if nz == -1 { n } else { m };
+                let minor = if nz == -1 { m } else { n };
+                if p.len() < major + 1 {
+                    return Err(bad(format!(
+                        "p has {} entries, expected {}",
+                        p.len(),
+                        major + 1
+                    )));
+                }
+                for c in 0..major {
+                    let (s, e) = (p[c], p[c + 1]);
+                    if s < 0 || e < s || e as u64 > i.len().min(x.len()) as u64 {
+                        return Err(bad(format!(
+                            "p[{c}..{}] = {s}..{e} is not a valid range",
+                            c + 1
+                        )));
+                    }
+                    for k in s as usize..e as usize {
+                        let r = idx(i[k], minor, "minor")?;
+                        let (row, col) = if nz == -1 { (r, c) } else { (c, r) };
+                        a[row + col * m] += x[k];
+                    }
+                }
+            }
+            nz if nz >= 0 => {
+                let nz = nz as usize;
+                if i.len() < nz || p.len() < nz || x.len() < nz {
+                    return Err(bad(format!("{nz} triplets but shorter i, p or x")));
+                }
+                for k in 0..nz {
+                    // CSparse triplets: i = row, p = column
+                    let row = idx(i[k], m, "row")?;
+                    let col = idx(p[k], n, "column")?;
+                    a[row + col * m] += x[k];
+                }
+            }
+            other => return Err(bad(format!("nz = {other}: expected −1, −2 or ≥ 0"))),
+        }
+        Ok((m, n, a))
+    }
+
+    pub(super) fn read(path: &Path) -> Result<FrictionContactProblem, Error> {
+        let f = hdf5::File::open(path).map_err(|e| h5err(path, "file", e))?;
+        let guess = if f.link_exists("guesses/1/r") {
+            reals(&f, path, "guesses/1/r").ok()
+        } else {
+            None
+        };
+        if f.link_exists("fclib_local") {
+            let dim = int(&f, path, "fclib_local/spacedim")?;
+            let (m, n, w) = matrix(&f, path, "fclib_local/W", MAX_ROWS)?;
+            if m != n {
+                return Err(Error::invalid(
+                    &format!("{}: fclib_local/W", path.display()),
+                    format!("{m}×{n}"),
+                    "must be square",
+                ));
+            }
+            return FrictionContactProblem {
+                dim: dim.max(0) as usize,
+                w,
+                q: reals(&f, path, "fclib_local/vectors/q")?,
+                mu: reals(&f, path, "fclib_local/vectors/mu")?,
+                guess,
+                form: "local",
+                asymmetry: 0.0,
+            }
+            .finish(path);
+        }
+        if f.link_exists("fclib_global") {
+            use faer::linalg::solvers::Solve;
+            let dim = int(&f, path, "fclib_global/spacedim")?;
+            let (nm, nm2, mm) = matrix(&f, path, "fclib_global/M", MAX_ROWS)?;
+            let (hn, hr, hh) = matrix(&f, path, "fclib_global/H", MAX_ROWS)?;
+            let fv = reals(&f, path, "fclib_global/vectors/f")?;
+            let wv = reals(&f, path, "fclib_global/vectors/w")?;
+            if nm != nm2 || hn != nm || fv.len() != nm || wv.len() != hr {
+                return Err(Error::invalid(
+                    &format!("{}: fclib_global", path.display()),
+                    format!("M {nm}×{nm2}, H {hn}×{hr}, f {}, w {}", fv.len(), wv.len()),
+                    "expected M n×n, H n×m, f of n and w of m values",
+                ));
+            }
+            let lu = faer::Mat::from_fn(nm, nm, |i, j| mm[i + j * nm]).partial_piv_lu();
+            // X = M⁻¹ [H f]
+            let mut x = faer::Mat::from_fn(
+                nm,
+                hr + 1,
+                |i, j| {
+                    if j < hr { hh[i + j * nm] } else { fv[i] }
+                },
+            );
+            lu.solve_in_place(x.as_mut());
+            let mut w = vec![0.0; hr * hr];
+            let mut q = wv.clone();
+            for b in 0..hr {
+                for a in 0..hr {
+                    w[a + b * hr] = (0..nm).map(|k| hh[k + a * nm] * x[(k, b)]).sum();
+                }
+            }
+            for (a, qa) in q.iter_mut().enumerate() {
+                *qa += (0..nm).map(|k| hh[k + a * nm] * x[(k, hr)]).sum::<f64>();
+            }
+            return FrictionContactProblem {
+                dim: dim.max(0) as usize,
+                w,
+                q,
+                mu: reals(&f, path, "fclib_global/vectors/mu")?,
+                guess,
+                form: "global (condensed W = Hᵀ M⁻¹ H by dense LU)",
+                asymmetry: 0.0,
+            }
+            .finish(path);
+        }
+        Err(Error::invalid(
+            &path.display().to_string(),
+            "HDF5",
+            "holds neither /fclib_local nor /fclib_global",
+        ))
+    }
+}
+
+/// A solved problem: what `signorini fclib --solution` writes.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Solution {
+    /// Reactions, contact by contact, normal first.
+    pub r: Vec<f64>,
+    /// Velocities `W r + q`, same layout.
+    pub u: Vec<f64>,
+    /// Siconos' residual (see [`crate::solvers::friction`]).
+    pub residual: f64,
+    /// NSGS sweeps (summed over the proximal iterations for PROX).
+    pub iterations: usize,
+    /// Proximal iterations (PROX only).
+    pub prox_iterations: usize,
+    /// The residual reached the tolerance.
+    pub converged: bool,
+    /// Wall time of the solve (s).
+    pub seconds: f64,
+    /// The solver.
+    pub solver: String,
+}
+
+/// Solves `prob` from `r = 0` (or the file's guess when `warm`) with `params`.
+pub fn solve(
+    prob: &FrictionContactProblem,
+    params: &crate::solvers::friction::FrictionParams,
+    warm: bool,
+) -> Result<Solution, Error> {
+    use crate::delassus::DenseOperator;
+    use crate::solvers::friction::{Block, FrictionProblem, FrictionSolver};
+    let n = prob.rows();
+    let blocks: Vec<Block> = prob
+        .mu
+        .iter()
+        .enumerate()
+        .map(|(a, &mu)| Block {
+            offset: a * prob.dim,
+            dim: prob.dim,
+            mu,
+        })
+        .collect();
+    let mut r = match (&prob.guess, warm) {
+        (Some(g), true) => g.clone(),
+        _ => vec![0.0; n],
+    };
+    let mut u = vec![0.0; n];
+    let mut solver = FrictionSolver::with_capacity(n);
+    let op = DenseOperator::new(n, &prob.w);
+    let t0 = std::time::Instant::now();
+    let info = solver
+        .solve(
+            FrictionProblem {
+                w: &op,
+                q: &prob.q,
+                blocks: &blocks,
+            },
+            params,
+            &mut r,
+            &mut u,
+        )
+        .map_err(|e| Error::Numerical(e.to_string()))?;
+    let seconds = t0.elapsed().as_secs_f64();
+    Ok(Solution {
+        r,
+        u,
+        residual: info.residual,
+        iterations: info.iterations,
+        prox_iterations: info.prox_iterations,
+        converged: info.converged,
+        seconds,
+        solver: params.solver.name().to_string(),
+    })
+}
