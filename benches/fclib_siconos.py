@@ -1,0 +1,149 @@
+#!/usr/bin/python3
+"""FCLIB benchmark: signorini's friction solvers against Siconos' on the same files, in
+one run on one machine (Debian's python3-siconos and python3-h5py, /usr/bin/python3).
+
+For every .hdf5 / .dat file of DIR (default ../shared/fclib): Siconos' fc3d NSGS, PROX,
+NSN_AC and ADMM (fc2d NSGS, CPG and ENUM for 2-D problems), and `signorini fclib` with
+nsgs, prox and newton, all from r = 0 with tolerance 1e-8 and 20 000 iterations. Each
+solve runs 3 times; the table shows the median solve time (Siconos: the driver call;
+signorini: the `seconds` of its --solution JSON, the solve without reading the file),
+the iterations, Siconos' residual as each code reports it, and whether it converged.
+
+Global problems are condensed here as signorini does (W = H^T M^-1 H, q = H^T M^-1 f + w,
+dense LU), so both codes solve the same local problem. Siconos 4.4 has no FCLIB reader.
+
+Usage: /usr/bin/python3 benches/fclib_siconos.py [path/to/signorini] [DIR]
+"""
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+import siconos.numerics as sn
+
+TOL, MAX_IT, REPEAT = 1e-8, 20000, 3
+
+
+def sparse(g):
+    m, n, nz = int(g["m"][()]), int(g["n"][()]), int(g["nz"][()])
+    p, i, x = np.array(g["p"]), np.array(g["i"]), np.array(g["x"])
+    a = np.zeros((m, n))
+    if nz == -1:  # CSC
+        for c in range(n):
+            for k in range(p[c], p[c + 1]):
+                a[i[k], c] += x[k]
+    elif nz == -2:  # CSR
+        for r in range(m):
+            for k in range(p[r], p[r + 1]):
+                a[r, i[k]] += x[k]
+    else:  # triplets: i = row, p = column (CSparse)
+        for k in range(nz):
+            a[i[k], p[k]] += x[k]
+    return a
+
+
+def load(path):
+    if path.endswith(".dat"):
+        t = open(path).read().split()
+        d, nc = int(t[0]), int(t[1])
+        n = d * nc
+        w = np.array(list(map(float, t[7 : 7 + n * n]))).reshape(n, n).T
+        q = np.array(list(map(float, t[7 + n * n : 7 + n * n + n])))
+        mu = np.array(list(map(float, t[7 + n * n + n : 7 + n * n + n + nc])))
+        return d, w, q, mu
+    import h5py
+
+    f = h5py.File(path, "r")
+    if "fclib_local" in f:
+        g = f["fclib_local"]
+        return (int(g["spacedim"][()]), sparse(g["W"]), np.array(g["vectors/q"]),
+                np.array(g["vectors/mu"]))
+    g = f["fclib_global"]
+    m, h = sparse(g["M"]), sparse(g["H"])
+    x = np.linalg.solve(m, np.column_stack([h, np.array(g["vectors/f"])]))
+    w = h.T @ x[:, :-1]
+    q = h.T @ x[:, -1] + np.array(g["vectors/w"])
+    return int(g["spacedim"][()]), w, q, np.array(g["vectors/mu"])
+
+
+def siconos(d, w, q, mu, solver):
+    times, out = [], None
+    for _ in range(REPEAT):
+        n = len(q)
+        fcp = sn.FrictionContactProblem(d, np.ascontiguousarray(w), q.copy(), mu.copy())
+        so = sn.SolverOptions(solver)
+        so.iparam[sn.SICONOS_IPARAM_MAX_ITER] = MAX_IT
+        so.dparam[sn.SICONOS_DPARAM_TOL] = TOL
+        r, u = np.zeros(n), np.zeros(n)
+        # Siconos prints a line per failed inner factorization: silence its C output
+        sys.stdout.flush()
+        saved = [os.dup(1), os.dup(2)]
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        try:
+            t0 = time.perf_counter()
+            info = (sn.fc3d_driver if d == 3 else sn.fc2d_driver)(fcp, r, u, so)
+            times.append(time.perf_counter() - t0)
+        finally:
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            for fd in saved + [null]:
+                os.close(fd)
+        out = (info == 0, so.iparam[sn.SICONOS_IPARAM_ITER_DONE], so.dparam[sn.SICONOS_DPARAM_RESIDU])
+    return out + (statistics.median(times),)
+
+
+def signorini(binary, path, solver):
+    times, out = [], None
+    with tempfile.TemporaryDirectory() as tmp:
+        js = os.path.join(tmp, "s.json")
+        for _ in range(REPEAT):
+            subprocess.run([binary, "fclib", path, "--solver", solver, "--tol", str(TOL),
+                            "--max-iter", str(MAX_IT), "--solution", js],
+                           stdout=subprocess.DEVNULL, check=False)
+            s = json.load(open(js))
+            times.append(s["seconds"])
+            out = (s["converged"], s["iterations"], s["residual"])
+    return out + (statistics.median(times),)
+
+
+def main():
+    binary = sys.argv[1] if len(sys.argv) > 1 else "target/release/signorini"
+    folder = sys.argv[2] if len(sys.argv) > 2 else "../shared/fclib"
+    files = sorted(f for f in os.listdir(folder) if f.endswith((".hdf5", ".dat")))
+    print(f"tol {TOL:g}, cap {MAX_IT}, median of {REPEAT} solves from r = 0; Siconos numerics "
+          f"{getattr(sn, '__version__', '4.4')}")
+    print(f"| file | rows | code | solver | converged | iterations | residual | ms |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name in files:
+        path = os.path.join(folder, name)
+        d, w, q, mu = load(path)
+        sic = ([("NSGS", sn.SICONOS_FRICTION_3D_NSGS), ("PROX", sn.SICONOS_FRICTION_3D_PROX),
+                ("NSN_AC", sn.SICONOS_FRICTION_3D_NSN_AC), ("ADMM", sn.SICONOS_FRICTION_3D_ADMM)]
+               if d == 3 else
+               [("NSGS", sn.SICONOS_FRICTION_2D_NSGS), ("CPG", sn.SICONOS_FRICTION_2D_CPG),
+                ("ENUM", sn.SICONOS_FRICTION_2D_ENUM)])
+        rows = []
+        for label, s in sic:
+            try:
+                rows.append(("Siconos", label) + siconos(d, w, q, mu, s))
+            except Exception as e:  # a solver missing or refusing the problem
+                rows.append(("Siconos", label, False, 0, float("nan"), float("nan")))
+                print(f"  ({name}: Siconos {label} failed: {e})", file=sys.stderr)
+        for s in ["nsgs", "prox", "newton"]:
+            rows.append(("signorini", s) + signorini(binary, path, s))
+        for code, label, ok, it, res, sec in rows:
+            print(f"| {name} | {len(q)} | {code} | {label} | {'yes' if ok else 'NO'} | {it} | "
+                  f"{res:.1e} | {1e3 * sec:.3f} |")
+        best = lambda c: min((r[5] for r in rows if r[0] == c and r[2]), default=float("inf"))
+        print(f"|   | | | fastest converged: Siconos {1e3 * best('Siconos'):.3f} ms, "
+              f"signorini {1e3 * best('signorini'):.3f} ms | | | | |")
+
+
+if __name__ == "__main__":
+    main()
