@@ -690,6 +690,39 @@ pub(crate) fn max_residual(a: SparseColMatRef<'_, usize, f64>, x: &[f64], b: &[f
         .fold(0.0, f64::max)
 }
 
+/// Solves `a x = b` in place for a dense column-major `k × k` `a` (overwritten by its LU
+/// factors) by faer's partial-pivoting LU, sequential below 512 rows (the global rayon
+/// setting of faer's high-level `partial_piv_lu` cost 0.1–0.3 ms per call on the
+/// 3-row FCLIB problems, more than the whole solve). Allocates its scratch: for
+/// one-step problems, not for the step loop.
+pub fn dense_lu_solve(a: &mut [f64], k: usize, b: &mut [f64]) {
+    use faer::linalg::lu::partial_pivoting::{factor, solve};
+    let par = if k < 512 { Par::Seq } else { Par::rayon(0) };
+    let mut perm = vec![0usize; k];
+    let mut perm_inv = vec![0usize; k];
+    let req = factor::lu_in_place_scratch::<usize, f64>(k, k, par, Default::default())
+        .or(solve::solve_in_place_scratch::<usize, f64>(k, 1, par));
+    let mut mem = MemBuffer::new(req);
+    let mut lu = faer::MatMut::from_column_major_slice_mut(&mut a[..k * k], k, k);
+    let (_, p) = factor::lu_in_place(
+        lu.as_mut(),
+        &mut perm,
+        &mut perm_inv,
+        par,
+        MemStack::new(&mut mem),
+        Default::default(),
+    );
+    let rhs = faer::MatMut::from_column_major_slice_mut(&mut b[..k], k, 1);
+    solve::solve_in_place(
+        lu.as_ref(),
+        lu.as_ref(),
+        p,
+        rhs,
+        par,
+        MemStack::new(&mut mem),
+    );
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -878,37 +911,4 @@ mod tests {
         assert!(!ch.factor(&mut bad.clone(), ld, k));
         assert!(!small_cholesky(&mut bad, ld, k));
     }
-}
-
-/// Solves `a x = b` in place for a dense column-major `k × k` `a` (overwritten by its LU
-/// factors) by faer's partial-pivoting LU, sequential below 512 rows (the global rayon
-/// setting of faer's high-level `partial_piv_lu` cost 0.1–0.3 ms per call on the
-/// 3-row FCLIB problems, more than the whole solve). Allocates its scratch: for
-/// one-step problems, not for the step loop.
-pub fn dense_lu_solve(a: &mut [f64], k: usize, b: &mut [f64]) {
-    use faer::linalg::lu::partial_pivoting::{factor, solve};
-    let par = if k < 512 { Par::Seq } else { Par::rayon(0) };
-    let mut perm = vec![0usize; k];
-    let mut perm_inv = vec![0usize; k];
-    let req = factor::lu_in_place_scratch::<usize, f64>(k, k, par, Default::default())
-        .or(solve::solve_in_place_scratch::<usize, f64>(k, 1, par));
-    let mut mem = MemBuffer::new(req);
-    let mut lu = faer::MatMut::from_column_major_slice_mut(&mut a[..k * k], k, k);
-    let (_, p) = factor::lu_in_place(
-        lu.as_mut(),
-        &mut perm,
-        &mut perm_inv,
-        par,
-        MemStack::new(&mut mem),
-        Default::default(),
-    );
-    let rhs = faer::MatMut::from_column_major_slice_mut(&mut b[..k], k, 1);
-    solve::solve_in_place(
-        lu.as_ref(),
-        lu.as_ref(),
-        p,
-        rhs,
-        par,
-        MemStack::new(&mut mem),
-    );
 }
