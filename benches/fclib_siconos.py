@@ -2,7 +2,7 @@
 """FCLIB benchmark: signorini's friction solvers against Siconos' on the same files, in
 one run on one machine (Debian's python3-siconos and python3-h5py, /usr/bin/python3).
 
-For every .hdf5 / .dat file of DIR (default ../shared/fclib): Siconos' fc3d NSGS, PROX,
+For every .hdf5 / .dat file of DIR (default tests/data/fclib): Siconos' fc3d NSGS, PROX,
 NSN_AC and ADMM (fc2d NSGS, CPG and ENUM for 2-D problems), and `signorini fclib` with
 nsgs, prox and newton, all from r = 0 with tolerance 1e-8 and 20 000 iterations. Each
 solve runs 3 times; the table shows the median solve time (Siconos: the driver call;

@@ -160,6 +160,13 @@ pub fn read_dat(path: &Path) -> Result<FrictionContactProblem, Error> {
         })
     };
     let dim = int(next("the dimension")?, "dimension")?;
+    if !(dim == 2 || dim == 3) {
+        return Err(Error::invalid(
+            &format!("{}: dimension", path.display()),
+            dim,
+            "expected 2 or 3 (spacedim)",
+        ));
+    }
     let nc = int(next("the contact count")?, "contact count")?;
     let storage = int(next("the matrix storage type")?, "storage type")?;
     if storage != 0 {

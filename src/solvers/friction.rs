@@ -305,7 +305,7 @@ impl FrictionSolver {
                 })
             }
             FrictionSolverKind::Prox => self.prox(prob, params, k, r, u),
-            FrictionSolverKind::Newton => Ok(prox_newton(prob, params, k, r, u)),
+            FrictionSolverKind::Newton => Ok(self.prox_newton(prob, params, k, r, u)),
         }
     }
 
@@ -843,125 +843,140 @@ fn ac_all<W: DelassusOperator + ?Sized>(
 }
 
 /// Proximal point around a global semismooth Newton on Alart–Curnier (module doc).
-fn prox_newton<W: DelassusOperator + ?Sized>(
-    prob: FrictionProblem<'_, W>,
-    params: &FrictionParams,
-    k: usize,
-    r: &mut [f64],
-    u: &mut [f64],
-) -> FrictionInfo {
-    let mut wd = vec![0.0; k * k];
-    let mut dir = vec![0.0; k];
-    for c in 0..k {
-        for i in 0..k {
-            wd[i + c * k] = prob.w.entry(i, c);
-        }
-    }
-    let rho: Vec<(f64, f64)> = prob
-        .blocks
-        .iter()
-        .map(|b| {
-            let o = b.offset;
-            let wnn = wd[o + o * k].abs().max(f64::MIN_POSITIVE);
-            let wtt = if b.dim > 1 {
-                (1..b.dim).map(|t| wd[o + t + (o + t) * k]).sum::<f64>() / (b.dim - 1) as f64
-            } else {
-                wnn
-            };
-            (1.0 / wnn, 1.0 / wtt.abs().max(f64::MIN_POSITIVE))
-        })
-        .collect();
-    let wmax = (0..k)
-        .map(|i| wd[i + i * k].abs())
-        .fold(0.0, f64::max)
-        .max(f64::MIN_POSITIVE);
-    let (mut phi, mut jac, mut qt, mut trial, mut ut, mut center) = (
-        vec![0.0; k],
-        vec![0.0; k * k],
-        vec![0.0; k],
-        vec![0.0; k],
-        vec![0.0; k],
-        vec![0.0; k],
-    );
-    let full = |r: &[f64], u: &mut [f64]| {
-        u.copy_from_slice(&prob.q[..k]);
-        prob.w.mul_add(1.0, r, u);
-        residual(prob.blocks, prob.q, r, u)
-    };
-    let mut res = full(&r[..k], &mut u[..k]);
-    // σ: small first (measured on the shared FCLIB files: 1e-4 of the largest diagonal
-    // took 3–5 proximal iterations where 1e-2 took 5–9); ×0.1 after a short proximal
-    // step, ×10 after an inner solve that made no progress (the line search failed)
-    let mut sigma = 1e-4 * wmax;
-    let (mut newton_its, mut outer) = (0, 0);
-    while res > params.tol && newton_its < params.max_iterations {
-        outer += 1;
-        center.copy_from_slice(&r[..k]);
-        for i in 0..k {
-            qt[i] = prob.q[i] - sigma * center[i];
-        }
-        // inner Newton on (W + σI, q − σ r_j)
-        let mut progress = false;
-        for _ in 0..50 {
-            newton_its += 1;
-            let f = ac_all(
-                &prob,
-                &qt,
-                sigma,
-                &rho,
-                &r[..k],
-                &mut ut,
-                &mut phi,
-                Some((&mut jac, &wd)),
-            );
-            // the regularized problem's own relative residual (u = ut here)
-            // inexact inner solves: two orders below the outer residual
-            let inner_tol = (1e-2 * res).max(0.1 * params.tol);
-            if f == 0.0 || residual(prob.blocks, &qt, &r[..k], &ut) <= inner_tol {
-                break;
-            }
+impl FrictionSolver {
+    fn prox_newton<W: DelassusOperator + ?Sized>(
+        &mut self,
+        prob: FrictionProblem<'_, W>,
+        params: &FrictionParams,
+        k: usize,
+        r: &mut [f64],
+        u: &mut [f64],
+    ) -> FrictionInfo {
+        let mut wd = vec![0.0; k * k];
+        let mut dir = vec![0.0; k];
+        for c in 0..k {
             for i in 0..k {
-                dir[i] = -phi[i];
+                wd[i + c * k] = prob.w.entry(i, c);
             }
-            crate::linalg::dense_lu_solve(&mut jac, k, &mut dir);
-            let mut t = 1.0;
-            let mut accepted = false;
-            for _ in 0..40 {
-                for i in 0..k {
-                    trial[i] = r[i] + t * dir[i];
-                }
-                let ft = ac_all(&prob, &qt, sigma, &rho, &trial, &mut ut, &mut phi, None);
-                if ft.is_finite() && ft <= (1.0 - 1e-4 * t) * f {
-                    r[..k].copy_from_slice(&trial);
-                    accepted = true;
-                    progress = true;
+        }
+        let rho: Vec<(f64, f64)> = prob
+            .blocks
+            .iter()
+            .map(|b| {
+                let o = b.offset;
+                let wnn = wd[o + o * k].abs().max(f64::MIN_POSITIVE);
+                let wtt = if b.dim > 1 {
+                    (1..b.dim).map(|t| wd[o + t + (o + t) * k]).sum::<f64>() / (b.dim - 1) as f64
+                } else {
+                    wnn
+                };
+                (1.0 / wnn, 1.0 / wtt.abs().max(f64::MIN_POSITIVE))
+            })
+            .collect();
+        let wmax = (0..k)
+            .map(|i| wd[i + i * k].abs())
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let (mut phi, mut jac, mut qt, mut trial, mut ut, mut center) = (
+            vec![0.0; k],
+            vec![0.0; k * k],
+            vec![0.0; k],
+            vec![0.0; k],
+            vec![0.0; k],
+            vec![0.0; k],
+        );
+        let full = |r: &[f64], u: &mut [f64]| {
+            u.copy_from_slice(&prob.q[..k]);
+            prob.w.mul_add(1.0, r, u);
+            residual(prob.blocks, prob.q, r, u)
+        };
+        let mut res = full(&r[..k], &mut u[..k]);
+        // σ: small first (measured on the shared FCLIB files: 1e-4 of the largest diagonal
+        // took 3–5 proximal iterations where 1e-2 took 5–9); ×0.1 after a short proximal
+        // step, ×10 after an inner solve that made no progress (the line search failed)
+        let mut sigma = 1e-4 * wmax;
+        let (mut newton_its, mut outer) = (0, 0);
+        while res > params.tol && newton_its < params.max_iterations {
+            outer += 1;
+            center.copy_from_slice(&r[..k]);
+            for i in 0..k {
+                qt[i] = prob.q[i] - sigma * center[i];
+            }
+            // inner Newton on (W + σI, q − σ r_j)
+            let mut progress = false;
+            let mut solved = false;
+            let inner_tol = (1e-2 * res).max(0.1 * params.tol);
+            for _ in 0..50 {
+                newton_its += 1;
+                let f = ac_all(
+                    &prob,
+                    &qt,
+                    sigma,
+                    &rho,
+                    &r[..k],
+                    &mut ut,
+                    &mut phi,
+                    Some((&mut jac, &wd)),
+                );
+                // inexact inner solves: the regularized problem's own relative residual
+                // (u = ut here) two orders below the outer residual
+                if f == 0.0 || residual(prob.blocks, &qt, &r[..k], &ut) <= inner_tol {
+                    solved = true;
                     break;
                 }
-                t *= 0.5;
+                for i in 0..k {
+                    dir[i] = -phi[i];
+                }
+                crate::linalg::dense_lu_solve(&mut jac, k, &mut dir);
+                let mut t = 1.0;
+                let mut accepted = false;
+                for _ in 0..40 {
+                    for i in 0..k {
+                        trial[i] = r[i] + t * dir[i];
+                    }
+                    let ft = ac_all(&prob, &qt, sigma, &rho, &trial, &mut ut, &mut phi, None);
+                    if ft.is_finite() && ft <= (1.0 - 1e-4 * t) * f {
+                        r[..k].copy_from_slice(&trial);
+                        accepted = true;
+                        progress = true;
+                        break;
+                    }
+                    t *= 0.5;
+                }
+                if !accepted || newton_its >= params.max_iterations {
+                    break;
+                }
             }
-            if !accepted || newton_its >= params.max_iterations {
+            if !solved {
+                // Newton stalled at a point where ½‖Φ‖² does not decrease (a local minimum
+                // of the merit function; seen with μ > 1 in 2-D): finish this proximal step
+                // with NSGS on the same regularized problem, whose blocks are SPD
+                self.qreg[..k].copy_from_slice(&qt);
+                let budget = params.max_iterations.saturating_sub(newton_its).max(1);
+                let (it, _) = self.nsgs_reg(prob, sigma, inner_tol, budget.min(1000), r, &mut ut);
+                newton_its += it;
+                progress = true;
+            }
+            res = full(&r[..k], &mut u[..k]);
+            let step = (0..k)
+                .map(|i| (r[i] - center[i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            if !progress {
+                sigma = (sigma * 10.0).min(1e2 * wmax);
+            } else if step <= 0.5 * norm(&r[..k]).max(f64::MIN_POSITIVE) {
+                sigma = (sigma * 0.1).max(1e-12 * wmax);
+            }
+            if outer > 10_000 {
                 break;
             }
         }
-        res = full(&r[..k], &mut u[..k]);
-        let step = (0..k)
-            .map(|i| (r[i] - center[i]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        if !progress {
-            sigma = (sigma * 10.0).min(1e2 * wmax);
-        } else if step <= 0.5 * norm(&r[..k]).max(f64::MIN_POSITIVE) {
-            sigma = (sigma * 0.1).max(1e-12 * wmax);
+        FrictionInfo {
+            iterations: newton_its,
+            residual: res,
+            prox_iterations: outer,
+            converged: res <= params.tol,
         }
-        if outer > 10_000 {
-            break;
-        }
-    }
-    FrictionInfo {
-        iterations: newton_its,
-        residual: res,
-        prox_iterations: outer,
-        converged: res <= params.tol,
     }
 }
 
