@@ -104,3 +104,61 @@ fn nonlinear_contact_steps_do_not_allocate() {
         assert_eq!(n, 0, "{} {delassus:?} allocated {n} times", kind.name());
     }
 }
+
+/// Frictional steps (NSGS and PROX on the velocity problem, eq. 15): the elastic hex8
+/// block of `meshes/sliding_block.toml` sliding, sticking and rocking, under the three
+/// schemes that take friction, on both Delassus paths; and a particle in a circle with
+/// friction (curved obstacle: the frame turns with the normal).
+#[test]
+fn frictional_steps_do_not_allocate() {
+    use signorini::scene::file::Scene;
+    use signorini::solvers::friction::FrictionSolverKind;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/sliding_block.toml");
+    for kind in [
+        SchemeKind::MoreauJean,
+        SchemeKind::DirectProjection,
+        SchemeKind::CombinedProjection,
+    ] {
+        for delassus in [DelassusKind::Dense, DelassusKind::Columns] {
+            for solver in [FrictionSolverKind::Nsgs, FrictionSolverKind::Prox] {
+                let mut scene = Scene::from_file(&path).unwrap();
+                scene.scheme.kind = kind;
+                scene.scheme.delassus = delassus;
+                scene.scheme.friction.solver = solver;
+                let (model, _) = scene.build().unwrap();
+                let mut integ = model.into_integrator(&scene.scheme, 1e-3).unwrap();
+                let n = count_steps(integ.as_mut(), 400);
+                assert_eq!(
+                    n,
+                    0,
+                    "{} {delassus:?} {solver:?} allocated {n} times",
+                    kind.name()
+                );
+            }
+        }
+        let sys = point_mass(2, 1.0, &[0.0, 0.0]).unwrap();
+        let c = InsideSphere::new(
+            vec![vec![0, 1]],
+            vec![vec![0.0, 0.0]],
+            vec![0.0, 0.0],
+            1.0,
+            0.5,
+        )
+        .unwrap()
+        .with_friction(0.3)
+        .unwrap();
+        let p = SchemeParams {
+            kind,
+            ..SchemeParams::default()
+        };
+        let mut integ =
+            integrators::build(&p, sys, Box::new(c), &[0.0, 0.5], &[1.0, 0.37], 1e-2).unwrap();
+        let n = count_steps(integ.as_mut(), 1000);
+        assert_eq!(
+            n,
+            0,
+            "{} in a circle with friction allocated {n} times",
+            kind.name()
+        );
+    }
+}
