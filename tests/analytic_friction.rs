@@ -275,3 +275,70 @@ fn elastic_hex8_block_sliding_on_a_plane_stops_at_v0_over_mu_g() {
         }
     }
 }
+
+/// A rigid rod (the block of eq. 10 with thickness 1e-6 of its length: inertia within
+/// 1e-12 of m L²/12, corner lever arms within 1e-6 of the rod's) falls flat-footed at angle θ = 45° onto the ground, no gravity,
+/// e = 0. Right after the impact its lower end sticks iff
+/// `μ ≥ 3 sin θ cos θ / (1 + 3 sin² θ)` = 0.6 (impulse balance of the rod about its end);
+/// then `|P_T| / P_N` equals that ratio, and below it the end slips with `|P_T| = μ P_N`.
+/// Checked 0.05 on either side of the threshold, at the first step with an impulse.
+#[test]
+fn rigid_rod_falling_at_45_degrees_sticks_iff_mu_reaches_the_threshold() {
+    let th = std::f64::consts::FRAC_PI_4;
+    let ratio = 3.0 * th.sin() * th.cos() / (1.0 + 3.0 * th.sin().powi(2));
+    assert!((ratio - 0.6).abs() < 1e-12);
+    let (len, thick, h, v0) = (1.0, 1e-6, 1e-4, 1.0);
+    for kind in SCHEMES {
+        for (mu, sticks) in [(ratio + 0.05, true), (ratio - 0.05, false)] {
+            let sys = rigid_block(1.0, len, thick, 0.0).unwrap();
+            let corners = BlockCorners::new(len, thick, 0.0)
+                .unwrap()
+                .with_friction(mu)
+                .unwrap();
+            // corner B = (−L/2, −l/2) lowest, 1e-6 m above the ground
+            let y = 0.5 * len * th.sin() + 0.5 * thick * th.cos() + 1e-6;
+            let mut integ = integrators::build(
+                &params(kind),
+                sys,
+                Box::new(corners),
+                &[0.0, y, th],
+                &[0.0, -v0, 0.0],
+                h,
+            )
+            .unwrap();
+            let s = loop {
+                integ.step().unwrap();
+                if integ.state().impulse[1] > 0.0 {
+                    break integ.state().clone();
+                }
+                assert!(integ.state().time < 0.01, "{kind:?}: no impact");
+            };
+            let (pn, pt) = (s.impulse[1], s.tangent_impulse[1]);
+            let want = if sticks {
+                ContactStatus::Stick
+            } else {
+                ContactStatus::Slip
+            };
+            assert_eq!(
+                s.status[1],
+                want,
+                "{kind:?} μ = {mu}: P_T/P_N = {}",
+                pt / pn
+            );
+            let r = pt.abs() / pn;
+            if sticks {
+                // the implicit schemes take G at the end of the impact step, when the rod
+                // has turned by ω h ≈ 1.6e-4 rad: the ratio is off by O(ω h) (6e-5 seen)
+                assert!(
+                    (r / ratio - 1.0).abs() < 1e-3,
+                    "{kind:?} μ = {mu}: |P_T|/P_N = {r}"
+                );
+            } else {
+                assert!(
+                    (r / mu - 1.0).abs() < 1e-9,
+                    "{kind:?} μ = {mu}: |P_T|/P_N = {r}"
+                );
+            }
+        }
+    }
+}
