@@ -109,6 +109,9 @@ struct FclibArgs {
     /// Start from the file's /guesses/1/r instead of r = 0.
     #[arg(long)]
     warm: bool,
+    /// Solve this many times (from the same start) and report the median time.
+    #[arg(long, default_value_t = 1)]
+    repeat: usize,
     /// Write r, u, residual, iterations and seconds as JSON.
     #[arg(long, value_name = "OUT.json")]
     solution: Option<PathBuf>,
@@ -530,7 +533,14 @@ fn fclib(a: &FclibArgs) -> Result<bool, signorini::Error> {
     };
     params.validate_ranges("--")?;
     let prob = signorini::io::fclib::read(&a.file)?;
-    let sol = signorini::io::fclib::solve(&prob, &params, a.warm)?;
+    if a.repeat == 0 || a.repeat > 1_000_000 {
+        return Err(signorini::Error::invalid(
+            "--repeat",
+            a.repeat,
+            "must be in [1, 1000000]",
+        ));
+    }
+    let sol = signorini::io::fclib::solve_repeated(&prob, &params, a.warm, a.repeat)?;
     out!("problem             {} ({})", a.file.display(), prob.form);
     out!(
         "size                {} contacts in {}-D, {} rows; μ in [{}, {}]; W asymmetry {:.1e}",
@@ -553,7 +563,7 @@ fn fclib(a: &FclibArgs) -> Result<bool, signorini::Error> {
         }
     );
     out!(
-        "result              {} after {} sweeps{}: residual {:.3e}, {:.3e} s",
+        "result              {} after {} sweeps{}: residual {:.3e}, {:.3e} s{}",
         if sol.converged {
             "converged"
         } else {
@@ -566,7 +576,12 @@ fn fclib(a: &FclibArgs) -> Result<bool, signorini::Error> {
             String::new()
         },
         sol.residual,
-        sol.seconds
+        sol.seconds,
+        if a.repeat > 1 {
+            format!(" (median of {})", a.repeat)
+        } else {
+            String::new()
+        }
     );
     if let Some(p) = &a.solution {
         let json = serde_json::to_vec_pretty(&sol)
