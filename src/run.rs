@@ -352,6 +352,7 @@ pub fn run(
                 Some(f) => hist.with_hdf5(crate::io::h5::History::create(
                     f,
                     m,
+                    integ.state().tangent_dim,
                     integ.name(),
                     h,
                     theta,

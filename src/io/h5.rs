@@ -12,8 +12,11 @@
 //! - `/history`: the per-step history with the names of `history.csv`: one 1-D
 //!   dataset per scalar column (`step`, `time`, `kinetic_energy`, …) and one 2-D dataset
 //!   `[rows, m]` per contact quantity (`gap`, `velocity`, `impulse`, `projection`;
-//!   column `c` is the CSV's `gap_c`, …). Attributes: `scheme`, `dt`, `theta` and
-//!   `parameters` (the run's parameters as JSON).
+//!   column `c` is the CSV's `gap_c`, …); in a frictional scene also
+//!   `tangent_impulse` and `slip_velocity` `[rows, m·t]` (column `c·t + j` is the CSV's
+//!   `tangent_impulse_c_j`), `status` `[rows, m]` (0 open, 1 stick, 2 slip),
+//!   `friction_iterations` and `friction_residual`. Attributes: `scheme`, `dt`, `theta`
+//!   and `parameters` (the run's parameters as JSON).
 //!
 //! Rows are buffered and appended in blocks (at every field frame, every 4096 rows and at
 //! the end), then the file is flushed, so a killed run keeps every completed frame and
@@ -255,7 +258,22 @@ pub struct History {
     rows_s: Vec<f64>,
     rows_i: Vec<i64>,
     rows_c: Vec<f64>,
+    /// Frictional scenes: `tangent_impulse`, `slip_velocity` (`[rows, m·td]`), `status`
+    /// (`[rows, m]`, 0 open, 1 stick, 2 slip) and the friction sweeps and residual.
+    friction: Option<FrictionHistory>,
     buffered: usize,
+}
+
+struct FrictionHistory {
+    td: usize,
+    impulse: Growing,
+    slip: Growing,
+    status: Growing,
+    iterations: Growing,
+    residual: Growing,
+    rows_t: Vec<f64>,
+    rows_st: Vec<i64>,
+    rows_f: Vec<(i64, f64)>,
 }
 
 const FLOAT_COLUMNS: [&str; 3] = ["time", "kinetic_energy", "potential_energy"];
@@ -270,10 +288,13 @@ impl History {
     /// Rows buffered before a block is appended.
     const BLOCK: usize = 4096;
 
-    /// Creates `/history` for `m` contacts with the run's parameters as attributes.
+    /// Creates `/history` for `m` contacts (with `td` tangents each in a frictional
+    /// scene, 0 otherwise) with the run's parameters as attributes.
+    #[allow(clippy::too_many_arguments)]
     pub fn create(
         run: &RunFile,
         m: usize,
+        td: usize,
         scheme: &str,
         dt: f64,
         theta: f64,
@@ -315,11 +336,27 @@ impl History {
                     ))
                 })
                 .collect::<hdf5::Result<Vec<_>>>()?;
+            let friction = if td > 0 && m > 0 {
+                Some(FrictionHistory {
+                    td,
+                    impulse: Growing::create::<f64>(&g, "tangent_impulse", m * td, rows)?,
+                    slip: Growing::create::<f64>(&g, "slip_velocity", m * td, rows)?,
+                    status: Growing::create::<i64>(&g, "status", m, rows)?,
+                    iterations: Growing::create::<i64>(&g, "friction_iterations", 0, 4096)?,
+                    residual: Growing::create::<f64>(&g, "friction_residual", 0, 4096)?,
+                    rows_t: Vec::with_capacity(2 * m * td * Self::BLOCK),
+                    rows_st: Vec::with_capacity(m * Self::BLOCK),
+                    rows_f: Vec::with_capacity(Self::BLOCK),
+                })
+            } else {
+                None
+            };
             Ok(History {
                 run: run.clone(),
                 scalars,
                 contact,
                 m,
+                friction,
                 rows_s: Vec::with_capacity(5 * Self::BLOCK),
                 rows_i: Vec::with_capacity(4 * Self::BLOCK),
                 rows_c: Vec::with_capacity(4 * m * Self::BLOCK),
@@ -340,6 +377,13 @@ impl History {
         self.rows_s.extend([s.time, ke, pe, st.max_violation]);
         for q in [&s.gap, &s.local_velocity, &s.impulse, &s.projection] {
             self.rows_c.extend_from_slice(q);
+        }
+        if let Some(f) = self.friction.as_mut() {
+            f.rows_t.extend_from_slice(&s.tangent_impulse);
+            f.rows_t.extend_from_slice(&s.tangent_velocity);
+            f.rows_st.extend(s.status.iter().map(|c| c.code() as i64));
+            f.rows_f
+                .push((st.friction_iterations as i64, st.friction_residual));
         }
         self.buffered += 1;
         if self.buffered >= Self::BLOCK {
@@ -389,6 +433,25 @@ impl History {
                     }
                     ds.append(&block)?;
                 }
+            }
+            if let Some(f) = self.friction.as_mut() {
+                let w = m * f.td;
+                let mut block = vec![0.0; n * w];
+                for (q, ds) in [&mut f.impulse, &mut f.slip].into_iter().enumerate() {
+                    for r in 0..n {
+                        let src = &f.rows_t[(2 * r + q) * w..(2 * r + q + 1) * w];
+                        block[r * w..(r + 1) * w].copy_from_slice(src);
+                    }
+                    ds.append(&block)?;
+                }
+                f.status.append(&f.rows_st)?;
+                let its: Vec<i64> = f.rows_f.iter().map(|x| x.0).collect();
+                let res: Vec<f64> = f.rows_f.iter().map(|x| x.1).collect();
+                f.iterations.append(&its)?;
+                f.residual.append(&res)?;
+                f.rows_t.clear();
+                f.rows_st.clear();
+                f.rows_f.clear();
             }
             Ok(())
         })();
