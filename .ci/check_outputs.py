@@ -9,7 +9,8 @@ Checks, for every frame listed in OUT_DIR/fields.pvd:
     points, the cells and every point/cell array (bit for bit);
   - the arrays users rely on are there with the right number of components;
   - the field data TimeValue equals the .pvd timestep and Step is a history step;
-  - the contact force at the contact nodes equals the history's impulse / dt.
+  - the contact force at the contact nodes equals the history's impulse / dt (normal
+    and, in frictional runs, tangential; those also carry contact_status).
 and that the frame count matches summary.json.
 """
 import csv
@@ -45,6 +46,9 @@ def main(out):
     if any(b[0] <= a[0] for a, b in zip(frames, frames[1:])):
         fail("frame times are not increasing")
     ncontact = len([k for k in next(iter(rows.values())) if k.startswith("impulse_")])
+    # frictional runs (status_ columns) also carry the contact_status point field
+    if any(k.startswith("status_") for k in next(iter(rows.values()))):
+        POINT["contact_status"] = 1
     for t, name in frames:
         path = out / name
         r = vtk.vtkXMLUnstructuredGridReader()
@@ -82,7 +86,12 @@ def main(out):
             fail(f"{name}: step {step} has no history row")
         force = vtk_to_numpy(g.GetPointData().GetArray("contact_force"))
         total = float(np.linalg.norm(force, axis=1).sum())
-        want = sum(abs(float(row[f"impulse_{c}"])) for c in range(ncontact)) / dt
+        # |G_α P_α| per contact node: the normal and, with friction, tangential impulses
+        # (an orthonormal frame, so the norm of the block's impulse)
+        def contact_impulse(c):
+            tang = [float(v) for k, v in row.items() if k.startswith(f"tangent_impulse_{c}_")]
+            return float(np.hypot(float(row[f"impulse_{c}"]), np.linalg.norm(tang)))
+        want = sum(contact_impulse(c) for c in range(ncontact)) / dt
         if abs(total - want) > 1e-9 * max(want, 1.0):
             fail(f"{name}: contact force {total} N, history {want} N")
     h5 = out / "fields.vtkhdf"

@@ -381,7 +381,8 @@ pub fn run(
                     None => w,
                 };
                 let s = integ.state();
-                let mut w = FrameStream::spawn(w, s.q.len(), m, FRAME_POOL);
+                let mut w =
+                    FrameStream::spawn_with_statuses(w, s.q.len(), m, s.status.len(), FRAME_POOL);
                 w.push(s, integ.jacobian(), h)?;
                 Some(w)
             } else {

@@ -106,6 +106,8 @@ pub fn uniform_laws(m: usize, e: f64, mu: f64) -> Result<Vec<ContactLaw>, crate:
 /// row: `d_α` consecutive columns per contact).
 #[derive(Clone, Debug)]
 pub struct ContactJacobian {
+    /// First column of each contact's block (`m + 1` values).
+    block_ptr: Vec<usize>,
     col_ptr: Vec<usize>,
     dofs: Vec<usize>,
     values: Vec<f64>,
@@ -123,11 +125,32 @@ impl ContactJacobian {
             col_ptr.push(dofs.len());
         }
         let values = vec![0.0; dofs.len()];
+        let mut block_ptr = Vec::with_capacity(set.len() + 1);
+        block_ptr.push(0);
+        for a in 0..set.len() {
+            block_ptr.push(block_ptr[a] + set.dim(a));
+        }
+        assert_eq!(
+            block_ptr[set.len()],
+            pattern.len(),
+            "contact set: the blocks' rows and the pattern's columns disagree"
+        );
         ContactJacobian {
+            block_ptr,
             col_ptr,
             dofs,
             values,
         }
+    }
+
+    /// Number of contacts (blocks).
+    pub fn contacts(&self) -> usize {
+        self.block_ptr.len() - 1
+    }
+
+    /// The columns of contact `alpha`'s block (its first is the normal).
+    pub fn block(&self, alpha: usize) -> std::ops::Range<usize> {
+        self.block_ptr[alpha]..self.block_ptr[alpha + 1]
     }
 
     /// Number of columns (rows of all blocks).

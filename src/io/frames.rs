@@ -197,6 +197,15 @@ pub const POINT_ARRAYS: [(&str, usize); 4] = [
     ("contact_force", 3),
     ("gap", 1),
 ];
+/// Point arrays of a frame in a frictional scene: also `contact_status` (0 open, 1 stick,
+/// 2 slip; NaN at points without a contact).
+pub const FRICTION_POINT_ARRAYS: [(&str, usize); 5] = [
+    ("displacement", 3),
+    ("velocity", 3),
+    ("contact_force", 3),
+    ("gap", 1),
+    ("contact_status", 1),
+];
 /// Cell arrays of a frame.
 pub const CELL_ARRAYS: [(&str, usize); 3] = [("strain", 6), ("stress", 6), ("von_mises", 1)];
 
@@ -221,6 +230,9 @@ pub struct FrameWriter {
     encoding: Encoding,
     /// point index of each contact (from the Jacobian pattern)
     contact_point: Vec<usize>,
+    /// `contact_status` point field (frictional scenes: 0 open, 1 stick, 2 slip; NaN
+    /// away from contacts), written only when the snapshots carry statuses
+    status: Vec<f64>,
     frames: Vec<(f64, String)>,
     // per-frame scratch, sized once
     disp: Vec<f64>,
@@ -261,9 +273,10 @@ impl FrameWriter {
                 point_of_dof[*d] = k / geom.dim;
             }
         }
-        let contact_point = (0..jac.ncols())
+        // the point of each contact: the first dof of its normal column
+        let contact_point = (0..jac.contacts())
             .map(|a| {
-                jac.col(a)
+                jac.col(jac.block(a).start)
                     .0
                     .first()
                     .and_then(|&d| point_of_dof.get(d).copied())
@@ -271,6 +284,8 @@ impl FrameWriter {
             })
             .collect();
         let (np, nc) = (geom.points.len(), geom.cells.len());
+        // blocks of more than one row: Coulomb friction, and a contact_status field
+        let frictional = jac.ncols() > jac.contacts();
         let mut w = FrameWriter {
             dir: dir.to_path_buf(),
             stem: stem.to_string(),
@@ -281,6 +296,11 @@ impl FrameWriter {
             vel: vec![0.0; 3 * np],
             force: vec![0.0; 3 * np],
             gap: vec![f64::NAN; np],
+            status: if frictional {
+                vec![f64::NAN; np]
+            } else {
+                Vec::new()
+            },
             strain: vec![0.0; 6 * nc],
             stress: vec![0.0; 6 * nc],
             mises: vec![0.0; nc],
@@ -323,7 +343,11 @@ impl FrameWriter {
             &conn,
             &offs,
             &types,
-            &POINT_ARRAYS,
+            if self.status.is_empty() {
+                &POINT_ARRAYS[..]
+            } else {
+                &FRICTION_POINT_ARRAYS[..]
+            },
             &CELL_ARRAYS,
         )?);
         Ok(self)
@@ -345,7 +369,7 @@ impl FrameWriter {
     /// Allocates a [`Snapshot`]; a run streams through [`FrameStream`] instead, which
     /// reuses its snapshots and writes on its own thread.
     pub fn write(&mut self, state: &State, jac: &ContactJacobian, h: f64) -> Result<(), Error> {
-        let mut snap = Snapshot::new(state.q.len(), state.gap.len());
+        let mut snap = Snapshot::with_statuses(state.q.len(), state.gap.len(), state.status.len());
         snap.copy_from(state, jac, h);
         self.write_snapshot(&snap)
     }
@@ -367,11 +391,12 @@ impl FrameWriter {
         self.fill(snap);
         #[cfg(feature = "hdf5")]
         if let Some(w) = self.h5.as_mut() {
-            w.append(
-                snap.time,
-                &[&self.disp, &self.vel, &self.force, &self.gap],
-                &[&self.strain, &self.stress, &self.mises],
-            )?;
+            let point: &[&[f64]] = if self.status.is_empty() {
+                &[&self.disp, &self.vel, &self.force, &self.gap]
+            } else {
+                &[&self.disp, &self.vel, &self.force, &self.gap, &self.status]
+            };
+            w.append(snap.time, point, &[&self.strain, &self.stress, &self.mises])?;
         }
         let name = format!("{}/frame_{:06}.vtu", self.stem, self.frames.len());
         let path = self.dir.join(&name);
@@ -416,6 +441,20 @@ impl FrameWriter {
             } else {
                 self.gap[p].min(s.gap[a])
             };
+        }
+        if !self.status.is_empty() {
+            self.status.iter_mut().for_each(|f| *f = f64::NAN);
+            for (a, &p) in self.contact_point.iter().enumerate() {
+                if p != usize::MAX && a < s.status.len() {
+                    // a node in several contacts shows its most engaged status
+                    let v = s.status[a] as f64;
+                    self.status[p] = if self.status[p].is_nan() {
+                        v
+                    } else {
+                        self.status[p].max(v)
+                    };
+                }
+            }
         }
         for (c, (kind, nodes, body)) in g.cells.iter().enumerate() {
             let (mat, form) = &g.bodies[*body];
@@ -478,6 +517,11 @@ impl FrameWriter {
         self.array_f64(&mut x, "contact_force", 3, &force);
         self.array_f64(&mut x, "gap", 1, &gap);
         (self.disp, self.vel, self.force, self.gap) = (disp, vel, force, gap);
+        if !self.status.is_empty() {
+            let status = std::mem::take(&mut self.status);
+            self.array_f64(&mut x, "contact_status", 1, &status);
+            self.status = status;
+        }
         x.push_str("</PointData>\n<CellData Tensors=\"stress\" Scalars=\"von_mises\">\n");
         let (strain, stress, mises) = (
             std::mem::take(&mut self.strain),
@@ -647,11 +691,19 @@ pub struct Snapshot {
     pub reaction: Vec<f64>,
     /// Gap per contact (m).
     pub gap: Vec<f64>,
+    /// Open / stick / slip code per contact (frictional scenes; empty otherwise).
+    pub status: Vec<u8>,
 }
 
 impl Snapshot {
-    /// A snapshot for `n` dofs and `m` contacts.
+    /// A snapshot for `n` dofs and `m` contacts (frictionless: no statuses).
     pub fn new(n: usize, m: usize) -> Self {
+        Self::with_statuses(n, m, 0)
+    }
+
+    /// A snapshot for `n` dofs, `m` contacts and `statuses` contact statuses (`m` in a
+    /// frictional scene, 0 otherwise).
+    pub fn with_statuses(n: usize, m: usize, statuses: usize) -> Self {
         Snapshot {
             step: 0,
             time: 0.0,
@@ -659,6 +711,7 @@ impl Snapshot {
             v: vec![0.0; n],
             reaction: vec![0.0; n],
             gap: vec![0.0; m],
+            status: vec![0; statuses],
         }
     }
 
@@ -669,6 +722,11 @@ impl Snapshot {
         self.q.copy_from_slice(&state.q);
         self.v.copy_from_slice(&state.v);
         self.gap.copy_from_slice(&state.gap);
+        if self.status.len() == state.status.len() {
+            for (o, s) in self.status.iter_mut().zip(&state.status) {
+                *o = s.code();
+            }
+        }
         self.reaction.iter_mut().for_each(|r| *r = 0.0);
         // every row of G: the normal and, with friction, the tangential impulses
         for (a, &p) in state.impulse_rows.iter().enumerate().take(jac.ncols()) {
@@ -701,13 +759,25 @@ pub struct FrameStream {
 
 impl FrameStream {
     /// Starts the writer thread with `pool` snapshots of `n` dofs and `m` contacts.
-    pub fn spawn(mut writer: FrameWriter, n: usize, m: usize, pool: usize) -> Self {
+    pub fn spawn(writer: FrameWriter, n: usize, m: usize, pool: usize) -> Self {
+        Self::spawn_with_statuses(writer, n, m, 0, pool)
+    }
+
+    /// As [`FrameStream::spawn`], the snapshots also holding `statuses` contact statuses
+    /// (a frictional scene's `contact_status` field).
+    pub fn spawn_with_statuses(
+        mut writer: FrameWriter,
+        n: usize,
+        m: usize,
+        statuses: usize,
+        pool: usize,
+    ) -> Self {
         let pool = pool.max(1);
         let (work_tx, work_rx) = std::sync::mpsc::sync_channel::<Snapshot>(pool);
         let (free_tx, free_rx) = std::sync::mpsc::sync_channel::<Snapshot>(pool);
         for _ in 0..pool {
             free_tx
-                .send(Snapshot::new(n, m))
+                .send(Snapshot::with_statuses(n, m, statuses))
                 .expect("the pool channel holds `pool` snapshots");
         }
         let thread = std::thread::Builder::new()
