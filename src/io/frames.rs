@@ -807,11 +807,9 @@ impl FrameStream {
         };
         self.waited += t0.elapsed().as_secs_f64();
         snap.copy_from(state, jac, h);
-        let sent = self.work.as_ref().map(|w| w.send(snap));
-        match sent {
-            Some(Ok(())) => Ok(()),
-            _ => Err(self.failure()),
-        }
+        // the snapshot comes back in a send error only when the writer has stopped
+        let sent = self.work.as_ref().is_some_and(|w| w.send(snap).is_ok());
+        if sent { Ok(()) } else { Err(self.failure()) }
     }
 
     /// Seconds the run spent waiting for a free snapshot.
