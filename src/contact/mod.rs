@@ -18,6 +18,7 @@
 
 pub mod block;
 pub mod frame;
+pub mod linear;
 pub mod plane;
 pub mod sphere;
 

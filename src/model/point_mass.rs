@@ -70,3 +70,38 @@ pub fn rigid_block(mass: f64, length: f64, thickness: f64, g: f64) -> Result<Lin
         ordering: None,
     })
 }
+
+/// A rigid system with a diagonal mass matrix (`masses`: masses and inertias, one per
+/// dof) under constant generalized forces: e.g. the slider (height) and roller (angle)
+/// of the paper's Fig. 8.
+pub fn diagonal(masses: &[f64], force: &[f64]) -> Result<LinearSystem, Error> {
+    if masses.len() != force.len() || masses.is_empty() {
+        return Err(Error::invalid(
+            "masses",
+            format!("{} masses, {} forces", masses.len(), force.len()),
+            "needs one mass and one force per dof",
+        ));
+    }
+    let n = masses.len();
+    let mut am = Assembler::new(n, n);
+    for (i, &m) in masses.iter().enumerate() {
+        require_positive(&format!("masses[{i}]"), m)?;
+        am.add(i, i, m);
+    }
+    if let Some(i) = force.iter().position(|f| !f.is_finite()) {
+        return Err(Error::invalid(
+            &format!("force[{i}]"),
+            force[i],
+            "must be finite",
+        ));
+    }
+    Ok(LinearSystem {
+        mass: am.finish(),
+        stiffness: Assembler::new(n, 0).finish(),
+        damping: None,
+        force: force.to_vec(),
+        dofs_per_node: n,
+        component: (0..n).map(|i| i.min(2) as u8).collect(),
+        ordering: None,
+    })
+}
