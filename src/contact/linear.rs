@@ -51,7 +51,7 @@ impl LinearContacts {
             if !c.offset.is_finite() {
                 return Err(Error::invalid(&at("offset"), c.offset, "must be finite"));
             }
-            if (c.law.friction > 0.0) != !c.tangents.is_empty() || c.tangents.len() > 2 {
+            if (c.law.friction > 0.0) == c.tangents.is_empty() || c.tangents.len() > 2 {
                 return Err(Error::invalid(
                     &at("tangents"),
                     c.tangents.len(),
