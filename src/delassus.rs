@@ -49,7 +49,7 @@ use crate::solvers::SolveError;
 use faer::sparse::SparseColMatRef;
 
 /// Position projection metric `N` (eq. 58 and remark 3, eq. 59–60).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Metric {
     /// `N = I`: `q ← q + G τ` (eq. 58). Kicks only the contact dofs.
@@ -142,7 +142,7 @@ impl DelassusOperator for DenseOperator<'_> {
 }
 
 /// How the Delassus data are stored (DESIGN.md §4).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum DelassusKind {
     /// Dense while the blocks fit in 2 GiB and `G` is constant (or the contacts are

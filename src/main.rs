@@ -172,26 +172,12 @@ impl OutputArgs {
     }
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum SchemeArg {
-    MoreauJean,
-    SchatzmanPaoli,
-    TrapezoidPosition,
-    DirectProjection,
-    CombinedProjection,
-}
-
+/// The CLI's forecast and LCP choices: the library's `Forecast` and `LcpKind` carry their
+/// parameters (γ; PGS tolerance and sweeps), which come from their own flags here.
 #[derive(Clone, Copy, ValueEnum)]
 enum ForecastArg {
     Explicit,
     Free,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum MassArg {
-    Consistent,
-    Lumped,
-    Redistributed,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -200,19 +186,6 @@ enum LcpArg {
     Lemke,
     BlockPivoting,
     Pgs,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum DelassusArg {
-    Auto,
-    Dense,
-    Columns,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum MetricArg {
-    Euclidean,
-    Mass,
 }
 
 #[derive(Args)]
@@ -231,7 +204,7 @@ struct BarArgs {
     theta: f64,
     /// Time-stepping scheme.
     #[arg(long, value_enum, default_value = "combined-projection")]
-    scheme: SchemeArg,
+    scheme: SchemeKind,
     /// Activation forecast for moreau-jean and direct-projection (eq. 61 / 62).
     #[arg(long, value_enum, default_value = "free")]
     forecast: ForecastArg,
@@ -261,10 +234,10 @@ struct BarArgs {
     density: f64,
     /// Mass matrix.
     #[arg(long, value_enum, default_value = "consistent")]
-    mass: MassArg,
+    mass: MassKind,
     /// Position projection metric for the projection schemes (eq. 58 / 60).
     #[arg(long, value_enum, default_value = "mass")]
-    metric: MetricArg,
+    metric: Metric,
     /// Algorithm 2: project every active contact (Siconos' rule) instead of P > 0 only.
     #[arg(long)]
     project_all_active: bool,
@@ -288,7 +261,7 @@ struct BarArgs {
     /// Delassus storage: dense n×m blocks, per-active-column, or auto (dense up to 64
     /// contacts).
     #[arg(long, value_enum, default_value = "auto")]
-    delassus: DelassusArg,
+    delassus: DelassusKind,
     /// Columns of the per-active-column pool (0: as many as fit in 2 GiB).
     #[arg(long, default_value_t = 0)]
     delassus_pool: usize,
@@ -321,30 +294,17 @@ impl BarArgs {
             velocity: self.velocity,
             gap: self.gap,
             restitution: self.restitution,
-            mass: match self.mass {
-                MassArg::Consistent => MassKind::Consistent,
-                MassArg::Lumped => MassKind::Lumped,
-                MassArg::Redistributed => MassKind::Redistributed,
-            },
+            mass: self.mass,
             ..BarScene::default()
         };
         let p = &mut s.scheme;
-        p.kind = match self.scheme {
-            SchemeArg::MoreauJean => SchemeKind::MoreauJean,
-            SchemeArg::SchatzmanPaoli => SchemeKind::SchatzmanPaoli,
-            SchemeArg::TrapezoidPosition => SchemeKind::TrapezoidPosition,
-            SchemeArg::DirectProjection => SchemeKind::DirectProjection,
-            SchemeArg::CombinedProjection => SchemeKind::CombinedProjection,
-        };
+        p.kind = self.scheme;
         p.theta = self.theta;
         p.forecast = match self.forecast {
             ForecastArg::Explicit => Forecast::Explicit { gamma: self.gamma },
             ForecastArg::Free => Forecast::Free,
         };
-        p.metric = match self.metric {
-            MetricArg::Euclidean => Metric::Euclidean,
-            MetricArg::Mass => Metric::Mass,
-        };
+        p.metric = self.metric;
         p.project_all_active = self.project_all_active;
         p.projection_feedback = !self.no_projection_feedback;
         p.projection_tolerance = self.projection_tolerance;
@@ -357,11 +317,7 @@ impl BarArgs {
                 max_sweeps: self.lcp_max_sweeps,
             },
         };
-        p.delassus = match self.delassus {
-            DelassusArg::Auto => DelassusKind::Auto,
-            DelassusArg::Dense => DelassusKind::Dense,
-            DelassusArg::Columns => DelassusKind::Columns,
-        };
+        p.delassus = self.delassus;
         p.delassus_pool = self.delassus_pool;
         p.newton.tol = self.newton_tol;
         p.newton.max_iterations = self.newton_max_iterations;

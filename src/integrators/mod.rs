@@ -154,8 +154,8 @@ pub trait Integrator {
     fn jacobian(&self) -> &crate::contact::ContactJacobian;
 }
 
-/// Which scheme to run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+/// Which scheme to run (also the CLI's `--scheme` values).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum SchemeKind {
     /// Moreau–Jean (eq. 18).

@@ -32,75 +32,16 @@ use crate::error::Error;
 use crate::integrators::State;
 use crate::model::solid::{CellKind, Formulation, Material, centre_strain, hooke, von_mises};
 
-/// One cell of the output geometry.
-#[derive(Clone, Debug, PartialEq)]
-pub enum GeomCell {
-    /// A two-node rod element (uniaxial stress along x).
-    Line,
-    /// A solid or plane element.
-    Solid(CellKind),
-}
+pub use crate::model::geometry::{GeomCell, Geometry, Outline};
 
-impl GeomCell {
-    fn vtk_type(&self) -> u8 {
-        match self {
-            GeomCell::Line => 3,
-            GeomCell::Solid(CellKind::Tri3) => 5,
-            GeomCell::Solid(CellKind::Quad4) => 9,
-            GeomCell::Solid(CellKind::Tet4) => 10,
-            GeomCell::Solid(CellKind::Hex8) => 12,
-        }
-    }
-}
-
-/// What the writers need to draw the model: points, cells, the material of each cell
-/// and where each nodal displacement component lives in the integrator's dof vector.
-#[derive(Clone, Debug, Default)]
-pub struct Geometry {
-    /// Reference coordinates (m).
-    pub points: Vec<[f64; 3]>,
-    /// Cells: kind, nodes, body index (into `bodies`).
-    pub cells: Vec<(GeomCell, Vec<usize>, usize)>,
-    /// Material and formulation per body.
-    pub bodies: Vec<(Material, Formulation)>,
-    /// Displacement components per point (1 for rods, 2 or 3 for solids).
-    pub dim: usize,
-    /// `point · dim + component` → dof of the integrated system (`None` when fixed).
-    pub dof_of: Vec<Option<usize>>,
-    /// Rigid obstacles drawn as outlines (written once to `obstacles.vtu`).
-    pub outlines: Vec<Outline>,
-}
-
-/// A rigid part drawn as line segments.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Outline {
-    /// Name (the scene's obstacle name).
-    pub name: String,
-    /// Points (m).
-    pub points: Vec<[f64; 3]>,
-    /// Segments between points.
-    pub segments: Vec<[usize; 2]>,
-}
-
-impl Outline {
-    /// A polygon of `n` segments: the circle of `radius` about `centre` in the plane
-    /// spanned by the unit vectors `a` and `b`.
-    pub fn circle(&mut self, centre: [f64; 3], a: [f64; 3], b: [f64; 3], radius: f64, n: usize) {
-        let base = self.points.len();
-        for k in 0..n {
-            let t = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
-            let (c, s) = (t.cos(), t.sin());
-            self.points.push(std::array::from_fn(|i| {
-                centre[i] + radius * (c * a[i] + s * b[i])
-            }));
-            self.segments.push([base + k, base + (k + 1) % n]);
-        }
-    }
-    /// The segment from `p` to `q`.
-    pub fn segment(&mut self, p: [f64; 3], q: [f64; 3]) {
-        let base = self.points.len();
-        self.points.extend([p, q]);
-        self.segments.push([base, base + 1]);
+/// The VTK cell type of a geometry cell.
+fn vtk_type(c: &GeomCell) -> u8 {
+    match c {
+        GeomCell::Line => 3,
+        GeomCell::Solid(CellKind::Tri3) => 5,
+        GeomCell::Solid(CellKind::Quad4) => 9,
+        GeomCell::Solid(CellKind::Tet4) => 10,
+        GeomCell::Solid(CellKind::Hex8) => 12,
     }
 }
 
@@ -336,7 +277,7 @@ impl FrameWriter {
                 Some(*o)
             })
             .collect();
-        let types: Vec<u8> = g.cells.iter().map(|(k, _, _)| k.vtk_type()).collect();
+        let types: Vec<u8> = g.cells.iter().map(|(k, _, _)| vtk_type(k)).collect();
         self.h5 = Some(super::h5::VtkHdf::create(
             run,
             &g.points,
@@ -563,7 +504,7 @@ impl FrameWriter {
             .geom
             .cells
             .iter()
-            .map(|(k, _, _)| k.vtk_type())
+            .map(|(k, _, _)| vtk_type(k))
             .collect();
         self.array_i64(&mut x, "connectivity", 1, &conn);
         self.array_i64(&mut x, "offsets", 1, &offs);

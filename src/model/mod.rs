@@ -10,6 +10,7 @@
 //! Submodules build systems: [`rod`] (P1 rod elements, eq. 71) and [`point_mass`].
 
 pub mod generate;
+pub mod geometry;
 pub mod ordering;
 pub mod point_mass;
 pub mod rod;
@@ -18,7 +19,9 @@ pub mod solid;
 use crate::linalg::{SparseMatrix, quadratic_form};
 
 /// How the element mass matrices are formed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum MassKind {
     /// Consistent mass, `∫ ρ Nᵀ N` (eq. 71 for the rod).

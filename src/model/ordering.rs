@@ -13,7 +13,7 @@
 //! against 3.49e7. [`crate::linalg::SpdFactor`] keeps whichever of the two orderings
 //! fills less.
 
-use crate::io::frames::{GeomCell, Geometry};
+use crate::model::geometry::{GeomCell, Geometry};
 
 /// Parts of at most this many nodes are not split further.
 pub const LEAF_NODES: usize = 64;

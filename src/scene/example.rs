@@ -5,8 +5,6 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::analytic::ball::BouncingBall;
-use crate::analytic::oscillator::Oscillator;
 use crate::contact::block::BlockCorners;
 use crate::contact::plane::NodesOnPlane;
 use crate::error::Error;
@@ -128,43 +126,6 @@ impl ExampleSpec {
                 "unknown example; the examples are bouncing-ball, oscillator, rocking-block",
             )
         })
-    }
-
-    /// The closed form of the ball or the oscillator (none for the block).
-    pub fn closed_form(&self) -> Option<crate::study::Example> {
-        match *self {
-            ExampleSpec::BouncingBall {
-                force,
-                mass,
-                restitution,
-                q0,
-                v0,
-            } => Some(crate::study::Example::Ball(BouncingBall {
-                q0,
-                v0,
-                force,
-                mass,
-                restitution,
-            })),
-            ExampleSpec::Oscillator {
-                mass,
-                damping,
-                stiffness,
-                force,
-                restitution,
-                q0,
-                v0,
-            } => Some(crate::study::Example::Oscillator(Oscillator {
-                mass,
-                damping,
-                stiffness,
-                force,
-                restitution,
-                q0,
-                v0,
-            })),
-            ExampleSpec::RockingBlock { .. } => None,
-        }
     }
 
     /// The model: system, contacts and initial state (no field geometry: the examples

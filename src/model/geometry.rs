@@ -1,0 +1,66 @@
+//! The geometry of a model as the writers and the orderings see it: points, cells with
+//! their kind and body, materials, the map from nodal components to integrated dofs, and
+//! obstacle outlines. It lives in `model` (not `io`) so that `model::ordering` can use it
+//! without `model` depending on `io`.
+
+use crate::model::solid::{CellKind, Formulation, Material};
+
+/// One cell of the output geometry.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GeomCell {
+    /// A two-node rod element (uniaxial stress along x).
+    Line,
+    /// A solid or plane element.
+    Solid(CellKind),
+}
+
+/// What the writers need to draw the model: points, cells, the material of each cell
+/// and where each nodal displacement component lives in the integrator's dof vector.
+#[derive(Clone, Debug, Default)]
+pub struct Geometry {
+    /// Reference coordinates (m).
+    pub points: Vec<[f64; 3]>,
+    /// Cells: kind, nodes, body index (into `bodies`).
+    pub cells: Vec<(GeomCell, Vec<usize>, usize)>,
+    /// Material and formulation per body.
+    pub bodies: Vec<(Material, Formulation)>,
+    /// Displacement components per point (1 for rods, 2 or 3 for solids).
+    pub dim: usize,
+    /// `point · dim + component` → dof of the integrated system (`None` when fixed).
+    pub dof_of: Vec<Option<usize>>,
+    /// Rigid obstacles drawn as outlines (written once to `obstacles.vtu`).
+    pub outlines: Vec<Outline>,
+}
+
+/// A rigid part drawn as line segments.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Outline {
+    /// Name (the scene's obstacle name).
+    pub name: String,
+    /// Points (m).
+    pub points: Vec<[f64; 3]>,
+    /// Segments between points.
+    pub segments: Vec<[usize; 2]>,
+}
+
+impl Outline {
+    /// A polygon of `n` segments: the circle of `radius` about `centre` in the plane
+    /// spanned by the unit vectors `a` and `b`.
+    pub fn circle(&mut self, centre: [f64; 3], a: [f64; 3], b: [f64; 3], radius: f64, n: usize) {
+        let base = self.points.len();
+        for k in 0..n {
+            let t = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+            let (c, s) = (t.cos(), t.sin());
+            self.points.push(std::array::from_fn(|i| {
+                centre[i] + radius * (c * a[i] + s * b[i])
+            }));
+            self.segments.push([base + k, base + (k + 1) % n]);
+        }
+    }
+    /// The segment from `p` to `q`.
+    pub fn segment(&mut self, p: [f64; 3], q: [f64; 3]) {
+        let base = self.points.len();
+        self.points.extend([p, q]);
+        self.segments.push([base, base + 1]);
+    }
+}
