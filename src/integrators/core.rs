@@ -692,23 +692,9 @@ impl ThetaCore {
                 self.linear_residual()?
             } else {
                 self.form();
-                let mut dq: f64 = 0.0;
-                let mut inc: f64 = 0.0;
-                let mut qn: f64 = 0.0;
-                for i in 0..self.n {
-                    dq = dq.max((self.q_new[i] - self.q_lin[i]).abs());
-                    inc = inc.max((self.q_new[i] - self.state.q[i]).abs());
-                    qn = qn.max(self.q_new[i].abs());
-                }
+                let r = newton_change(&self.q_new, &self.q_lin, &self.state.q);
                 self.q_lin.copy_from_slice(&self.q_new);
-                // a change at the round-off level of q is converged: at rest on two
-                // curved contacts the projection otherwise flips τ ~ 1e-17 forever
-                // (the rocking block at rest hit the cap before this floor)
-                if dq <= 16.0 * f64::EPSILON * qn {
-                    0.0
-                } else {
-                    dq / (inc + 8.0 * f64::EPSILON * qn).max(f64::MIN_POSITIVE)
-                }
+                r
             };
             stats.newton_residual = r;
             if r <= self.newton.tol {
@@ -960,6 +946,25 @@ impl ThetaCore {
                 ContactStatus::Slip
             };
         }
+    }
+}
+
+/// The Newton convergence measure of a nonlinear step, shared by every scheme: the
+/// change `|qⁿ⁺¹ − qⁿ|∞` relative to the step's increment `|qⁿ⁺¹ − q_k|∞`, and 0 once the
+/// change is at the round-off level of `q` (16 ulps): at rest on two curved contacts the
+/// projection otherwise flips τ ~ 1e-17 forever (the rocking block at rest hit the cap
+/// before this floor; Schatzman–Paoli's own copy of the loop had lost it).
+pub(crate) fn newton_change(q_new: &[f64], q_lin: &[f64], q_k: &[f64]) -> f64 {
+    let (mut dq, mut inc, mut qn) = (0.0_f64, 0.0_f64, 0.0_f64);
+    for ((a, b), c) in q_new.iter().zip(q_lin).zip(q_k) {
+        dq = dq.max((a - b).abs());
+        inc = inc.max((a - c).abs());
+        qn = qn.max(a.abs());
+    }
+    if dq <= 16.0 * f64::EPSILON * qn {
+        0.0
+    } else {
+        dq / (inc + 8.0 * f64::EPSILON * qn).max(f64::MIN_POSITIVE)
     }
 }
 

@@ -16,7 +16,7 @@
 //! when `M` is singular, as with the redistributed mass).
 //! The reported impulse is `P/h` (N·s), comparable with the velocity-level schemes.
 
-use super::core::{Workspace, factor_step_matrix, fail, grow_solve};
+use super::core::{Workspace, factor_step_matrix, fail, grow_solve, newton_change};
 use super::{Integrator, Metric, NewtonParams, SchemeParams, State, StepStats};
 use crate::contact::{ContactJacobian, ContactSet};
 use crate::delassus::{Delassus, Op};
@@ -215,13 +215,7 @@ impl Integrator for SchatzmanPaoli {
                 st.newton_residual = 0.0;
                 break;
             }
-            let (mut dq, mut inc, mut qn) = (0.0_f64, 0.0_f64, 0.0_f64);
-            for i in 0..n {
-                dq = dq.max((self.q_new[i] - self.q_lin[i]).abs());
-                inc = inc.max((self.q_new[i] - self.state.q[i]).abs());
-                qn = qn.max(self.q_new[i].abs());
-            }
-            let r = dq / (inc + 8.0 * f64::EPSILON * qn).max(f64::MIN_POSITIVE);
+            let r = newton_change(&self.q_new, &self.q_lin, &self.state.q);
             st.newton_residual = r;
             self.q_lin.copy_from_slice(&self.q_new);
             if r <= self.newton.tol {
