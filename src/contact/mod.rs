@@ -90,17 +90,38 @@ pub fn check_friction(field: &str, mu: f64) -> Result<f64, crate::error::Error> 
     crate::error::require_in(field, mu, 0.0, 1e6)
 }
 
-/// The laws of `m` contacts sharing one `{e, μ}`, checked.
-pub fn uniform_laws(m: usize, e: f64, mu: f64) -> Result<Vec<ContactLaw>, crate::error::Error> {
-    check_restitution("restitution", e)?;
-    check_friction("friction", mu)?;
-    Ok(vec![
-        ContactLaw {
-            restitution: e,
-            friction: mu,
-        };
-        m
-    ])
+/// The laws and block size of nodal contacts that share one `{e, μ}` (the plane and
+/// round obstacles): frictionless blocks of one row until [`UniformLaws::set_friction`].
+#[derive(Clone, Debug)]
+pub(crate) struct UniformLaws {
+    /// One law per contact.
+    pub laws: Vec<ContactLaw>,
+    /// Rows per contact.
+    pub dim: usize,
+}
+
+impl UniformLaws {
+    /// `m` frictionless contacts of restitution `e` (checked by the caller).
+    pub fn frictionless(m: usize, e: f64) -> Self {
+        UniformLaws {
+            laws: vec![
+                ContactLaw {
+                    restitution: e,
+                    friction: 0.0,
+                };
+                m
+            ],
+            dim: 1,
+        }
+    }
+
+    /// Friction `mu` for every contact: blocks of `space_dim` rows when `mu > 0`.
+    pub fn set_friction(&mut self, mu: f64, space_dim: usize) -> Result<(), crate::error::Error> {
+        check_friction("friction", mu)?;
+        self.laws.iter_mut().for_each(|l| l.friction = mu);
+        self.dim = if mu > 0.0 { space_dim } else { 1 };
+        Ok(())
+    }
 }
 
 /// The `n × rows` Jacobian `G` stored by columns with a fixed pattern (one column per

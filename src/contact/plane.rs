@@ -1,7 +1,7 @@
 //! Nodes against a fixed rigid plane: `g^α(q) = n·(X_α + u_α) − c` (linear in `q`), with
 //! the plane's constant frame ([`super::frame`]) as tangential rows when `μ > 0`.
 
-use super::{ContactJacobian, ContactLaw, ContactSet, check_friction, check_restitution};
+use super::{ContactJacobian, ContactLaw, ContactSet, check_restitution};
 use crate::error::Error;
 
 /// Nodal contacts of a deformable body with the rigid plane `{x : n·x = c}`; the body
@@ -16,9 +16,7 @@ pub struct NodesOnPlane {
     pub normal: Vec<f64>,
     /// Plane offset `c`.
     pub offset: f64,
-    laws: Vec<ContactLaw>,
-    /// Rows per contact: 1, or the space dimension with friction.
-    dim: usize,
+    laws: super::UniformLaws,
 }
 
 impl NodesOnPlane {
@@ -55,23 +53,15 @@ impl NodesOnPlane {
             reference,
             normal: normal.iter().map(|x| x / norm).collect(),
             offset: offset / norm,
-            laws: vec![
-                ContactLaw {
-                    restitution: e,
-                    friction: 0.0
-                };
-                m
-            ],
-            dim: 1,
+            laws: super::UniformLaws::frictionless(m, e),
         })
     }
 
     /// Gives every contact the friction coefficient `mu` (blocks of the space dimension
     /// when `mu > 0`).
     pub fn with_friction(mut self, mu: f64) -> Result<Self, Error> {
-        check_friction("friction", mu)?;
-        self.laws.iter_mut().for_each(|l| l.friction = mu);
-        self.dim = if mu > 0.0 { self.normal.len() } else { 1 };
+        let d = self.normal.len();
+        self.laws.set_friction(mu, d)?;
         Ok(self)
     }
 }
@@ -84,12 +74,12 @@ impl ContactSet for NodesOnPlane {
         true
     }
     fn dim(&self, _alpha: usize) -> usize {
-        self.dim
+        self.laws.dim
     }
     fn pattern(&self) -> Vec<Vec<usize>> {
         self.node_dofs
             .iter()
-            .flat_map(|d| std::iter::repeat_n(d.clone(), self.dim))
+            .flat_map(|d| std::iter::repeat_n(d.clone(), self.laws.dim))
             .collect()
     }
     fn evaluate(&self, q: &[f64], gap: &mut [f64], jac: &mut ContactJacobian) {
@@ -99,10 +89,10 @@ impl ContactSet for NodesOnPlane {
                 g += self.normal[k] * (self.reference[a][k] + q[d]);
             }
             gap[a] = g;
-            super::frame::write_nodal_block(&self.normal, self.dim, a * self.dim, jac);
+            super::frame::write_nodal_block(&self.normal, self.laws.dim, a * self.laws.dim, jac);
         }
     }
     fn laws(&self) -> &[ContactLaw] {
-        &self.laws
+        &self.laws.laws
     }
 }

@@ -5,7 +5,7 @@
 //! `G = −d/|d|`. The gap is nonlinear in `q` and `G` turns with the node, so a scheme
 //! that evaluates `G(q_{k+1})` (eq. 18a, 28) iterates (eq. 42–51).
 
-use super::{ContactJacobian, ContactLaw, ContactSet, check_friction, check_restitution};
+use super::{ContactJacobian, ContactLaw, ContactSet, check_restitution};
 use crate::error::{Error, require_positive};
 
 /// Which side of the surface is admissible.
@@ -33,8 +33,7 @@ pub struct RoundObstacle {
     pub radius: f64,
     /// Admissible side.
     pub side: Side,
-    laws: Vec<ContactLaw>,
-    dim: usize,
+    laws: super::UniformLaws,
 }
 
 /// The historical name: nodes kept inside a sphere.
@@ -103,23 +102,15 @@ impl RoundObstacle {
             axis,
             radius,
             side,
-            laws: vec![
-                ContactLaw {
-                    restitution: e,
-                    friction: 0.0
-                };
-                m
-            ],
-            dim: 1,
+            laws: super::UniformLaws::frictionless(m, e),
         })
     }
 
     /// Gives every contact the friction coefficient `mu` (blocks of the space dimension
     /// when `mu > 0`; the frame turns with the normal).
     pub fn with_friction(mut self, mu: f64) -> Result<Self, Error> {
-        check_friction("friction", mu)?;
-        self.laws.iter_mut().for_each(|l| l.friction = mu);
-        self.dim = if mu > 0.0 { self.center.len() } else { 1 };
+        let d = self.center.len();
+        self.laws.set_friction(mu, d)?;
         Ok(self)
     }
 }
@@ -132,12 +123,12 @@ impl ContactSet for RoundObstacle {
         false
     }
     fn dim(&self, _alpha: usize) -> usize {
-        self.dim
+        self.laws.dim
     }
     fn pattern(&self) -> Vec<Vec<usize>> {
         self.node_dofs
             .iter()
-            .flat_map(|d| std::iter::repeat_n(d.clone(), self.dim))
+            .flat_map(|d| std::iter::repeat_n(d.clone(), self.laws.dim))
             .collect()
     }
     fn evaluate(&self, q: &[f64], gap: &mut [f64], jac: &mut ContactJacobian) {
@@ -165,10 +156,10 @@ impl ContactSet for RoundObstacle {
                 col.iter_mut().for_each(|x| *x = 0.0);
                 col[0] = sign;
             }
-            super::frame::write_nodal_block(col, self.dim, a * self.dim, jac);
+            super::frame::write_nodal_block(col, self.laws.dim, a * self.laws.dim, jac);
         }
     }
     fn laws(&self) -> &[ContactLaw] {
-        &self.laws
+        &self.laws.laws
     }
 }

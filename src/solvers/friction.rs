@@ -842,8 +842,8 @@ fn ac_all<W: DelassusOperator + ?Sized>(
     0.5 * phi.iter().map(|x| x * x).sum::<f64>()
 }
 
-/// Proximal point around a global semismooth Newton on Alart–Curnier (module doc).
 impl FrictionSolver {
+    /// Proximal point around a global semismooth Newton on Alart–Curnier (module doc).
     fn prox_newton<W: DelassusOperator + ?Sized>(
         &mut self,
         prob: FrictionProblem<'_, W>,
