@@ -342,3 +342,77 @@ fn rigid_rod_falling_at_45_degrees_sticks_iff_mu_reaches_the_threshold() {
         }
     }
 }
+
+/// `meshes/pushed_block.toml`: the hex8 block at rest on the floor (μ = 0.3), its top
+/// face pushed along x by a force ramped from 0 (t = 0.1 s) to 3 N (t = 1.1 s). Closed
+/// form: friction balances the push while it is below μ m g = 1.4715 N (until
+/// t* = 0.5905 s), then the block slides with |ΣP_T| = μ ΣP_N. Checked within 1 %: the
+/// summed tangential force equals the push over [0.15, 0.55] s and stays below μ ΣN; it
+/// equals μ ΣN over [0.62, 1] s; it first reaches 0.99 μ ΣN within 1 % of t*; ΣN = m g
+/// to 1e-3 from t = 0.1 s.
+#[test]
+fn pushed_hex8_block_sticks_until_the_push_reaches_mu_m_g_then_slides() {
+    use signorini::scene::file::Scene;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/pushed_block.toml");
+    let (mu, m) = (0.3, 0.5);
+    let t_star = 0.1 + mu * m * G / 3.0;
+    for kind in SCHEMES {
+        let mut scene = Scene::from_file(&path).unwrap();
+        scene.scheme.kind = kind;
+        let (model, _) = scene.build().unwrap();
+        let mut integ = model.into_integrator(&scene.scheme, scene.time.dt).unwrap();
+        let h = integ.dt();
+        let mut reached = None;
+        while integ.state().time < 1.0 - 1e-12 {
+            let st = integ.step().unwrap();
+            assert_eq!(st.caps_hit, 0, "{kind:?}");
+            let s = integ.state();
+            let t = s.time;
+            let td = s.tangent_dim;
+            let pn: f64 = s.impulse.iter().sum();
+            // summed tangential impulse, as a vector in the tangent plane
+            let pt: Vec<f64> = (0..td)
+                .map(|j| {
+                    (0..s.impulse.len())
+                        .map(|c| s.tangent_impulse[c * td + j])
+                        .sum()
+                })
+                .collect();
+            let ft = pt.iter().map(|x| x * x).sum::<f64>().sqrt() / h;
+            let push = 3.0 * (t - 0.1).clamp(0.0, 1.0);
+            // ΣN = m g once settled (Moreau–Jean's contacts activate over the first steps)
+            if t >= 0.1 {
+                assert!(
+                    (pn / h / (m * G) - 1.0).abs() < 1e-3,
+                    "{kind:?} t = {t}: ΣN/mg = {}",
+                    pn / h / (m * G)
+                );
+            }
+            if (0.15..=0.55).contains(&t) {
+                assert!(
+                    (ft / push - 1.0).abs() < 0.01,
+                    "{kind:?} t = {t}: friction {ft} N, push {push} N"
+                );
+                assert!(
+                    ft < mu * pn / h,
+                    "{kind:?} t = {t}: beyond the cone while sticking"
+                );
+            }
+            if t >= 0.62 {
+                assert!(
+                    (ft / (mu * pn / h) - 1.0).abs() < 0.01,
+                    "{kind:?} t = {t}: |ΣT|/μΣN = {}",
+                    ft / (mu * pn / h)
+                );
+            }
+            if reached.is_none() && ft >= 0.99 * mu * pn / h {
+                reached = Some(t);
+            }
+        }
+        let t = reached.expect("never slid");
+        assert!(
+            (t / t_star - 1.0).abs() < 0.01,
+            "{kind:?}: slides from {t} s, analytic {t_star} s"
+        );
+    }
+}

@@ -5,7 +5,7 @@
 //! (eq. 47) is constant: it is formed and factored once. Each step computes the free
 //! velocity (eq. 18 with `P = 0`)
 //!
-//! `M̂ (v_free − v_k) = h f − h C v_k − h K (q_k + hθ v_k)`,
+//! `M̂ (v_free − v_k) = h f(t_{k+θ}) − h C v_k − h K (q_k + hθ v_k)`,
 //!
 //! and every iterate of the decoupled Newton loop (eq. 56–58, with the sign erratum
 //! of the module [`crate::integrators`]) is then
@@ -494,6 +494,8 @@ impl ThetaCore {
                 .sum();
             *w = h * (f - kx);
         }
+        // time-dependent nodal loads at t_{k+θ}
+        self.sys.add_loads(s.time + th * h, h, &mut self.work);
         if let Some(c) = &self.sys.damping {
             sym_spmv_add(c.as_ref(), -h, &s.v, &mut self.work);
         }

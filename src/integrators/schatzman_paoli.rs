@@ -153,6 +153,8 @@ impl Integrator for SchatzmanPaoli {
         for (w, f) in self.work.iter_mut().zip(&self.sys.force) {
             *w = h * h * f;
         }
+        self.sys
+            .add_loads(self.state.time + th * h, h * h, &mut self.work);
         spmv_add(self.sys.mass.as_ref(), 1.0, &self.q_lin, &mut self.work);
         spmv_add(
             self.sys.stiffness.as_ref(),

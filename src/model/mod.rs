@@ -75,6 +75,94 @@ pub struct LinearSystem {
     /// mesh geometry ([`ordering::nested_dissection`]); the factorization keeps it
     /// only where it fills less than AMD. `None`: AMD alone.
     pub ordering: Option<Vec<usize>>,
+    /// Time-dependent nodal loads `φ_i(t) b_i`, added to `force` at `t_{k+θ}` by the
+    /// schemes (the scene's `[[forces]]`).
+    pub loads: Vec<NodalLoad>,
+}
+
+/// A piecewise-linear function of time through `(t, value)` points (increasing `t`),
+/// constant before the first point and after the last.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TimeFunction {
+    points: Vec<(f64, f64)>,
+}
+
+impl TimeFunction {
+    /// Checks the points (at least one, finite, strictly increasing times); `field`
+    /// names them in errors.
+    pub fn new(field: &str, points: Vec<(f64, f64)>) -> Result<Self, crate::error::Error> {
+        if points.is_empty() {
+            return Err(crate::error::Error::invalid(
+                field,
+                "[]",
+                "needs at least one [time, value] point",
+            ));
+        }
+        for (i, &(t, v)) in points.iter().enumerate() {
+            if !(t.is_finite() && v.is_finite()) {
+                return Err(crate::error::Error::invalid(
+                    &format!("{field}[{i}]"),
+                    format!("[{t}, {v}]"),
+                    "must be finite",
+                ));
+            }
+            if i > 0 && t <= points[i - 1].0 {
+                return Err(crate::error::Error::invalid(
+                    &format!("{field}[{i}]"),
+                    t,
+                    &format!("times must increase (previous {})", points[i - 1].0),
+                ));
+            }
+        }
+        Ok(TimeFunction { points })
+    }
+
+    /// The constant 1.
+    pub fn one() -> Self {
+        TimeFunction {
+            points: vec![(0.0, 1.0)],
+        }
+    }
+
+    /// The value at `t`.
+    pub fn eval(&self, t: f64) -> f64 {
+        let p = &self.points;
+        if t <= p[0].0 {
+            return p[0].1;
+        }
+        let last = p[p.len() - 1];
+        if t >= last.0 {
+            return last.1;
+        }
+        let k = p.partition_point(|&(tk, _)| tk <= t);
+        let ((t0, v0), (t1, v1)) = (p[k - 1], p[k]);
+        v0 + (v1 - v0) * (t - t0) / (t1 - t0)
+    }
+}
+
+/// A load `φ(t) b` on a few dofs (`b` as dof/value pairs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodalLoad {
+    /// The dofs loaded.
+    pub dofs: Vec<usize>,
+    /// `b` on those dofs (N).
+    pub values: Vec<f64>,
+    /// `φ(t)`.
+    pub time: TimeFunction,
+}
+
+impl LinearSystem {
+    /// `out += s · Σ_i φ_i(t) b_i` (no allocation: the schemes call it every step).
+    pub fn add_loads(&self, t: f64, s: f64, out: &mut [f64]) {
+        for l in &self.loads {
+            let f = s * l.time.eval(t);
+            if f != 0.0 {
+                for (&d, &b) in l.dofs.iter().zip(&l.values) {
+                    out[d] += f * b;
+                }
+            }
+        }
+    }
 }
 
 /// Adds the element mass `me` (dense, `dofs.len()` square) to `asm` as `kind` asks;
@@ -182,6 +270,20 @@ impl LinearSystem {
                 .flat_map(|p| p.component.iter().copied())
                 .collect(),
             ordering: None,
+            loads: {
+                let mut off = 0;
+                let mut loads = Vec::new();
+                for p in parts {
+                    for l in &p.loads {
+                        loads.push(NodalLoad {
+                            dofs: l.dofs.iter().map(|d| d + off).collect(),
+                            ..l.clone()
+                        });
+                    }
+                    off += p.ndof();
+                }
+                loads
+            },
         })
     }
 
@@ -231,6 +333,23 @@ impl LinearSystem {
                 .map(|i| self.component[i])
                 .collect(),
             ordering: None,
+            loads: self
+                .loads
+                .iter()
+                .map(|l| {
+                    let (dofs, values) = l
+                        .dofs
+                        .iter()
+                        .zip(&l.values)
+                        .filter_map(|(&d, &b)| map[d].map(|a| (a, b)))
+                        .unzip();
+                    NodalLoad {
+                        dofs,
+                        values,
+                        time: l.time.clone(),
+                    }
+                })
+                .collect(),
         };
         (sys, map)
     }

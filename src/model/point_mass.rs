@@ -28,6 +28,7 @@ pub fn point_mass(dim: usize, mass: f64, force: &[f64]) -> Result<LinearSystem, 
         dofs_per_node: dim,
         component: super::interleaved_components(dim, dim),
         ordering: None,
+        loads: Vec::new(),
     })
 }
 
@@ -68,6 +69,7 @@ pub fn rigid_block(mass: f64, length: f64, thickness: f64, g: f64) -> Result<Lin
         dofs_per_node: 3,
         component: vec![0, 1, 2],
         ordering: None,
+        loads: Vec::new(),
     })
 }
 
@@ -103,5 +105,6 @@ pub fn diagonal(masses: &[f64], force: &[f64]) -> Result<LinearSystem, Error> {
         dofs_per_node: n,
         component: (0..n).map(|i| i.min(2) as u8).collect(),
         ordering: None,
+        loads: Vec::new(),
     })
 }

@@ -94,6 +94,7 @@ impl Rod {
             dofs_per_node: 1,
             component: super::interleaved_components(n, 1),
             ordering: None,
+            loads: Vec::new(),
         })
     }
 }

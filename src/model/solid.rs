@@ -590,6 +590,7 @@ pub fn assemble_with_contacts(
         dofs_per_node: dim,
         component: super::interleaved_components(n, dim),
         ordering: None,
+        loads: Vec::new(),
     })
 }
 

@@ -27,6 +27,12 @@
 //! obstacle = "wall"
 //! restitution = 0.0
 //! friction = 0.0               # Coulomb μ; > 0 adds tangential rows and the friction solver
+//!
+//! [[forces]]                   # optional: a force on a node set, split over its nodes
+//! body = "bar"
+//! nodes = "x1"
+//! total = [-10.0]              # N, one component per dimension
+//! time = [[0.0, 0.0], [1e-3, 1.0]]   # factor on `total`: piecewise linear, constant outside
 //! ```
 //!
 //! Mesh generators: `box` (hex8 or tet4), `rectangle` (quad4 or tri3), `rod` (the
@@ -75,6 +81,9 @@ pub struct Scene {
     /// Body forces.
     #[serde(default)]
     pub loads: Loads,
+    /// Forces on node sets with a time function.
+    #[serde(default)]
+    pub forces: Vec<ForceSpec>,
     /// Output options.
     #[serde(default)]
     pub output: crate::io::OutputOptions,
@@ -269,6 +278,23 @@ pub struct ContactSpec {
     pub friction: f64,
 }
 
+/// `[[forces]]`: a force on a node set, split evenly over its nodes, scaled by a
+/// piecewise-linear function of time.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForceSpec {
+    /// Body name.
+    pub body: String,
+    /// A node set of the body's mesh (as for `[[contacts]]`: a set, `boundary` or `all`).
+    pub nodes: String,
+    /// The total force over the set (N), one component per space dimension.
+    pub total: Vec<f64>,
+    /// `[[t, factor], …]`: the factor multiplying `total` at time `t`, linear between the
+    /// points and constant outside them (default: 1 at all times).
+    #[serde(default)]
+    pub time: Option<Vec<[f64; 2]>>,
+}
+
 /// `[loads]`.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -390,6 +416,28 @@ impl Scene {
                 c.restitution,
             )?;
             crate::contact::check_friction(&format!("contacts[{i}].friction"), c.friction)?;
+        }
+        for (i, f) in self.forces.iter().enumerate() {
+            let Some(b) = self.bodies.iter().find(|b| b.name == f.body) else {
+                return Err(Error::invalid(
+                    &format!("forces[{i}].body"),
+                    &f.body,
+                    "names no body",
+                ));
+            };
+            if f.total.len() != b.dim() || f.total.iter().any(|x| !x.is_finite()) {
+                return Err(Error::invalid(
+                    &format!("forces[{i}].total"),
+                    format!("{:?}", f.total),
+                    &format!("needs {} finite components (N)", b.dim()),
+                ));
+            }
+            if let Some(t) = &f.time {
+                crate::model::TimeFunction::new(
+                    &format!("forces[{i}].time"),
+                    t.iter().map(|p| (p[0], p[1])).collect(),
+                )?;
+            }
         }
         Ok(())
     }
@@ -544,6 +592,47 @@ impl Scene {
             .filter(|(_, m)| m.is_some())
             .map(|(v, _)| *v)
             .collect();
+        // forces on node sets (after the elimination: loads on fixed dofs are dropped,
+        // the supports carry them)
+        let mut system = system;
+        for (fi, f) in self.forces.iter().enumerate() {
+            let at = |e: Error| prefix(&format!("forces[{fi}]"), e);
+            let bi = self
+                .bodies
+                .iter()
+                .position(|b| b.name == f.body)
+                .expect("validated");
+            let mesh = &meshes[bi];
+            let nodes = node_set(mesh, &f.nodes).map_err(at)?;
+            if nodes.is_empty() {
+                return Err(at(Error::invalid(
+                    "nodes",
+                    &f.nodes,
+                    "the node set is empty",
+                )));
+            }
+            let dim = self.bodies[bi].dim();
+            let share = 1.0 / nodes.len() as f64;
+            let (mut dofs, mut values) = (Vec::new(), Vec::new());
+            for &v in &nodes {
+                for (i, &t) in f.total.iter().enumerate() {
+                    if let Some(d) = map[offsets[bi] + v * dim + i] {
+                        dofs.push(d);
+                        values.push(t * share);
+                    }
+                }
+            }
+            let time = match &f.time {
+                Some(t) => crate::model::TimeFunction::new(
+                    &format!("forces[{fi}].time"),
+                    t.iter().map(|p| (p[0], p[1])).collect(),
+                )?,
+                None => crate::model::TimeFunction::one(),
+            };
+            system
+                .loads
+                .push(crate::model::NodalLoad { dofs, values, time });
+        }
         // contacts
         let mut sets: Vec<Box<dyn ContactSet>> = Vec::new();
         for (ci, c) in self.contacts.iter().enumerate() {
@@ -559,22 +648,7 @@ impl Scene {
                 .iter()
                 .find(|o| o.name() == c.obstacle)
                 .expect("validated");
-            let nodes: Vec<usize> = if c.nodes == "all" {
-                (0..mesh.points.len()).collect()
-            } else if c.nodes == "boundary" && !mesh.node_sets.contains_key("boundary") {
-                mesh.boundary_nodes()
-            } else {
-                mesh.node_sets.get(&c.nodes).cloned().ok_or_else(|| {
-                    at(Error::invalid(
-                        "nodes",
-                        &c.nodes,
-                        &format!(
-                            "no such node set; the mesh has {:?}",
-                            mesh.node_sets.keys().collect::<Vec<_>>()
-                        ),
-                    ))
-                })?
-            };
+            let nodes = node_set(mesh, &c.nodes).map_err(at)?;
             if nodes.is_empty() {
                 return Err(at(Error::invalid(
                     "nodes",
@@ -888,6 +962,27 @@ fn outline(o: &ObstacleSpec, points: &[[f64; 3]], dim: usize) -> Outline {
         }
     }
     out
+}
+
+/// The nodes of the set `name` of `mesh`: a named set, `boundary` (computed from the
+/// cells when the mesh has no set of that name) or `all`.
+fn node_set(mesh: &crate::model::solid::Mesh, name: &str) -> Result<Vec<usize>, Error> {
+    if name == "all" {
+        Ok((0..mesh.points.len()).collect())
+    } else if name == "boundary" && !mesh.node_sets.contains_key("boundary") {
+        Ok(mesh.boundary_nodes())
+    } else {
+        mesh.node_sets.get(name).cloned().ok_or_else(|| {
+            Error::invalid(
+                "nodes",
+                name,
+                &format!(
+                    "no such node set; the mesh has {:?} (and `boundary`, `all`)",
+                    mesh.node_sets.keys().collect::<Vec<_>>()
+                ),
+            )
+        })
+    }
 }
 
 fn prefix(p: &str, e: Error) -> Error {
