@@ -732,7 +732,6 @@ impl Scene {
             fixed_dofs,
         };
         let n = system.ndof();
-        let mut system = system;
         if crate::model::ordering::worth_ordering(&geometry) {
             system.ordering = Some(crate::model::ordering::nested_dissection(&geometry, n));
         }
