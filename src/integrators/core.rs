@@ -42,7 +42,7 @@ use crate::contact::{ContactJacobian, ContactSet, ContactStatus};
 use crate::delassus::DenseOperator;
 use crate::delassus::{Delassus, Op};
 use crate::error::Error;
-use crate::linalg::{SparseMatrix, SpdFactor, sym_spmv_add};
+use crate::linalg::{SparseMatrix, SpdFactor, spmv_add, sym_spmv_add};
 use crate::model::LinearSystem;
 use crate::solvers::friction::{Block, FrictionParams, FrictionProblem, FrictionSolver};
 use crate::solvers::lcp::LcpSolver;
@@ -293,6 +293,9 @@ pub struct ThetaCore {
     pub(crate) state: State,
     /// `U = Gᵀ v` at the start of the step, all rows.
     u_rows: Vec<f64>,
+    /// Scratch of the prescribed dofs' velocities and displacements.
+    vp_a: Vec<f64>,
+    vp_b: Vec<f64>,
     // n-vectors
     pub(crate) v_free: Vec<f64>,
     work: Vec<f64>,
@@ -352,6 +355,7 @@ impl ThetaCore {
             "iteration matrix M + hθC + h²θ²K",
         )?;
         let n = sys.ndof();
+        let np = sys.prescribed.as_ref().map_or(0, |p| p.dofs.len());
         let m = contacts.len();
         let jac = ContactJacobian::for_set(contacts.as_ref());
         let rows = jac.ncols();
@@ -409,6 +413,8 @@ impl ThetaCore {
             projection_tolerance: params.projection_tolerance,
             state,
             u_rows: vec![0.0; rows],
+            vp_a: vec![0.0; np],
+            vp_b: vec![0.0; np],
             v_free: vec![0.0; n],
             work: vec![0.0; n],
             q_lin: vec![0.0; n],
@@ -496,6 +502,22 @@ impl ThetaCore {
         }
         // time-dependent nodal loads at t_{k+θ}
         self.sys.add_loads(s.time + th * h, h, &mut self.work);
+        // prescribed dofs (eliminated): −M_fp Δv_p − h C_fp v_p(t_{k+θ}) − h K_fp u_p(t_{k+θ})
+        if let Some(p) = &self.sys.prescribed {
+            let t = s.time;
+            p.velocity_at(t, &mut self.vp_a);
+            p.velocity_at(t + h, &mut self.vp_b);
+            for (b, a) in self.vp_b.iter_mut().zip(&self.vp_a) {
+                *b -= a;
+            }
+            spmv_add(p.mass.as_ref(), -1.0, &self.vp_b, &mut self.work);
+            p.velocity_at(t + th * h, &mut self.vp_a);
+            if let Some(c) = &p.damping {
+                spmv_add(c.as_ref(), -h, &self.vp_a, &mut self.work);
+            }
+            p.displacement_at(t + th * h, &mut self.vp_a);
+            spmv_add(p.stiffness.as_ref(), -h, &self.vp_a, &mut self.work);
+        }
         if let Some(c) = &self.sys.damping {
             sym_spmv_add(c.as_ref(), -h, &s.v, &mut self.work);
         }

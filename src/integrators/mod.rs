@@ -343,6 +343,13 @@ pub fn build(
 ) -> Result<Box<dyn Integrator>, Error> {
     params.validate()?;
     crate::error::require_positive("dt", h)?;
+    if system.prescribed.is_some() && params.kind == SchemeKind::SchatzmanPaoli {
+        return Err(Error::invalid(
+            "scheme.kind",
+            params.kind.name(),
+            "does not take prescribed velocities ([[prescribed]]); use a θ-method scheme",
+        ));
+    }
     if contacts.has_friction()
         && matches!(
             params.kind,

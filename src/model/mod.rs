@@ -78,6 +78,47 @@ pub struct LinearSystem {
     /// Time-dependent nodal loads `φ_i(t) b_i`, added to `force` at `t_{k+θ}` by the
     /// schemes (the scene's `[[forces]]`).
     pub loads: Vec<NodalLoad>,
+    /// Dofs eliminated with a prescribed velocity (the scene's `[[prescribed]]`): their
+    /// coupling to the kept dofs.
+    pub prescribed: Option<Prescribed>,
+}
+
+/// Dofs moved with a prescribed velocity `v_p(t) = w_p φ_p(t)` (displacement
+/// `u_p(t) = w_p ∫₀ᵗ φ_p`), eliminated from the system. The kept dofs feel them through
+/// the coupling blocks: the θ-method of eq. 18 on the full system, split by rows, adds
+/// `−M_fp (v_p(t_{k+1}) − v_p(t_k)) − h C_fp v_p(t_{k+θ}) − h K_fp u_p(t_{k+θ})` to the
+/// free-velocity right-hand side of the kept dofs.
+#[derive(Clone, Debug)]
+pub struct Prescribed {
+    /// `M_fp` (kept × prescribed).
+    pub mass: SparseMatrix,
+    /// `K_fp`.
+    pub stiffness: SparseMatrix,
+    /// `C_fp` (with damping).
+    pub damping: Option<SparseMatrix>,
+    /// `w_p` per prescribed dof (m/s).
+    pub velocity: Vec<f64>,
+    /// Index into `functions` per prescribed dof.
+    pub function: Vec<usize>,
+    /// The time functions `φ`.
+    pub functions: Vec<TimeFunction>,
+    /// The old (unreduced) dof of each prescribed dof.
+    pub dofs: Vec<usize>,
+}
+
+impl Prescribed {
+    /// `v_p(t)` into `out`.
+    pub fn velocity_at(&self, t: f64, out: &mut [f64]) {
+        for ((o, &w), &f) in out.iter_mut().zip(&self.velocity).zip(&self.function) {
+            *o = w * self.functions[f].eval(t);
+        }
+    }
+    /// `u_p(t)` into `out`.
+    pub fn displacement_at(&self, t: f64, out: &mut [f64]) {
+        for ((o, &w), &f) in out.iter_mut().zip(&self.velocity).zip(&self.function) {
+            *o = w * self.functions[f].integral(t);
+        }
+    }
 }
 
 /// A piecewise-linear function of time through `(t, value)` points (increasing `t`),
@@ -122,6 +163,29 @@ impl TimeFunction {
         TimeFunction {
             points: vec![(0.0, 1.0)],
         }
+    }
+
+    /// `∫₀ᵗ φ` (exact for the piecewise-linear φ, constant extension on either side).
+    pub fn integral(&self, t: f64) -> f64 {
+        let p = &self.points;
+        // ∫₀ᵗ = F(t) − F(0) with F the antiderivative from the first point
+        let anti = |t: f64| -> f64 {
+            if t <= p[0].0 {
+                return (t - p[0].0) * p[0].1;
+            }
+            let mut acc = 0.0;
+            for w in p.windows(2) {
+                let ((t0, v0), (t1, v1)) = (w[0], w[1]);
+                if t <= t1 {
+                    let vt = v0 + (v1 - v0) * (t - t0) / (t1 - t0);
+                    return acc + 0.5 * (v0 + vt) * (t - t0);
+                }
+                acc += 0.5 * (v0 + v1) * (t1 - t0);
+            }
+            let last = p[p.len() - 1];
+            acc + (t - last.0) * last.1
+        };
+        anti(t) - anti(0.0)
     }
 
     /// The value at `t`.
@@ -270,6 +334,7 @@ impl LinearSystem {
                 .flat_map(|p| p.component.iter().copied())
                 .collect(),
             ordering: None,
+            prescribed: None,
             loads: {
                 let mut off = 0;
                 let mut loads = Vec::new();
@@ -285,6 +350,70 @@ impl LinearSystem {
                 loads
             },
         })
+    }
+
+    /// Removes the dofs marked `fixed` (homogeneous Dirichlet conditions, u = 0) and those
+    /// with a prescribed velocity (`prescribed[i] = Some((w, function))`, keeping their
+    /// coupling blocks, see [`Prescribed`]). Returns the reduced system and, for each old
+    /// dof, its new index.
+    pub fn restrict_prescribed(
+        &self,
+        fixed: &[bool],
+        prescribed: &[Option<(f64, usize)>],
+        functions: Vec<TimeFunction>,
+    ) -> (LinearSystem, Vec<Option<usize>>) {
+        let gone: Vec<bool> = fixed
+            .iter()
+            .zip(prescribed)
+            .map(|(&f, p)| f || p.is_some())
+            .collect();
+        let (mut sys, map) = self.restrict(&gone);
+        let pdofs: Vec<usize> = (0..self.ndof())
+            .filter(|&i| !fixed[i] && prescribed[i].is_some())
+            .collect();
+        if pdofs.is_empty() {
+            return (sys, map);
+        }
+        let nf = sys.ndof();
+        // columns of the prescribed dofs, rows of the kept ones
+        let block = |m: &SparseMatrix| {
+            let m = m.as_ref();
+            let mut col_ptr = vec![0];
+            let (mut rows, mut vals) = (Vec::new(), Vec::new());
+            for &j in &pdofs {
+                for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
+                    if let Some(a) = map[m.row_idx()[k]] {
+                        rows.push(a);
+                        vals.push(m.val()[k]);
+                    }
+                }
+                col_ptr.push(rows.len());
+            }
+            let sym = faer::sparse::SymbolicSparseColMat::new_checked(
+                nf,
+                pdofs.len(),
+                col_ptr,
+                None,
+                rows,
+            );
+            SparseMatrix::new(sym, vals)
+        };
+        sys.prescribed = Some(Prescribed {
+            mass: block(&self.mass),
+            stiffness: block(&self.stiffness),
+            damping: self.damping.as_ref().map(block),
+            velocity: pdofs
+                .iter()
+                .map(|&i| prescribed[i].expect("prescribed").0)
+                .collect(),
+            function: pdofs
+                .iter()
+                .map(|&i| prescribed[i].expect("prescribed").1)
+                .collect(),
+            functions,
+            dofs: pdofs,
+        });
+        (sys, map)
     }
 
     /// Removes the dofs marked `fixed` (homogeneous Dirichlet conditions, u = 0).
@@ -333,6 +462,7 @@ impl LinearSystem {
                 .map(|i| self.component[i])
                 .collect(),
             ordering: None,
+            prescribed: None,
             loads: self
                 .loads
                 .iter()

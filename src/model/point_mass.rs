@@ -29,6 +29,7 @@ pub fn point_mass(dim: usize, mass: f64, force: &[f64]) -> Result<LinearSystem, 
         component: super::interleaved_components(dim, dim),
         ordering: None,
         loads: Vec::new(),
+        prescribed: None,
     })
 }
 
@@ -70,6 +71,7 @@ pub fn rigid_block(mass: f64, length: f64, thickness: f64, g: f64) -> Result<Lin
         component: vec![0, 1, 2],
         ordering: None,
         loads: Vec::new(),
+        prescribed: None,
     })
 }
 
@@ -106,5 +108,6 @@ pub fn diagonal(masses: &[f64], force: &[f64]) -> Result<LinearSystem, Error> {
         component: (0..n).map(|i| i.min(2) as u8).collect(),
         ordering: None,
         loads: Vec::new(),
+        prescribed: None,
     })
 }

@@ -95,6 +95,7 @@ impl Rod {
             component: super::interleaved_components(n, 1),
             ordering: None,
             loads: Vec::new(),
+            prescribed: None,
         })
     }
 }

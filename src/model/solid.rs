@@ -591,6 +591,7 @@ pub fn assemble_with_contacts(
         component: super::interleaved_components(n, dim),
         ordering: None,
         loads: Vec::new(),
+        prescribed: None,
     })
 }
 

@@ -84,6 +84,9 @@ pub struct Scene {
     /// Forces on node sets with a time function.
     #[serde(default)]
     pub forces: Vec<ForceSpec>,
+    /// Prescribed velocities of node sets with a time function.
+    #[serde(default)]
+    pub prescribed: Vec<PrescribedSpec>,
     /// Output options.
     #[serde(default)]
     pub output: crate::io::OutputOptions,
@@ -295,6 +298,25 @@ pub struct ForceSpec {
     pub time: Option<Vec<[f64; 2]>>,
 }
 
+/// `[[prescribed]]`: node-set dofs moved at a prescribed velocity `velocity · φ(t)`
+/// (displacement `velocity · ∫₀ᵗ φ`), eliminated from the system (θ-method schemes).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PrescribedSpec {
+    /// Body name.
+    pub body: String,
+    /// A node set of the body's mesh (a set, `boundary` or `all`).
+    pub nodes: String,
+    /// Velocity (m/s), one component per space dimension.
+    pub velocity: Vec<f64>,
+    /// The components prescribed (0 = x, 1 = y, 2 = z; default all).
+    #[serde(default)]
+    pub components: Option<Vec<usize>>,
+    /// `[[t, factor], …]` multiplying `velocity` (default 1 at all times).
+    #[serde(default)]
+    pub time: Option<Vec<[f64; 2]>>,
+}
+
 /// `[loads]`.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -416,6 +438,37 @@ impl Scene {
                 c.restitution,
             )?;
             crate::contact::check_friction(&format!("contacts[{i}].friction"), c.friction)?;
+        }
+        for (i, p) in self.prescribed.iter().enumerate() {
+            let Some(b) = self.bodies.iter().find(|b| b.name == p.body) else {
+                return Err(Error::invalid(
+                    &format!("prescribed[{i}].body"),
+                    &p.body,
+                    "names no body",
+                ));
+            };
+            if p.velocity.len() != b.dim() || p.velocity.iter().any(|x| !x.is_finite()) {
+                return Err(Error::invalid(
+                    &format!("prescribed[{i}].velocity"),
+                    format!("{:?}", p.velocity),
+                    &format!("needs {} finite components (m/s)", b.dim()),
+                ));
+            }
+            if let Some(c) = &p.components
+                && (c.is_empty() || c.iter().any(|&k| k >= b.dim()))
+            {
+                return Err(Error::invalid(
+                    &format!("prescribed[{i}].components"),
+                    format!("{c:?}"),
+                    &format!("expected components in 0..{}", b.dim()),
+                ));
+            }
+            if let Some(t) = &p.time {
+                crate::model::TimeFunction::new(
+                    &format!("prescribed[{i}].time"),
+                    t.iter().map(|p| (p[0], p[1])).collect(),
+                )?;
+            }
         }
         for (i, f) in self.forces.iter().enumerate() {
             let Some(b) = self.bodies.iter().find(|b| b.name == f.body) else {
@@ -584,7 +637,41 @@ impl Scene {
             .collect();
         let full = LinearSystem::block_diagonal(systems)?;
         let fixed_dofs = fixed.iter().filter(|&&f| f).count();
-        let (system, map) = full.restrict(&fixed);
+        // prescribed velocities: eliminated with their coupling blocks
+        let mut prescribed = vec![None; full.ndof()];
+        let mut functions = Vec::new();
+        for (pi, p) in self.prescribed.iter().enumerate() {
+            let at = |e: Error| prefix(&format!("prescribed[{pi}]"), e);
+            let bi = self
+                .bodies
+                .iter()
+                .position(|b| b.name == p.body)
+                .expect("validated");
+            let dim = self.bodies[bi].dim();
+            let nodes = node_set(&meshes[bi], &p.nodes).map_err(at)?;
+            let comps: Vec<usize> = p.components.clone().unwrap_or_else(|| (0..dim).collect());
+            functions.push(match &p.time {
+                Some(t) => crate::model::TimeFunction::new(
+                    &format!("prescribed[{pi}].time"),
+                    t.iter().map(|p| (p[0], p[1])).collect(),
+                )?,
+                None => crate::model::TimeFunction::one(),
+            });
+            for &v in &nodes {
+                for &c in &comps {
+                    let d = offsets[bi] + v * dim + c;
+                    if fixed[d] || prescribed[d].is_some() {
+                        return Err(at(Error::invalid(
+                            "nodes",
+                            format!("node {v} component {c}"),
+                            "is already fixed or prescribed",
+                        )));
+                    }
+                    prescribed[d] = Some((p.velocity[c], functions.len() - 1));
+                }
+            }
+        }
+        let (system, map) = full.restrict_prescribed(&fixed, &prescribed, functions);
         geometry.dof_of = map.clone();
         let v0: Vec<f64> = v0
             .iter()
