@@ -343,6 +343,24 @@ fn rigid_rod_falling_at_45_degrees_sticks_iff_mu_reaches_the_threshold() {
     }
 }
 
+/// The summed normal impulse `ΣP_N` (N·s) and the magnitude of the summed tangential
+/// force `|ΣP_T| / h` (N, the tangential impulses summed as vectors of the tangent plane).
+fn contact_sums(s: &signorini::integrators::State, h: f64) -> (f64, f64) {
+    let (td, nc) = (s.tangent_dim, s.impulse.len());
+    let pn: f64 = s.impulse.iter().sum();
+    let ft = (0..td)
+        .map(|j| {
+            (0..nc)
+                .map(|c| s.tangent_impulse[c * td + j])
+                .sum::<f64>()
+                .powi(2)
+        })
+        .sum::<f64>()
+        .sqrt()
+        / h;
+    (pn, ft)
+}
+
 /// `meshes/pushed_block.toml`: the hex8 block at rest on the floor (μ = 0.3), its top
 /// face pushed along x by a force ramped from 0 (t = 0.1 s) to 3 N (t = 1.1 s). Closed
 /// form: friction balances the push while it is below μ m g = 1.4715 N (until
@@ -368,17 +386,7 @@ fn pushed_hex8_block_sticks_until_the_push_reaches_mu_m_g_then_slides() {
             assert_eq!(st.caps_hit, 0, "{kind:?}");
             let s = integ.state();
             let t = s.time;
-            let td = s.tangent_dim;
-            let pn: f64 = s.impulse.iter().sum();
-            // summed tangential impulse, as a vector in the tangent plane
-            let pt: Vec<f64> = (0..td)
-                .map(|j| {
-                    (0..s.impulse.len())
-                        .map(|c| s.tangent_impulse[c * td + j])
-                        .sum()
-                })
-                .collect();
-            let ft = pt.iter().map(|x| x * x).sum::<f64>().sqrt() / h;
+            let (pn, ft) = contact_sums(s, h);
             let push = 3.0 * (t - 0.1).clamp(0.0, 1.0);
             // ΣN = m g once settled (Moreau–Jean's contacts activate over the first steps)
             if t >= 0.1 {
@@ -440,11 +448,7 @@ fn dragged_hex8_block_shears_then_slides_at_mu_n_with_the_drive() {
             assert_eq!(st.caps_hit, 0, "{kind:?}");
             let s = integ.state();
             let (t, td, nc) = (s.time, s.tangent_dim, s.impulse.len());
-            let pn: f64 = s.impulse.iter().sum();
-            let pt: Vec<f64> = (0..td)
-                .map(|j| (0..nc).map(|c| s.tangent_impulse[c * td + j]).sum())
-                .collect();
-            let ft = pt.iter().map(|x| x * x).sum::<f64>().sqrt() / h;
+            let (pn, ft) = contact_sums(s, h);
             // the stick–slip transition near 0.12 s is a small dynamic event: ΣN moved by
             // up to 1.4e-3 of m g under Moreau–Jean
             if t >= 0.1 {

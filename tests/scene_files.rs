@@ -293,3 +293,61 @@ fn academic_examples_run_from_scene_files() {
     .to_string();
     assert!(e.contains("example.mass") && e.contains("-1"), "{e}");
 }
+
+/// `[[forces]]` and `[[prescribed]]` entries that are wrong are refused with their key path,
+/// the value and what was expected.
+#[test]
+fn bad_forces_and_prescribed_entries_are_refused() {
+    use signorini::scene::file::Scene;
+    let base = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/dragged_block.toml"),
+    )
+    .unwrap();
+    for (from, to, expect) in [
+        (
+            "body = \"block\"\nnodes = \"z1\"\nvelocity",
+            "body = \"brick\"\nnodes = \"z1\"\nvelocity",
+            "prescribed[0].body",
+        ),
+        (
+            "velocity = [0.01, 0.0, 0.0]",
+            "velocity = [0.01, 0.0]",
+            "prescribed[0].velocity",
+        ),
+        (
+            "components = [0]",
+            "components = [3]",
+            "prescribed[0].components",
+        ),
+        (
+            "time = [[0.1, 0.0], [1.1, 1.0]]",
+            "time = [[0.1, 0.0], [0.1, 1.0]]",
+            "prescribed[0].time[1]",
+        ),
+        (
+            "time = [[0.1, 0.0], [1.1, 1.0]]",
+            "time = []",
+            "prescribed[0].time",
+        ),
+        ("nodes = \"z1\"", "nodes = \"top\"", "no such node set"),
+        (
+            "[[obstacles]]",
+            "[[forces]]\nbody = \"block\"\nnodes = \"z1\"\ntotal = [1.0, 0.0, nan]\n\n[[obstacles]]",
+            "forces[0].total",
+        ),
+        (
+            "[[obstacles]]",
+            "[[prescribed]]\nbody = \"block\"\nnodes = \"z1\"\nvelocity = [0.0, 0.0, 0.0]\ncomponents = [0]\n\n[[obstacles]]",
+            "already fixed or prescribed",
+        ),
+    ] {
+        assert!(base.contains(from), "{from}");
+        let text = base.replacen(from, to, 1);
+        let err = Scene::from_toml(&text)
+            .and_then(|s| s.build().map(|_| ()))
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {to}"))
+            .to_string();
+        assert!(err.contains(expect), "{to}: {err}");
+    }
+}

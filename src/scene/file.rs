@@ -440,20 +440,8 @@ impl Scene {
             crate::contact::check_friction(&format!("contacts[{i}].friction"), c.friction)?;
         }
         for (i, p) in self.prescribed.iter().enumerate() {
-            let Some(b) = self.bodies.iter().find(|b| b.name == p.body) else {
-                return Err(Error::invalid(
-                    &format!("prescribed[{i}].body"),
-                    &p.body,
-                    "names no body",
-                ));
-            };
-            if p.velocity.len() != b.dim() || p.velocity.iter().any(|x| !x.is_finite()) {
-                return Err(Error::invalid(
-                    &format!("prescribed[{i}].velocity"),
-                    format!("{:?}", p.velocity),
-                    &format!("needs {} finite components (m/s)", b.dim()),
-                ));
-            }
+            let at = format!("prescribed[{i}]");
+            let b = self.driven_body(&at, &p.body, ("velocity", &p.velocity, "m/s"), &p.time)?;
             if let Some(c) = &p.components
                 && (c.is_empty() || c.iter().any(|&k| k >= b.dim()))
             {
@@ -463,36 +451,35 @@ impl Scene {
                     &format!("expected components in 0..{}", b.dim()),
                 ));
             }
-            if let Some(t) = &p.time {
-                crate::model::TimeFunction::new(
-                    &format!("prescribed[{i}].time"),
-                    t.iter().map(|p| (p[0], p[1])).collect(),
-                )?;
-            }
         }
         for (i, f) in self.forces.iter().enumerate() {
-            let Some(b) = self.bodies.iter().find(|b| b.name == f.body) else {
-                return Err(Error::invalid(
-                    &format!("forces[{i}].body"),
-                    &f.body,
-                    "names no body",
-                ));
-            };
-            if f.total.len() != b.dim() || f.total.iter().any(|x| !x.is_finite()) {
-                return Err(Error::invalid(
-                    &format!("forces[{i}].total"),
-                    format!("{:?}", f.total),
-                    &format!("needs {} finite components (N)", b.dim()),
-                ));
-            }
-            if let Some(t) = &f.time {
-                crate::model::TimeFunction::new(
-                    &format!("forces[{i}].time"),
-                    t.iter().map(|p| (p[0], p[1])).collect(),
-                )?;
-            }
+            let at = format!("forces[{i}]");
+            self.driven_body(&at, &f.body, ("total", &f.total, "N"), &f.time)?;
         }
         Ok(())
+    }
+
+    /// Checks a `[[forces]]` or `[[prescribed]]` entry at `at`: its body exists, its
+    /// vector has one finite component per dimension, its time function is valid.
+    fn driven_body(
+        &self,
+        at: &str,
+        body: &str,
+        (key, v, unit): (&str, &[f64], &str),
+        time: &Option<Vec<[f64; 2]>>,
+    ) -> Result<&BodySpec, Error> {
+        let Some(b) = self.bodies.iter().find(|b| b.name == body) else {
+            return Err(Error::invalid(&format!("{at}.body"), body, "names no body"));
+        };
+        if v.len() != b.dim() || v.iter().any(|x| !x.is_finite()) {
+            return Err(Error::invalid(
+                &format!("{at}.{key}"),
+                format!("{v:?}"),
+                &format!("needs {} finite components ({unit})", b.dim()),
+            ));
+        }
+        time_function(&format!("{at}.time"), time)?;
+        Ok(b)
     }
 
     /// Number of steps.
@@ -650,13 +637,7 @@ impl Scene {
             let dim = self.bodies[bi].dim();
             let nodes = node_set(&meshes[bi], &p.nodes).map_err(at)?;
             let comps: Vec<usize> = p.components.clone().unwrap_or_else(|| (0..dim).collect());
-            functions.push(match &p.time {
-                Some(t) => crate::model::TimeFunction::new(
-                    &format!("prescribed[{pi}].time"),
-                    t.iter().map(|p| (p[0], p[1])).collect(),
-                )?,
-                None => crate::model::TimeFunction::one(),
-            });
+            functions.push(time_function(&format!("prescribed[{pi}].time"), &p.time)?);
             for &v in &nodes {
                 for &c in &comps {
                     let d = offsets[bi] + v * dim + c;
@@ -709,13 +690,7 @@ impl Scene {
                     }
                 }
             }
-            let time = match &f.time {
-                Some(t) => crate::model::TimeFunction::new(
-                    &format!("forces[{fi}].time"),
-                    t.iter().map(|p| (p[0], p[1])).collect(),
-                )?,
-                None => crate::model::TimeFunction::one(),
-            };
+            let time = time_function(&format!("forces[{fi}].time"), &f.time)?;
             system
                 .loads
                 .push(crate::model::NodalLoad { dofs, values, time });
@@ -1048,6 +1023,17 @@ fn outline(o: &ObstacleSpec, points: &[[f64; 3]], dim: usize) -> Outline {
         }
     }
     out
+}
+
+/// The time function of a `[[forces]]` / `[[prescribed]]` entry (1 when absent).
+fn time_function(
+    field: &str,
+    t: &Option<Vec<[f64; 2]>>,
+) -> Result<crate::model::TimeFunction, Error> {
+    match t {
+        Some(t) => crate::model::TimeFunction::new(field, t.iter().map(|p| (p[0], p[1])).collect()),
+        None => Ok(crate::model::TimeFunction::one()),
+    }
 }
 
 /// The nodes of the set `name` of `mesh`: a named set, `boundary` (computed from the
