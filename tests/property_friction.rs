@@ -4,7 +4,10 @@
 //! in 2-D and 3-D, with frictionless blocks mixed in.
 //!
 //! Checked on every problem:
-//! - the solver reports convergence and Siconos' residual ≤ 1e-10 (the tolerance asked);
+//! - the solver reports convergence and Siconos' residual ≤ 1e-10 (the tolerance asked):
+//!   NSGS, PROX and Newton for μ ≤ 0.5; for μ up to 1.5 the Newton solver (NSGS is not
+//!   guaranteed to converge for large μ — Coulomb's law is not associated — and CI found
+//!   a 2-D case with μ ≈ 1.1 where it cycles at a residual of 0.09, pinned below);
 //! - the cone conditions hold block by block to 1e-8 of the problem's scale:
 //!   `r_N ≥ 0`, `‖r_T‖ ≤ μ r_N`, `u_N ≥ 0`, `r_N u_N = 0`, and where `u_T ≠ 0`,
 //!   `r_T = −μ r_N u_T/‖u_T‖` (maximal dissipation);
@@ -98,7 +101,13 @@ fn blocks(dim: usize, n: usize, mus: &[f64], mixed: bool) -> (Vec<Block>, usize)
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(96))]
+    // a fixed seed: the same 96 problems on every run (a random seed made CI depend on
+    // the draw; the regimes below are what the solvers guarantee)
+    #![proptest_config(ProptestConfig {
+        cases: 96,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x5167_6e6f_7269_6e69),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn friction_solvers_satisfy_the_cone_and_agree(
@@ -107,7 +116,7 @@ proptest! {
         mixed in any::<bool>(),
         a in prop::collection::vec(-1.0f64..1.0, 18 * 18),
         q in prop::collection::vec(-1.0f64..1.0, 18),
-        mus in prop::collection::vec(0.0f64..1.5, 6),
+        mus in prop::collection::vec(0.0f64..0.5, 6),
     ) {
         let (bl, k) = blocks(dim, n, &mus, mixed);
         let w = spd(k, &a);
@@ -122,16 +131,89 @@ proptest! {
             us.push(u);
         }
         let scale = us[0].iter().fold(1.0_f64, |a, x| a.max(x.abs()));
-        // μ small enough for uniqueness is not guaranteed for μ up to 1.5: compare the
-        // solvers where the solution is unique in practice (μ ≤ 0.5 everywhere)
-        if bl.iter().all(|b| b.mu <= 0.5) {
-            for other in &us[1..] {
-                for (x, y) in us[0].iter().zip(other) {
-                    prop_assert!((x - y).abs() <= 1e-6 * scale, "u differs: {x} vs {y}");
-                }
+        // μ ≤ 0.5 with an SPD W: u is unique in practice, the three solvers agree
+        for other in &us[1..] {
+            for (x, y) in us[0].iter().zip(other) {
+                prop_assert!((x - y).abs() <= 1e-6 * scale, "u differs: {x} vs {y}");
             }
         }
     }
+
+    #[test]
+    fn the_newton_solver_satisfies_the_cone_for_large_mu(
+        dim in 2usize..=3,
+        n in 1usize..=6,
+        mixed in any::<bool>(),
+        a in prop::collection::vec(-1.0f64..1.0, 18 * 18),
+        q in prop::collection::vec(-1.0f64..1.0, 18),
+        mus in prop::collection::vec(0.0f64..1.5, 6),
+    ) {
+        let (bl, k) = blocks(dim, n, &mus, mixed);
+        let w = spd(k, &a);
+        let (r, u, res) = solve(FrictionSolverKind::Newton, &w, &q[..k], &bl);
+        prop_assert!(res <= 1e-10);
+        check_cone(&bl, &q[..k], &r, &u);
+    }
+}
+
+/// The 2-D problem (5 contacts, μ up to 1.14) on which CI drew NSGS cycling at a residual
+/// of 0.09 after 100 000 sweeps: the Newton solver solves it.
+#[test]
+fn regression_nsgs_cycles_at_large_mu_and_newton_solves_it() {
+    let mut a = vec![0.0; 18 * 18];
+    for (i, v) in [
+        (4, 0.8165665076399973),
+        (7, -0.5900341850306401),
+        (27, -0.8818304432586963),
+        (31, -0.4940792591148648),
+        (32, -0.17385621883248895),
+        (33, -0.7166990865950665),
+        (35, -0.8416874703829256),
+        (37, -0.9869937046062907),
+        (38, 0.36403976230362944),
+        (39, -0.2164904361516896),
+        (61, -0.8607313185199157),
+        (62, -0.5615527806013167),
+        (63, -0.7833938957501524),
+        (65, -0.6946364292465236),
+        (66, -0.4515630427250305),
+        (71, 0.47902367873520824),
+        (72, 0.4379596496284452),
+        (77, -0.9460081179565561),
+        (79, -0.37038959351362194),
+    ] {
+        a[i] = v;
+    }
+    let mut q = vec![0.0; 10];
+    q[2] = -0.7060470102005962;
+    q[7] = -0.8868022093269443;
+    let mus = [0.0, 1.1437300054800537, 0.0, 1.0122038799626316, 0.0, 0.0];
+    let (bl, k) = blocks(2, 5, &mus, false);
+    assert_eq!(k, 10);
+    let w = spd(k, &a);
+    let (r, u, res) = solve(FrictionSolverKind::Newton, &w, &q, &bl);
+    assert!(res <= 1e-10);
+    check_cone(&bl, &q, &r, &u);
+    // and NSGS indeed does not converge on it (the limitation the README states)
+    let op = DenseOperator::new(k, &w);
+    let (mut r2, mut u2) = (vec![0.0; k], vec![0.0; k]);
+    let info = FrictionSolver::with_capacity(k)
+        .solve(
+            FrictionProblem {
+                w: &op,
+                q: &q,
+                blocks: &bl,
+            },
+            &FrictionParams {
+                tol: 1e-10,
+                max_iterations: 20_000,
+                ..FrictionParams::default()
+            },
+            &mut r2,
+            &mut u2,
+        )
+        .unwrap();
+    assert!(!info.converged && info.residual > 1e-3, "{info:?}");
 }
 
 /// The three regimes of one 3-D contact, by construction: open (`q_N > 0`), stick (small
