@@ -357,3 +357,49 @@ fn rerun_into_the_same_directory_leaves_no_stale_frames() {
     assert!(listed.len() < 10, "{}", listed.len());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Prescribed components (eliminated from the integrated dofs) are drawn with their
+/// prescribed motion: on `meshes/dragged_block.toml` the top face's x displacement in the
+/// last frame is `0.01 ∫₀ᵗ φ = 0.01 (t − 0.1)²/2` and its x velocity `0.01 (t − 0.1)`
+/// (the ramp of the scene), to round-off.
+#[test]
+fn frames_show_the_prescribed_motion() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = std::env::temp_dir().join(format!("signorini-dragged-{}", std::process::id()));
+    let st = std::process::Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .current_dir(root)
+        .args([
+            "run",
+            "meshes/dragged_block.toml",
+            "--quiet",
+            "--no-plots",
+            "--out",
+        ])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let frames = read_pvd(&out.join("fields.pvd"));
+    let (t, name) = frames.last().unwrap();
+    let f = read_frame(&out.join(name));
+    let (u, v) = (&f.point["displacement"], &f.point["velocity"]);
+    let (want_u, want_v) = (0.01 * (t - 0.1).powi(2) / 2.0, 0.01 * (t - 0.1));
+    let mut top = 0;
+    for p in 0..f.points.len() / 3 {
+        if (f.points[3 * p + 2] - 0.05).abs() < 1e-12 {
+            top += 1;
+            assert!(
+                (u[3 * p] - want_u).abs() <= 1e-12 * want_u,
+                "u = {}",
+                u[3 * p]
+            );
+            assert!(
+                (v[3 * p] - want_v).abs() <= 1e-12 * want_v,
+                "v = {}",
+                v[3 * p]
+            );
+        }
+    }
+    assert_eq!(top, 25, "top-face nodes");
+    let _ = std::fs::remove_dir_all(&out);
+}

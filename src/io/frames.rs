@@ -126,7 +126,7 @@ impl Geometry {
             )],
             dim: 1,
             dof_of: (0..=n).map(Some).collect(),
-            outlines: Vec::new(),
+            ..Geometry::default()
         }
     }
 }
@@ -371,6 +371,12 @@ impl FrameWriter {
             self.disp[3 * p + i] = u;
             self.vel[3 * p + i] = v;
             self.force[3 * p + i] = r;
+        }
+        for &(k, w, f) in &g.prescribed {
+            let (p, i) = (k / dim, k % dim);
+            let phi = &g.prescribed_functions[f];
+            self.disp[3 * p + i] = w * phi.integral(s.time);
+            self.vel[3 * p + i] = w * phi.eval(s.time);
         }
         self.gap.iter_mut().for_each(|f| *f = f64::NAN);
         for (a, &p) in self.contact_point.iter().enumerate() {

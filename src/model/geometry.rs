@@ -30,6 +30,12 @@ pub struct Geometry {
     pub dof_of: Vec<Option<usize>>,
     /// Rigid obstacles drawn as outlines (written once to `obstacles.vtu`).
     pub outlines: Vec<Outline>,
+    /// Components moved at a prescribed velocity (eliminated, so not in `dof_of`):
+    /// `(point · dim + component, w, index into prescribed_functions)`; the frames show
+    /// `u = w ∫₀ᵗ φ`, `v = w φ(t)` there.
+    pub prescribed: Vec<(usize, f64, usize)>,
+    /// The time functions `φ` of `prescribed`.
+    pub prescribed_functions: Vec<crate::model::TimeFunction>,
 }
 
 /// A rigid part drawn as line segments.

@@ -166,7 +166,7 @@ mod tests {
                 .collect(),
             bodies: vec![(mat, Formulation::Solid)],
             points: mesh.points,
-            outlines: Vec::new(),
+            ..Geometry::default()
         }
     }
 

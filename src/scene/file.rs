@@ -652,6 +652,13 @@ impl Scene {
                 }
             }
         }
+        geometry.prescribed = (0..full.ndof())
+            .filter_map(|d| match prescribed[d] {
+                Some((w, f)) if !fixed[d] => Some((d, w, f)),
+                _ => None,
+            })
+            .collect();
+        geometry.prescribed_functions = functions.clone();
         let (system, map) = full.restrict_prescribed(&fixed, &prescribed, functions);
         geometry.dof_of = map.clone();
         let v0: Vec<f64> = v0

@@ -138,7 +138,7 @@ impl SolidBarScene {
             bodies: vec![(self.material, Formulation::Solid)],
             dim: 3,
             dof_of: (0..n).map(Some).collect(),
-            outlines: Vec::new(),
+            ..Geometry::default()
         };
         let mut system = system;
         system.ordering = Some(crate::model::ordering::nested_dissection(&geometry, n));
