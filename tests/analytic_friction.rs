@@ -240,15 +240,10 @@ fn momentum_x(integ: &dyn Integrator) -> (f64, f64) {
 /// step with `v_G ≤ 1e-3 v0`, a step of 2e-4 s is 0.06 % of the stop time).
 #[test]
 fn elastic_hex8_block_sliding_on_a_plane_stops_at_v0_over_mu_g() {
-    use signorini::scene::file::Scene;
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/sliding_block.toml");
     let (mu, v0) = (0.3, 1.0);
     let (t_ref, d_ref) = (v0 / (mu * G), v0 * v0 / (2.0 * mu * G));
     for kind in SCHEMES {
-        let mut scene = Scene::from_file(&path).unwrap();
-        scene.scheme.kind = kind;
-        let (model, _) = scene.build().unwrap();
-        let mut integ = model.into_integrator(&scene.scheme, scene.time.dt).unwrap();
+        let mut integ = scene_integrator("sliding_block", kind);
         let h = integ.dt();
         let (p0, mass) = momentum_x(integ.as_ref());
         assert!((p0 / mass - v0).abs() < 1e-12);
@@ -343,6 +338,17 @@ fn rigid_rod_falling_at_45_degrees_sticks_iff_mu_reaches_the_threshold() {
     }
 }
 
+/// The integrator of `meshes/NAME.toml` under `kind`.
+fn scene_integrator(name: &str, kind: SchemeKind) -> Box<dyn Integrator> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("meshes")
+        .join(format!("{name}.toml"));
+    let mut scene = signorini::scene::file::Scene::from_file(&path).unwrap();
+    scene.scheme.kind = kind;
+    let (model, _) = scene.build().unwrap();
+    model.into_integrator(&scene.scheme, scene.time.dt).unwrap()
+}
+
 /// The summed normal impulse `ΣP_N` (N·s) and the magnitude of the summed tangential
 /// force `|ΣP_T| / h` (N, the tangential impulses summed as vectors of the tangent plane).
 fn contact_sums(s: &signorini::integrators::State, h: f64) -> (f64, f64) {
@@ -370,15 +376,10 @@ fn contact_sums(s: &signorini::integrators::State, h: f64) -> (f64, f64) {
 /// to 1e-3 from t = 0.1 s.
 #[test]
 fn pushed_hex8_block_sticks_until_the_push_reaches_mu_m_g_then_slides() {
-    use signorini::scene::file::Scene;
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/pushed_block.toml");
     let (mu, m) = (0.3, 0.5);
     let t_star = 0.1 + mu * m * G / 3.0;
     for kind in SCHEMES {
-        let mut scene = Scene::from_file(&path).unwrap();
-        scene.scheme.kind = kind;
-        let (model, _) = scene.build().unwrap();
-        let mut integ = model.into_integrator(&scene.scheme, scene.time.dt).unwrap();
+        let mut integ = scene_integrator("pushed_block", kind);
         let h = integ.dt();
         let mut reached = None;
         while integ.state().time < 1.0 - 1e-12 {
@@ -433,14 +434,9 @@ fn pushed_hex8_block_sticks_until_the_push_reaches_mu_m_g_then_slides() {
 /// when the quasi-static shear has settled); ΣN = m g to 5e-3 throughout.
 #[test]
 fn dragged_hex8_block_shears_then_slides_at_mu_n_with_the_drive() {
-    use signorini::scene::file::Scene;
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/dragged_block.toml");
     let (mu, m) = (0.3, 0.5);
     for kind in SCHEMES {
-        let mut scene = Scene::from_file(&path).unwrap();
-        scene.scheme.kind = kind;
-        let (model, _) = scene.build().unwrap();
-        let mut integ = model.into_integrator(&scene.scheme, scene.time.dt).unwrap();
+        let mut integ = scene_integrator("dragged_block", kind);
         let h = integ.dt();
         let mut stuck_below = false;
         while integ.state().time < 1.0 - 1e-12 {

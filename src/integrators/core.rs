@@ -201,6 +201,33 @@ impl Workspace {
             .solve(prob, params, &mut self.z[..k], &mut self.w[..k])
     }
 
+    /// The growth step of `grow_solve` and of Algorithm 2's position problem: appends to
+    /// `idx` every row of `candidates` not in it whose `rhs + scale·op·z < −tol` at the
+    /// current solution `z`; returns whether any was added.
+    fn add_violated(
+        &mut self,
+        del: &Delassus,
+        (op, scale): (Op, f64),
+        rhs: &[f64],
+        z: &[f64],
+        tol: f64,
+        candidates: impl Iterator<Item = usize>,
+    ) -> bool {
+        self.member.iter_mut().for_each(|x| *x = false);
+        for &a in &self.idx {
+            self.member[a] = true;
+        }
+        self.res.copy_from_slice(rhs);
+        del.mul_add(op, scale, z, &mut self.res);
+        let before = self.idx.len();
+        for a in candidates {
+            if !self.member[a] && self.res[a] < -tol {
+                self.idx.push(a);
+            }
+        }
+        self.idx.len() > before
+    }
+
     /// `out[idx] = z`, zero elsewhere.
     pub fn scatter(&self, out: &mut [f64]) {
         out.iter_mut().for_each(|x| *x = 0.0);
@@ -849,24 +876,17 @@ impl ThetaCore {
                     stats.lcp_residual = stats.lcp_residual.max(info.residual);
                     self.ws.scatter(&mut self.tau);
                     // complementarity rows of the active set left out and now violated
-                    let before = self.ws.idx.len();
-                    self.ws.member.iter_mut().for_each(|x| *x = false);
-                    for &a in &self.ws.idx {
-                        self.ws.member[a] = true;
-                    }
-                    self.ws.res.iter_mut().for_each(|x| *x = 0.0);
-                    self.del.mul_add(Op::Wn, 1.0, &self.tau, &mut self.ws.res);
-                    for c in 0..m {
-                        let a = self.off[c];
-                        if self.pos_mask[c]
-                            && !eq(a)
-                            && !self.ws.member[a]
-                            && b[a] + self.ws.res[a] < -ptol
-                        {
-                            self.ws.idx.push(a);
-                        }
-                    }
-                    if self.ws.idx.len() == before {
+                    let (off, pos) = (&self.off, &self.pos_mask);
+                    let candidates = (0..m).filter(|&c| pos[c]).map(|c| off[c]);
+                    let grew = self.ws.add_violated(
+                        &self.del,
+                        (Op::Wn, 1.0),
+                        b,
+                        &self.tau,
+                        ptol,
+                        candidates.filter(|&a| !eq(a)),
+                    );
+                    if !grew {
                         break;
                     }
                     if rounds > m {
@@ -1032,19 +1052,7 @@ pub(crate) fn grow_solve(
         stats.lcp_iterations += info.iterations;
         stats.lcp_residual = stats.lcp_residual.max(info.residual);
         ws.scatter(out);
-        let before = ws.idx.len();
-        ws.member.iter_mut().for_each(|x| *x = false);
-        for &a in &ws.idx {
-            ws.member[a] = true;
-        }
-        ws.res.copy_from_slice(rhs);
-        del.mul_add(op, scale, out, &mut ws.res);
-        for a in 0..m {
-            if rows[a] && !ws.member[a] && ws.res[a] < -tol {
-                ws.idx.push(a);
-            }
-        }
-        if ws.idx.len() == before {
+        if !ws.add_violated(del, (op, scale), rhs, out, tol, (0..m).filter(|&a| rows[a])) {
             break;
         }
         if rounds > m {

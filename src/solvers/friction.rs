@@ -296,7 +296,7 @@ impl FrictionSolver {
         match params.solver {
             FrictionSolverKind::Nsgs => {
                 let (it, res) =
-                    self.nsgs(prob, 0.0, params, params.tol, params.max_iterations, r, u);
+                    self.nsgs(prob, 0.0, (params.tol, params.max_iterations), params, r, u);
                 Ok(FrictionInfo {
                     iterations: it,
                     residual: res,
@@ -339,7 +339,7 @@ impl FrictionSolver {
             // inner tolerance: two orders below the current outer residual
             let inner_tol = (1e-2 * res).max(0.1 * params.tol);
             let budget = params.max_iterations - total;
-            let (it, _) = self.nsgs_reg(prob, sigma, inner_tol, budget, r, u);
+            let (it, _) = self.nsgs_reg(prob, sigma, (inner_tol, budget), params, r, u);
             total += it;
             res = self.full_residual(prob, r, u);
             let step: f64 = (0..k)
@@ -372,14 +372,16 @@ impl FrictionSolver {
         residual(prob.blocks, prob.q, r, u)
     }
 
-    /// NSGS on `(W + σI, qreg)` where `qreg` is already in `self.qreg`; returns the
-    /// sweeps and the residual of the regularized problem.
+    /// NSGS on `(W + σI, qreg)` where `qreg` is already in `self.qreg`, to `tol` within
+    /// `cap` sweeps (local solves as `params` says); returns the sweeps and the residual of
+    /// the regularized problem.
+    #[allow(clippy::too_many_arguments)]
     fn nsgs_reg<W: DelassusOperator + ?Sized>(
         &mut self,
         prob: FrictionProblem<'_, W>,
         sigma: f64,
-        tol: f64,
-        cap: usize,
+        (tol, cap): (f64, usize),
+        params: &FrictionParams,
         r: &mut [f64],
         u: &mut [f64],
     ) -> (usize, f64) {
@@ -390,25 +392,19 @@ impl FrictionSolver {
             q: &qreg[..k],
             blocks: prob.blocks,
         };
-        let params = FrictionParams {
-            tol,
-            max_iterations: cap.max(1),
-            ..FrictionParams::default()
-        };
-        let out = self.nsgs(p, sigma, &params, tol, cap.max(1), r, u);
+        let out = self.nsgs(p, sigma, (tol, cap.max(1)), params, r, u);
         self.qreg = qreg;
         out
     }
 
-    /// NSGS sweeps on `(W + σI, q)`; returns the sweeps done and the residual.
-    #[allow(clippy::too_many_arguments)]
+    /// NSGS sweeps on `(W + σI, q)` to `tol` within `cap` sweeps (`params` gives the local
+    /// solves' cap); returns the sweeps done and the residual.
     fn nsgs<W: DelassusOperator + ?Sized>(
         &mut self,
         prob: FrictionProblem<'_, W>,
         sigma: f64,
+        (tol, cap): (f64, usize),
         params: &FrictionParams,
-        tol: f64,
-        cap: usize,
         r: &mut [f64],
         u: &mut [f64],
     ) -> (usize, f64) {
@@ -953,7 +949,14 @@ impl FrictionSolver {
                 // with NSGS on the same regularized problem, whose blocks are SPD
                 self.qreg[..k].copy_from_slice(&qt);
                 let budget = params.max_iterations.saturating_sub(newton_its).max(1);
-                let (it, _) = self.nsgs_reg(prob, sigma, inner_tol, budget.min(1000), r, &mut ut);
+                let (it, _) = self.nsgs_reg(
+                    prob,
+                    sigma,
+                    (inner_tol, budget.min(1000)),
+                    params,
+                    r,
+                    &mut ut,
+                );
                 newton_its += it;
                 progress = true;
             }
