@@ -1,4 +1,8 @@
-//! The crate's error type: every failure names what was wrong (file, field, value).
+//! The crate's error type: every failure names what was wrong (file, field or line,
+//! value, expectation), and says which exit code it maps to (DESIGN.md §9):
+//! 2 for bad input ([`Error::InvalidParameter`], [`Error::BadFile`], [`Error::Io`] on
+//! reading), 1 for a run that fails ([`Error::RunFailed`], [`Error::NotConverged`],
+//! [`Error::Numerical`], [`Error::Write`]).
 
 use std::path::PathBuf;
 
@@ -30,7 +34,40 @@ pub enum Error {
         /// Residual, iteration count, cap.
         detail: String,
     },
-    /// Reading or writing a file failed.
+    /// A malformed input file (mesh, scene, FCLIB problem, checkpoint, history): the
+    /// file, where in it (`line 12`, `byte 4096`, a key path), and what is wrong.
+    #[error("{}{}: {detail}", file.display(), if where_.is_empty() { String::new() } else { format!(":{where_}") })]
+    BadFile {
+        /// The file.
+        file: PathBuf,
+        /// Where in it: `line L`, `line L, column C`, `byte B`, a key path; may be empty.
+        where_: String,
+        /// What is wrong and what was expected.
+        detail: String,
+    },
+    /// A run stopped because its state can no longer be trusted (a non-finite value, a
+    /// violation that exploded, an iteration cap hit that the scene does not allow).
+    #[error("run failed at step {step} (t = {time:e} s){}: {detail}", contact.map(|c| format!(", contact {c}")).unwrap_or_default())]
+    RunFailed {
+        /// Step being taken (1-based: the state after it is the bad one).
+        step: usize,
+        /// Time at the end of that step (s).
+        time: f64,
+        /// The contact concerned, when one is.
+        contact: Option<usize>,
+        /// What went wrong, with the value and the limit.
+        detail: String,
+    },
+    /// Writing an output file failed (disk full, permissions): the run fails (exit 1).
+    #[error("writing {path}: {source}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Reading an input file failed (missing, unreadable).
     #[error("{path}: {source}")]
     Io {
         /// The file.
@@ -51,7 +88,66 @@ impl Error {
         }
     }
 
-    /// Wraps an I/O error with the path it concerns.
+    /// Shorthand for [`Error::BadFile`].
+    pub fn bad_file(
+        file: impl Into<PathBuf>,
+        where_: impl std::fmt::Display,
+        detail: impl std::fmt::Display,
+    ) -> Self {
+        Error::BadFile {
+            file: file.into(),
+            where_: where_.to_string(),
+            detail: detail.to_string(),
+        }
+    }
+
+    /// Wraps an output error with the path it concerns (exit code 1).
+    pub fn write(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Write {
+            path: path.into(),
+            source,
+        }
+    }
+
+    /// The process exit code this error maps to: 2 for bad input, 1 for a run that
+    /// failed (DESIGN.md §9).
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Error::InvalidParameter { .. } | Error::BadFile { .. } | Error::Io { .. } => 2,
+            Error::Numerical(_)
+            | Error::NotConverged { .. }
+            | Error::RunFailed { .. }
+            | Error::Write { .. } => 1,
+        }
+    }
+
+    /// Prefixes the field or location of an input error with `context` (a scene file's
+    /// path, a key path such as `bodies[2].`): errors raised while building a model then
+    /// name the scene file that asked for it.
+    pub fn in_file(self, file: &std::path::Path) -> Self {
+        match self {
+            Error::InvalidParameter {
+                field,
+                value,
+                reason,
+            } => Error::BadFile {
+                file: file.to_path_buf(),
+                where_: if field.starts_with("line ") {
+                    field
+                } else {
+                    format!("`{field}`")
+                },
+                detail: if value.starts_with('(') || value.is_empty() {
+                    reason
+                } else {
+                    format!("value {value}: {reason}")
+                },
+            },
+            other => other,
+        }
+    }
+
+    /// Wraps an I/O error with the path it concerns (reading an input: exit code 2).
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
@@ -60,24 +156,52 @@ impl Error {
     }
 }
 
+/// A number as a person reads it: plain for moderate magnitudes, `1e-300` rather than
+/// 300 zeros, `inf` for the unbounded end of a range (`f64::MAX` and above).
+pub fn num(x: f64) -> String {
+    if x.is_nan() {
+        "NaN".into()
+    } else if x.is_infinite() || x.abs() >= f64::MAX / 2.0 || x.abs() >= 1e300 {
+        if x > 0.0 { "inf".into() } else { "-inf".into() }
+    } else if x == 0.0 || (1e-4..1e7).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// A closed range `[lo, hi]`, or `[lo, inf)` when `hi` is unbounded.
+pub fn range(lo: f64, hi: f64) -> String {
+    if num(hi) == "inf" {
+        format!("[{}, inf)", num(lo))
+    } else {
+        format!("[{}, {}]", num(lo), num(hi))
+    }
+}
+
 /// Checks that `value` is finite and strictly positive.
 pub fn require_positive(field: &str, value: f64) -> Result<f64, Error> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
-        Err(Error::invalid(field, value, "must be a finite number > 0"))
+        Err(Error::invalid(
+            field,
+            num(value),
+            "must be a finite number > 0",
+        ))
     }
 }
 
-/// Checks that `value` is finite and in `[lo, hi]`.
+/// Checks that `value` is finite and in `[lo, hi]` (`hi` may be `f64::MAX` for "no upper
+/// bound", printed `inf`).
 pub fn require_in(field: &str, value: f64, lo: f64, hi: f64) -> Result<f64, Error> {
     if value.is_finite() && value >= lo && value <= hi {
         Ok(value)
     } else {
         Err(Error::invalid(
             field,
-            value,
-            &format!("must be a finite number in [{lo}, {hi}]"),
+            num(value),
+            &format!("must be a finite number in {}", range(lo, hi)),
         ))
     }
 }
@@ -87,6 +211,24 @@ pub fn require_finite(field: &str, value: f64) -> Result<f64, Error> {
     if value.is_finite() {
         Ok(value)
     } else {
-        Err(Error::invalid(field, value, "must be a finite number"))
+        Err(Error::invalid(field, num(value), "must be a finite number"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_and_ranges_print_short() {
+        assert_eq!(num(1e-300), "1e-300");
+        assert_eq!(num(0.5), "0.5");
+        assert_eq!(num(f64::MAX), "inf");
+        assert_eq!(range(0.0, 1e300), "[0, inf)");
+        assert_eq!(range(0.5, 1.0), "[0.5, 1]");
+        let e = require_in("gap", -1.0, 0.0, f64::MAX)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("[0, inf)") && e.len() < 120, "{e}");
     }
 }

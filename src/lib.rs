@@ -30,6 +30,7 @@ pub mod delassus;
 pub mod error;
 pub mod integrators;
 pub mod io;
+pub mod limits;
 pub mod linalg;
 pub mod model;
 pub mod plot;

@@ -153,6 +153,19 @@ struct OutputArgs {
 }
 
 impl OutputArgs {
+    /// Checks the strides whether or not the run writes what they stride.
+    fn validate(&self) -> Result<(), signorini::Error> {
+        for (flag, v) in [
+            ("--save-every", self.save_every),
+            ("--history-every", self.history_every),
+        ] {
+            if v == Some(0) {
+                return Err(signorini::Error::invalid(flag, 0, "must be at least 1"));
+            }
+        }
+        Ok(())
+    }
+
     fn apply(&self, o: &mut OutputOptions) {
         if let Some(k) = self.save_every {
             o.stride = k;
@@ -268,9 +281,13 @@ struct BarArgs {
     /// Newton / fixed-point tolerance (relative).
     #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
     newton_tol: f64,
-    /// Newton iteration cap per step (caps hit are counted in the summary).
+    /// Newton iteration cap per step.
     #[arg(long, default_value_t = 50)]
     newton_max_iterations: usize,
+    /// Count iteration caps hit (Newton, projection, LCP) in the summary and go on,
+    /// instead of failing the run (exit code 1) at the first one.
+    #[arg(long)]
+    allow_caps: bool,
     /// Output directory.
     #[arg(long, default_value = "out/bar")]
     out: PathBuf,
@@ -282,6 +299,22 @@ struct BarArgs {
 }
 
 impl BarArgs {
+    /// Checks every flag, also those the chosen options do not use (`--lcp-tol -1`
+    /// without `--lcp pgs` is as wrong as with it).
+    fn validate_flags(&self) -> Result<(), signorini::Error> {
+        use signorini::error::{require_in, require_positive};
+        require_in("--gamma", self.gamma, 0.0, 2.0)?;
+        require_positive("--lcp-tol", self.lcp_tol)?;
+        if self.lcp_max_sweeps == 0 {
+            return Err(signorini::Error::invalid(
+                "--lcp-max-sweeps",
+                0,
+                "must be at least 1",
+            ));
+        }
+        Ok(())
+    }
+
     fn scene(&self) -> BarScene {
         let mut s = BarScene {
             elements: self.elements,
@@ -321,6 +354,7 @@ impl BarArgs {
         p.delassus_pool = self.delassus_pool;
         p.newton.tol = self.newton_tol;
         p.newton.max_iterations = self.newton_max_iterations;
+        p.allow_caps = self.allow_caps;
         s
     }
 }
@@ -383,6 +417,8 @@ impl Progress for CliProgress {
 }
 
 fn run_bar(args: &BarArgs) -> Result<(), signorini::Error> {
+    args.validate_flags()?;
+    args.output.validate()?;
     let scene = args.scene();
     scene.validate()?;
     if !args.quiet {
@@ -439,6 +475,7 @@ fn scene_out(args: &SceneArgs, scene: &Scene) -> PathBuf {
 }
 
 fn run_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
+    args.output.validate()?;
     let scene = Scene::from_file(&args.scene)?;
     let out = scene_out(args, &scene);
     if !args.quiet {
@@ -725,7 +762,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             err!("error: {e}");
-            ExitCode::from(2)
+            ExitCode::from(e.exit_code())
         }
     }
 }

@@ -49,7 +49,7 @@ fn tick(v: f64) -> String {
 }
 
 fn plot_error(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::Io {
+    Error::Write {
         path: path.to_path_buf(),
         source: std::io::Error::other(format!("plot: {e}")),
     }

@@ -270,11 +270,13 @@ pub fn run_bar(
     let mut integ = model.into_integrator(&scene.scheme, scene.dt)?;
     let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
     let parameters = serde_json::to_value(scene).expect("scene serializes");
+    let checks = RunChecks::new(&scene.scheme, geometry.size());
     run(
         integ.as_mut(),
         scene.steps(),
         scene.elements,
         scene.scheme.theta,
+        &checks,
         scene.analytic(),
         parameters,
         out.map(|o| (o, geometry)),
@@ -283,7 +285,9 @@ pub fn run_bar(
     .and_then(|r| finish(r, setup, out))
 }
 
-/// Runs a scene file; writes into `out.dir` if given.
+/// Runs a scene file; writes into `out.dir` if given. Errors raised while building name
+/// the scene's key paths; [`Scene::from_file`](crate::scene::file::Scene::from_file)
+/// adds the file.
 pub fn run_scene(
     scene: &crate::scene::file::Scene,
     out: Option<Output>,
@@ -298,11 +302,13 @@ pub fn run_scene(
     let mut integ = model.into_integrator(&scene.scheme, scene.time.dt)?;
     let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
     let parameters = serde_json::to_value(scene).expect("scene serializes");
+    let checks = RunChecks::new(&scene.scheme, geometry.size());
     run(
         integ.as_mut(),
         scene.steps(),
         report.cells,
         scene.scheme.theta,
+        &checks,
         scene.reference.map(|r| r.impacting_bar),
         parameters,
         out.map(|o| (o, geometry)),
@@ -311,9 +317,270 @@ pub fn run_scene(
     .and_then(|r| finish(r, setup, out))
 }
 
-/// Steps `integ` `steps` times, streaming the history and the field frames (when
-/// `out` is given) and measuring the contact; the caller writes the summary
-/// ([`write_summary`]).
+/// What the driver checks after every step (DESIGN.md §9): a state that turned
+/// non-finite, a penetration that exploded, an iteration cap hit. Each stops the run with
+/// [`Error::RunFailed`] (exit code 1) naming the step, the time and the contact.
+#[derive(Clone, Copy, Debug)]
+pub struct RunChecks {
+    /// Count iteration caps in the statistics instead of failing the run
+    /// (`scheme.allow_caps`, `--allow-caps`).
+    pub allow_caps: bool,
+    /// A penetration deeper than this (m) fails the run: no scheme of the paper lets a
+    /// node sink through a body's own size, so the solution has exploded.
+    pub max_violation: f64,
+    /// The Newton / projection cap (`scheme.newton.max_iterations`), for the message.
+    pub newton_cap: usize,
+    /// The friction sweep cap (`scheme.friction.max_iterations`), for the message.
+    pub friction_cap: usize,
+}
+
+impl RunChecks {
+    /// The checks of a run with `params`, on a model whose bounding box has diagonal
+    /// `size` (m; 0 or non-finite when the model has no geometry: no violation limit).
+    pub fn new(params: &crate::integrators::SchemeParams, size: f64) -> Self {
+        RunChecks {
+            allow_caps: params.allow_caps,
+            max_violation: if size.is_finite() && size > 0.0 {
+                size
+            } else {
+                f64::INFINITY
+            },
+            newton_cap: params.newton.max_iterations,
+            friction_cap: params.friction.max_iterations,
+        }
+    }
+
+    /// No checks beyond non-finite states (caps allowed, no violation limit).
+    pub fn lenient() -> Self {
+        RunChecks {
+            allow_caps: true,
+            max_violation: f64::INFINITY,
+            newton_cap: 0,
+            friction_cap: 0,
+        }
+    }
+
+    /// Checks the state after a step; the error names the step, time and contact.
+    pub fn check(&self, integ: &dyn Integrator, st: &StepStats) -> Result<(), Error> {
+        let s = integ.state();
+        let fail = |contact: Option<usize>, detail: String| Error::RunFailed {
+            step: s.step,
+            time: s.time,
+            contact,
+            detail,
+        };
+        let deepest = || {
+            s.gap
+                .iter()
+                .enumerate()
+                .min_by(|a, b| a.1.total_cmp(b.1))
+                .map(|(c, _)| c)
+        };
+        for (name, v, per_contact) in [
+            ("displacement", &s.q, false),
+            ("velocity", &s.v, false),
+            ("impulse", &s.impulse, true),
+            ("gap", &s.gap, true),
+        ] {
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                let (contact, at) = if per_contact {
+                    (Some(i), String::new())
+                } else {
+                    (None, format!(" of dof {i}"))
+                };
+                return Err(fail(
+                    contact,
+                    format!(
+                        "the {name}{at} is {}: the solution broke down (lower the time step, \
+                         check the material and loads)",
+                        v[i]
+                    ),
+                ));
+            }
+        }
+        if st.max_violation > self.max_violation {
+            return Err(fail(
+                deepest(),
+                format!(
+                    "penetration {:.3e} m exceeds the model's size {:.3e} m: the solution \
+                     exploded (lower the time step)",
+                    st.max_violation, self.max_violation
+                ),
+            ));
+        }
+        if st.caps_hit > 0 && !self.allow_caps {
+            let detail = if st.friction_caps > 0 {
+                format!(
+                    "the friction solver stopped at its cap of {} sweeps with residual {:.3e} \
+                     (raise scheme.friction.max_iterations, try scheme.friction.solver = \
+                     \"prox\", or set scheme.allow_caps = true to count caps instead)",
+                    self.friction_cap, st.friction_residual
+                )
+            } else {
+                format!(
+                    "an iteration loop stopped at its cap (Newton/projection cap {}, residual \
+                     {:.3e}; LCP residual {:.3e}): raise scheme.newton.max_iterations or lower \
+                     the time step, or set scheme.allow_caps = true (--allow-caps) to count caps \
+                     instead",
+                    self.newton_cap, st.newton_residual, st.lcp_residual
+                )
+            };
+            return Err(fail(deepest(), detail));
+        }
+        Ok(())
+    }
+}
+
+/// Something that looks at the run after every step: the history and frame writers,
+/// the contact measurement, a study's trajectory. Called in order after the checks.
+pub trait Observer {
+    /// The step just taken (`integ.state()` is the state after it); `last` on the final
+    /// step of the run.
+    fn observe(
+        &mut self,
+        integ: &dyn Integrator,
+        stats: &StepStats,
+        last: bool,
+    ) -> Result<(), Error>;
+}
+
+impl<F> Observer for F
+where
+    F: FnMut(&dyn Integrator, &StepStats, bool) -> Result<(), Error>,
+{
+    fn observe(
+        &mut self,
+        integ: &dyn Integrator,
+        stats: &StepStats,
+        last: bool,
+    ) -> Result<(), Error> {
+        self(integ, stats, last)
+    }
+}
+
+/// The one step loop every run goes through (scenes, the bar, the examples, the
+/// studies): steps `integ` from its current step up to `steps`, checks each state
+/// ([`RunChecks`]), hands it to the observers in order, and reports progress.
+pub fn drive(
+    integ: &mut dyn Integrator,
+    steps: usize,
+    checks: &RunChecks,
+    observers: &mut [&mut dyn Observer],
+    progress: &mut dyn Progress,
+) -> Result<(), Error> {
+    let report_every = (steps / 1000).max(1);
+    let first = integ.state().step;
+    progress.start(steps);
+    for k in first..steps {
+        let st = integ.step()?;
+        checks.check(integ, &st)?;
+        let last = k + 1 == steps;
+        for o in observers.iter_mut() {
+            o.observe(integ, &st, last)?;
+        }
+        if (k + 1) % report_every == 0 || last {
+            progress.update(k + 1, steps);
+        }
+    }
+    Ok(())
+}
+
+/// The per-step contact force `Σ P / h` is kept in [`RunResult::force`] for runs of at
+/// most this many steps (32 MiB); longer runs keep only the first contact interval,
+/// which the contact measurement needs.
+pub const FORCE_TRACE_MAX_STEPS: usize = 1 << 22;
+
+/// Measures the contact as the run goes: the total impulse, and the samples of the
+/// first contact interval (from the first positive impulse to one step after the last
+/// closed step), which is all [`contact_summary`] reads.
+#[derive(Default)]
+struct ContactTracker {
+    trace: Option<Vec<f64>>,
+    first: Option<usize>,
+    force: Vec<f64>,
+    min_gap: Vec<f64>,
+    done: bool,
+    total_force: f64,
+}
+
+impl ContactTracker {
+    fn new(steps: usize) -> Self {
+        ContactTracker {
+            trace: (steps <= FORCE_TRACE_MAX_STEPS).then(|| Vec::with_capacity(steps)),
+            ..ContactTracker::default()
+        }
+    }
+
+    fn push(&mut self, k: usize, f: f64, min_gap: f64) {
+        if let Some(t) = self.trace.as_mut() {
+            t.push(f);
+        }
+        self.total_force += f;
+        if self.done {
+            return;
+        }
+        if self.first.is_none() && f > 0.0 {
+            self.first = Some(k);
+        }
+        if self.first.is_some() {
+            self.force.push(f);
+            self.min_gap.push(min_gap);
+            // the interval ended at the previous sample: this one is the sample after it
+            if !(f > 0.0 || min_gap <= 0.0) {
+                self.done = true;
+            }
+        }
+    }
+}
+
+/// Where the run's output goes and what it costs: the history and frame observers.
+struct Writers {
+    history: Option<HistoryWriter>,
+    frames: Option<FrameStream>,
+    frame_stride: usize,
+    history_stride: usize,
+    closed_before: bool,
+    seconds: f64,
+}
+
+impl Observer for Writers {
+    fn observe(&mut self, integ: &dyn Integrator, st: &StepStats, last: bool) -> Result<(), Error> {
+        if self.history.is_none() {
+            return Ok(());
+        }
+        let t0 = Instant::now();
+        let s = integ.state();
+        let k = s.step;
+        if let Some(w) = self
+            .history
+            .as_mut()
+            .filter(|_| k % self.history_stride == 0 || last)
+        {
+            let ke = integ.system().kinetic_energy(&s.v);
+            let pe = integ.system().potential_energy(&s.q);
+            w.row(s, st, ke, pe)?;
+        }
+        let closed = s.impulse.iter().any(|&p| p > 0.0);
+        let switch = closed != self.closed_before;
+        self.closed_before = closed;
+        if let Some(w) = self
+            .frames
+            .as_mut()
+            .filter(|_| k % self.frame_stride == 0 || last || switch)
+        {
+            if let Some(hw) = self.history.as_mut() {
+                hw.flush()?;
+            }
+            w.push(s, integ.jacobian(), integ.dt())?;
+        }
+        self.seconds += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+}
+
+/// Steps `integ` `steps` times through [`drive`], streaming the history and the field
+/// frames (when `out` is given) and measuring the contact; the caller writes the
+/// summary ([`write_summary`]).
 ///
 /// Frames are saved at the start, every `frame_stride` steps, at each contact onset and
 /// release and at the last step; history rows every `history_stride` steps and at the
@@ -325,6 +592,7 @@ pub fn run(
     steps: usize,
     elements: usize,
     theta: f64,
+    checks: &RunChecks,
     reference: Option<ImpactingBar>,
     parameters: serde_json::Value,
     out: Option<(Output, Geometry)>,
@@ -332,123 +600,90 @@ pub fn run(
 ) -> Result<RunResult, Error> {
     let h = integ.dt();
     let m = integ.state().gap.len();
-    let mut output_seconds = 0.0;
     let t0 = Instant::now();
-    let (mut history, mut frames, frame_stride, history_stride) = match out {
-        Some((o, geom)) => {
-            o.options.validate()?;
-            let geom_outlines = geom.outlines.clone();
-            std::fs::create_dir_all(o.dir).map_err(|e| Error::io(o.dir, e))?;
-            let hist =
-                HistoryWriter::create(&o.dir.join("history.csv"), m, integ.state().tangent_dim)?;
-            #[cfg(feature = "hdf5")]
-            let h5 = if o.options.hdf5() {
-                Some(crate::io::h5::RunFile::create(o.dir)?)
-            } else {
-                None
-            };
-            #[cfg(feature = "hdf5")]
-            let hist = match &h5 {
-                Some(f) => hist.with_hdf5(crate::io::h5::History::create(
-                    f,
-                    m,
-                    integ.state().tangent_dim,
-                    integ.name(),
-                    h,
-                    theta,
-                    &parameters,
-                )?),
-                None => hist,
-            };
-            // a model without field geometry (the academic examples) writes no frames
-            let frames = if o.options.fields && !geom.points.is_empty() {
-                let w = FrameWriter::create(
-                    o.dir,
-                    "fields",
-                    geom,
-                    integ.jacobian(),
-                    o.options.encoding,
-                )?;
-                if !geom_outlines.is_empty() {
-                    crate::io::frames::write_outlines(
-                        &o.dir.join("obstacles.vtu"),
-                        &geom_outlines,
-                    )?;
-                }
-                #[cfg(feature = "hdf5")]
-                let w = match &h5 {
-                    Some(f) => w.with_hdf5(f)?,
-                    None => w,
-                };
-                let s = integ.state();
-                let mut w =
-                    FrameStream::spawn_with_statuses(w, s.q.len(), m, s.status.len(), FRAME_POOL);
-                w.push(s, integ.jacobian(), h)?;
-                Some(w)
-            } else {
-                None
-            };
-            (
-                Some(hist),
-                frames,
-                o.options.frame_stride(steps),
-                o.options.history_stride,
-            )
-        }
-        None => (None, None, usize::MAX, usize::MAX),
+    let mut writers = Writers {
+        history: None,
+        frames: None,
+        frame_stride: usize::MAX,
+        history_stride: usize::MAX,
+        closed_before: false,
+        seconds: 0.0,
     };
-    output_seconds += t0.elapsed().as_secs_f64();
+    if let Some((o, geom)) = out {
+        o.options.validate()?;
+        let geom_outlines = geom.outlines.clone();
+        crate::io::prepare_run_dir(o.dir)?;
+        let hist = HistoryWriter::create(&o.dir.join("history.csv"), m, integ.state().tangent_dim)?;
+        #[cfg(feature = "hdf5")]
+        let h5 = if o.options.hdf5() {
+            Some(crate::io::h5::RunFile::create(o.dir)?)
+        } else {
+            None
+        };
+        #[cfg(feature = "hdf5")]
+        let hist = match &h5 {
+            Some(f) => hist.with_hdf5(crate::io::h5::History::create(
+                f,
+                m,
+                integ.state().tangent_dim,
+                integ.name(),
+                h,
+                theta,
+                &parameters,
+            )?),
+            None => hist,
+        };
+        // a model without field geometry (the academic examples) writes no frames
+        if o.options.fields && !geom.points.is_empty() {
+            let w =
+                FrameWriter::create(o.dir, "fields", geom, integ.jacobian(), o.options.encoding)?;
+            if !geom_outlines.is_empty() {
+                crate::io::frames::write_outlines(&o.dir.join("obstacles.vtu"), &geom_outlines)?;
+            }
+            #[cfg(feature = "hdf5")]
+            let w = match &h5 {
+                Some(f) => w.with_hdf5(f)?,
+                None => w,
+            };
+            let s = integ.state();
+            let mut w =
+                FrameStream::spawn_with_statuses(w, s.q.len(), m, s.status.len(), FRAME_POOL);
+            w.push(s, integ.jacobian(), h)?;
+            writers.frames = Some(w);
+        }
+        writers.history = Some(hist);
+        writers.frame_stride = o.options.frame_stride(steps);
+        writers.history_stride = o.options.history_stride;
+    }
+    let mut output_seconds = t0.elapsed().as_secs_f64();
     let energy0 = {
         let s = integ.state();
         integ.system().kinetic_energy(&s.v) + integ.system().potential_energy(&s.q)
     };
-    let mut force = Vec::with_capacity(steps);
-    let mut min_gap = Vec::with_capacity(steps);
+    let mut tracker = ContactTracker::new(steps);
     let mut acc = Acc::default();
-    let mut closed_before = false;
-    let start = Instant::now();
-    let report_every = (steps / 1000).max(1);
-    progress.start(steps);
-    for k in 0..steps {
-        let st = integ.step()?;
-        acc.add(&st);
+    let mut measure = |integ: &dyn Integrator, st: &StepStats, _last: bool| {
+        acc.add(st);
         let s = integ.state();
-        force.push(s.impulse.iter().sum::<f64>() / h);
-        min_gap.push(s.gap.iter().copied().fold(f64::INFINITY, f64::min));
-        let last = k + 1 == steps;
-        if history.is_some() {
-            let t0 = Instant::now();
-            if let Some(w) = history
-                .as_mut()
-                .filter(|_| (k + 1) % history_stride == 0 || last)
-            {
-                let ke = integ.system().kinetic_energy(&s.v);
-                let pe = integ.system().potential_energy(&s.q);
-                w.row(s, &st, ke, pe)?;
-            }
-            let closed = s.impulse.iter().any(|&p| p > 0.0);
-            let switch = closed != closed_before;
-            closed_before = closed;
-            if let Some(w) = frames
-                .as_mut()
-                .filter(|_| (k + 1) % frame_stride == 0 || last || switch)
-            {
-                if let Some(hw) = history.as_mut() {
-                    hw.flush()?;
-                }
-                w.push(s, integ.jacobian(), h)?;
-            }
-            output_seconds += t0.elapsed().as_secs_f64();
-        }
-        if (k + 1) % report_every == 0 || last {
-            progress.update(k + 1, steps);
-        }
-    }
+        let f = s.impulse.iter().sum::<f64>() / h;
+        let g = s.gap.iter().copied().fold(f64::INFINITY, f64::min);
+        tracker.push(s.step - 1, f, g);
+        Ok(())
+    };
+    let start = Instant::now();
+    drive(
+        integ,
+        steps,
+        checks,
+        &mut [&mut measure, &mut writers],
+        progress,
+    )?;
     let t_fin = Instant::now();
-    if let Some(w) = history {
+    output_seconds += writers.seconds;
+    if let Some(w) = writers.history.take() {
         w.finish()?;
     }
-    let (frame_count, frame_seconds, frame_wait) = match frames {
+    let (frame_count, frame_seconds, frame_wait) = match writers.frames.take() {
         Some(f) => {
             let wait = f.waited_seconds();
             let w = f.finish()?;
@@ -461,7 +696,13 @@ pub fn run(
     let s = integ.state();
     let sys = integ.system();
     let energy1 = sys.kinetic_energy(&s.v) + sys.potential_energy(&s.q);
-    let contact = reference.map(|r| contact_summary(&force, &min_gap, h, sys, &s.v, r));
+    let contact = reference.map(|r| {
+        let mut c = contact_summary(&tracker.force, &tracker.min_gap, h, sys, &s.v, r);
+        let offset = tracker.first.unwrap_or(0) as f64 * h;
+        c.first_contact_time += offset;
+        c.total_impulse = tracker.total_force * h;
+        c
+    });
     let summary = Summary {
         scheme: integ.name().to_string(),
         elements,
@@ -488,7 +729,10 @@ pub fn run(
         integrator_seconds: 0.0,
         parameters,
     };
-    Ok(RunResult { summary, force })
+    Ok(RunResult {
+        summary,
+        force: tracker.trace.unwrap_or_default(),
+    })
 }
 
 /// Completes a run: records the set-up times, writes `summary.json` and the plots.

@@ -2,7 +2,7 @@
 //! summed over the end face against the 1-D analytic plateau E S |v0| / c0.
 
 use signorini::integrators::SchemeKind;
-use signorini::run::{Quiet, run};
+use signorini::run::{Quiet, RunChecks, run};
 use signorini::scene::solid_bar::SolidBarScene;
 
 #[test]
@@ -22,6 +22,7 @@ fn hex_bar_end_face_force_matches_the_rod_solution() {
             s.steps(),
             s.cells_along,
             s.scheme.theta,
+            &RunChecks::new(&s.scheme, s.length),
             s.analytic(),
             params,
             None,

@@ -277,6 +277,10 @@ pub struct SchemeParams {
     pub max_active_rows: usize,
     /// Coulomb friction solver controls (used only when some contact has `μ > 0`).
     pub friction: crate::solvers::friction::FrictionParams,
+    /// Count iteration caps (Newton, projection, LCP, friction) in the statistics and go
+    /// on, instead of failing the run at the first one (default false: a cap hit means
+    /// the step's solution is not the scheme's, and the run stops with exit code 1).
+    pub allow_caps: bool,
 }
 
 impl Default for SchemeParams {
@@ -295,6 +299,7 @@ impl Default for SchemeParams {
             delassus_pool: 0,
             max_active_rows: 0,
             friction: crate::solvers::friction::FrictionParams::default(),
+            allow_caps: false,
         }
     }
 }

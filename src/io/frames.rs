@@ -206,7 +206,7 @@ impl FrameWriter {
         encoding: Encoding,
     ) -> Result<Self, Error> {
         let frames_dir = dir.join(stem);
-        std::fs::create_dir_all(&frames_dir).map_err(|e| Error::io(&frames_dir, e))?;
+        std::fs::create_dir_all(&frames_dir).map_err(|e| Error::write(&frames_dir, e))?;
         remove_stale_frames(&frames_dir)?;
         let mut point_of_dof = vec![usize::MAX; geom.dof_of.iter().flatten().count()];
         for (k, d) in geom.dof_of.iter().enumerate() {
@@ -774,7 +774,7 @@ impl FrameStream {
         match self.thread.take().map(|t| t.join()) {
             Some(Ok(r)) => r,
             Some(Err(p)) => std::panic::resume_unwind(p),
-            None => Err(Error::Io {
+            None => Err(Error::Write {
                 path: PathBuf::from("fields.pvd"),
                 source: std::io::Error::other("the frame writer already stopped"),
             }),
@@ -786,7 +786,7 @@ impl FrameStream {
         drop(self.work.take());
         match self.join() {
             Err(e) => e,
-            Ok(_) => Error::Io {
+            Ok(_) => Error::Write {
                 path: PathBuf::from("fields.pvd"),
                 source: std::io::Error::other("the frame writer stopped without an error"),
             },
@@ -817,12 +817,12 @@ fn bytemuck_f64(v: &[f64]) -> &[u8] {
 /// old one makes ext4 write the file out first (`auto_da_alloc`), which measured 10×
 /// slower than writing a new name (0.6 vs 0.06 ms for the bar's 77 kB frame).
 fn remove_stale_frames(dir: &Path) -> Result<(), Error> {
-    let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
+    let entries = std::fs::read_dir(dir).map_err(|e| Error::write(dir, e))?;
     for e in entries {
-        let path = e.map_err(|e| Error::io(dir, e))?.path();
+        let path = e.map_err(|e| Error::write(dir, e))?.path();
         let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
         if name.starts_with("frame_") && (name.ends_with(".vtu") || name.ends_with(".vtu.part")) {
-            std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
+            std::fs::remove_file(&path).map_err(|e| Error::write(&path, e))?;
         }
     }
     Ok(())
@@ -834,6 +834,6 @@ fn write_renamed(path: &Path, bytes: &[u8]) -> Result<(), Error> {
     let mut tmp = path.as_os_str().to_owned();
     tmp.push(".part");
     let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, bytes).map_err(|e| Error::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+    std::fs::write(&tmp, bytes).map_err(|e| Error::write(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| Error::write(path, e))
 }

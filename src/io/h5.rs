@@ -32,7 +32,7 @@ use crate::error::Error;
 use crate::integrators::{State, StepStats};
 
 fn h5err(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::Io {
+    Error::Write {
         path: path.to_path_buf(),
         source: std::io::Error::other(format!("HDF5: {e}")),
     }

@@ -24,10 +24,58 @@ use crate::integrators::{State, StepStats};
 /// Writes `bytes` to `path` atomically (write `path.part`, flush, sync, rename).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
     let tmp = part_path(path);
-    let mut f = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
-    f.write_all(bytes).map_err(|e| Error::io(&tmp, e))?;
-    f.sync_all().map_err(|e| Error::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+    let mut f = File::create(&tmp).map_err(|e| Error::write(&tmp, e))?;
+    f.write_all(bytes).map_err(|e| Error::write(&tmp, e))?;
+    f.sync_all().map_err(|e| Error::write(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| Error::write(path, e))
+}
+
+/// The files a run writes into its directory (besides `fields/frame_*.vtu`).
+pub const RUN_FILES: [&str; 12] = [
+    "summary.json",
+    "history.csv",
+    "fields.pvd",
+    "fields.vtkhdf",
+    "obstacles.vtu",
+    "checkpoint.json",
+    "contact_force.png",
+    "contact_force.svg",
+    "energy.png",
+    "energy.svg",
+    "violation.png",
+    "violation.svg",
+];
+
+/// Makes `dir` ready for a new run: creates it, and removes what an earlier run left
+/// there that this run would write or that would contradict it (its summary, history,
+/// frames, plots, checkpoint, and every leftover `.part` file), so a finished directory
+/// never mixes two runs.
+pub fn prepare_run_dir(dir: &Path) -> Result<(), Error> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))?;
+    for sub in [dir.to_path_buf(), dir.join("fields")] {
+        let entries = match std::fs::read_dir(&sub) {
+            Ok(e) => e,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+            Err(e) => return Err(Error::write(&sub, e)),
+        };
+        for e in entries {
+            let path = e.map_err(|e| Error::write(&sub, e))?.path();
+            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            let ours = if sub == dir {
+                RUN_FILES.contains(&name)
+                    || name.ends_with(".part")
+                    || name
+                        .strip_suffix(".part")
+                        .is_some_and(|n| RUN_FILES.contains(&n))
+            } else {
+                name.starts_with("frame_") && (name.ends_with(".vtu") || name.ends_with(".part"))
+            };
+            if ours && path.is_file() {
+                std::fs::remove_file(&path).map_err(|e| Error::write(&path, e))?;
+            }
+        }
+    }
+    Ok(())
 }
 
 fn part_path(path: &Path) -> PathBuf {
@@ -72,7 +120,7 @@ impl HistoryWriter {
     /// row `friction_iterations`, `friction_residual`.
     pub fn create(path: &Path, m: usize, tangent_dim: usize) -> Result<Self, Error> {
         let tmp = part_path(path);
-        let f = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+        let f = File::create(&tmp).map_err(|e| Error::write(&tmp, e))?;
         let mut out = BufWriter::with_capacity(1 << 16, f);
         let mut header = String::from(
             "step,time,kinetic_energy,potential_energy,max_violation,newton_iterations,\
@@ -90,7 +138,7 @@ impl HistoryWriter {
         if tangent_dim > 0 {
             header.push_str(",friction_iterations,friction_residual");
         }
-        writeln!(out, "{header}").map_err(|e| Error::io(&tmp, e))?;
+        writeln!(out, "{header}").map_err(|e| Error::write(&tmp, e))?;
         Ok(HistoryWriter {
             #[cfg(feature = "hdf5")]
             h5: None,
@@ -159,14 +207,14 @@ impl HistoryWriter {
             }
             o.write_all(b"\n")
         })();
-        r.map_err(|e| Error::io(&self.tmp, e))?;
+        r.map_err(|e| Error::write(&self.tmp, e))?;
         #[cfg(feature = "hdf5")]
         if let Some(h) = self.h5.as_mut() {
             h.row(state, stats, kinetic, potential)?;
         }
         self.rows_since_flush += 1;
         if self.rows_since_flush >= Self::FLUSH_EVERY {
-            self.out.flush().map_err(|e| Error::io(&self.tmp, e))?;
+            self.out.flush().map_err(|e| Error::write(&self.tmp, e))?;
             self.rows_since_flush = 0;
         }
         Ok(())
@@ -180,7 +228,7 @@ impl HistoryWriter {
         if let Some(h) = self.h5.as_mut() {
             h.flush()?;
         }
-        self.out.flush().map_err(|e| Error::io(&self.tmp, e))
+        self.out.flush().map_err(|e| Error::write(&self.tmp, e))
     }
 
     /// Flushes and renames the file into place. No `fsync`: a killed process loses
@@ -191,8 +239,8 @@ impl HistoryWriter {
         if let Some(h) = self.h5.as_mut() {
             h.flush()?;
         }
-        self.out.flush().map_err(|e| Error::io(&self.tmp, e))?;
-        std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(&self.path, e))
+        self.out.flush().map_err(|e| Error::write(&self.tmp, e))?;
+        std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::write(&self.path, e))
     }
 }
 

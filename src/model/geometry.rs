@@ -38,6 +38,25 @@ pub struct Geometry {
     pub prescribed_functions: Vec<crate::model::TimeFunction>,
 }
 
+impl Geometry {
+    /// The diagonal of the points' bounding box (m); 0 without points. The run checks
+    /// use it as the depth no penetration can reach in a sound solution.
+    pub fn size(&self) -> f64 {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in &self.points {
+            for i in 0..3 {
+                lo[i] = lo[i].min(p[i]);
+                hi[i] = hi[i].max(p[i]);
+            }
+        }
+        if self.points.is_empty() {
+            return 0.0;
+        }
+        (0..3).map(|i| (hi[i] - lo[i]).powi(2)).sum::<f64>().sqrt()
+    }
+}
+
 /// A rigid part drawn as line segments.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Outline {

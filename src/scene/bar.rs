@@ -81,7 +81,17 @@ impl BarScene {
 
     /// Number of steps `round(t_end / dt)`.
     pub fn steps(&self) -> usize {
-        (self.t_end / self.dt).round() as usize
+        crate::limits::step_count(self.t_end, self.dt, "t-end", "dt").unwrap_or(0)
+    }
+
+    /// The memory the run needs at least: the rod's dofs (tridiagonal matrices, two
+    /// neighbours a node) and their frame geometry.
+    pub fn memory(&self) -> crate::limits::MemoryEstimate {
+        let mut m = crate::limits::MemoryEstimate::default();
+        let n = self.elements as u64 + 1;
+        m.add("dofs", n, crate::limits::bytes_per_dof(3, 1));
+        m.add("frame geometry", n, 64);
+        m
     }
 
     /// Checks every field; the error names it.
@@ -93,21 +103,8 @@ impl BarScene {
         require_in("gap", self.gap, 0.0, f64::MAX)?;
         check_restitution("restitution", self.restitution)?;
         self.scheme.validate()?;
-        let steps = self.t_end / self.dt;
-        if steps < 1.0 {
-            return Err(Error::invalid(
-                "t-end",
-                self.t_end,
-                &format!("must be at least one step (dt = {})", self.dt),
-            ));
-        }
-        if steps > 1e10 {
-            return Err(Error::invalid(
-                "dt",
-                self.dt,
-                &format!("t-end/dt = {steps:e} steps is more than 1e10"),
-            ));
-        }
+        crate::limits::step_count(self.t_end, self.dt, "t-end", "dt")?;
+        self.memory().check("elements", self.elements)?;
         Ok(())
     }
 

@@ -348,36 +348,37 @@ pub struct ModelReport {
 }
 
 impl Scene {
-    /// Reads and validates a scene file; errors name the file and the key path.
+    /// Reads and validates a scene file; errors name the file and the key path (or the
+    /// line and column of a TOML syntax error).
     pub fn from_file(path: &Path) -> Result<Scene, Error> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let mut scene = Self::from_toml(&text).map_err(|e| match e {
-            Error::InvalidParameter {
-                field,
-                value,
-                reason,
-            } => Error::InvalidParameter {
-                field: format!("{}: {field}", path.display()),
-                value,
-                reason,
-            },
-            other => other,
-        })?;
+        let text = crate::limits::read_text(path, "scene", crate::limits::MAX_SCENE_BYTES)?;
+        let mut scene = Self::from_toml(&text).map_err(|e| e.in_file(path))?;
         scene.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Ok(scene)
     }
 
     /// Parses and validates scene text.
     pub fn from_toml(text: &str) -> Result<Scene, Error> {
+        let at = |span: Option<std::ops::Range<usize>>| match span {
+            Some(r) => {
+                let before = &text[..r.start.min(text.len())];
+                let line = 1 + before.matches('\n').count();
+                let col = 1 + before.len() - before.rfind('\n').map_or(0, |i| i + 1);
+                format!("line {line}, column {col}")
+            }
+            None => "scene".to_string(),
+        };
         let de = toml::Deserializer::parse(text)
-            .map_err(|e| Error::invalid("scene", "TOML", &e.to_string()))?;
+            .map_err(|e| Error::invalid(&at(e.span()), "(TOML syntax)", first_line(e.message())))?;
         let scene: Scene = serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();
-            Error::invalid(
-                &path,
-                "(key)",
-                &e.into_inner().to_string().replace('\n', " "),
-            )
+            let inner = e.into_inner();
+            let field = if path == "." || path.is_empty() {
+                at(inner.span())
+            } else {
+                path
+            };
+            Error::invalid(&field, "(key)", first_line(inner.message()))
         })?;
         scene.validate()?;
         Ok(scene)
@@ -385,15 +386,7 @@ impl Scene {
 
     /// Range checks that serde cannot express.
     pub fn validate(&self) -> Result<(), Error> {
-        require_positive("time.dt", self.time.dt)?;
-        require_positive("time.t_end", self.time.t_end)?;
-        if self.time.t_end / self.time.dt < 1.0 {
-            return Err(Error::invalid(
-                "time.t_end",
-                self.time.t_end,
-                "must be at least one step",
-            ));
-        }
+        crate::limits::step_count(self.time.t_end, self.time.dt, "time.t_end", "time.dt")?;
         self.scheme.validate()?;
         self.output.validate().map_err(|e| prefix("output", e))?;
         if self.example.is_some() {
@@ -484,7 +477,8 @@ impl Scene {
 
     /// Number of steps.
     pub fn steps(&self) -> usize {
-        (self.time.t_end / self.time.dt).round() as usize
+        crate::limits::step_count(self.time.t_end, self.time.dt, "time.t_end", "time.dt")
+            .unwrap_or(0)
     }
 
     /// Meshes and assembles every body, eliminates fixed dofs, and builds the contacts.
@@ -887,13 +881,7 @@ impl BodySpec {
                 size,
                 origin,
             } => {
-                if cells.contains(&0) || size.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
-                    return Err(Error::invalid(
-                        "mesh",
-                        format!("cells {cells:?}, size {size:?}"),
-                        "needs positive counts and sizes",
-                    ));
-                }
+                generator_checks("box", *cell, cells, size, origin)?;
                 let mut m = box_mesh(*cell, *cells, *size);
                 for p in &mut m.points {
                     for i in 0..3 {
@@ -908,13 +896,7 @@ impl BodySpec {
                 size,
                 origin,
             } => {
-                if cells.contains(&0) || size.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
-                    return Err(Error::invalid(
-                        "mesh",
-                        format!("cells {cells:?}, size {size:?}"),
-                        "needs positive counts and sizes",
-                    ));
-                }
+                generator_checks("rectangle", *cell, cells, size, origin)?;
                 let mut m = rectangle_mesh(*cell, *cells, *size);
                 for p in &mut m.points {
                     p[0] += origin[0];
@@ -925,6 +907,12 @@ impl BodySpec {
             MeshSpec::Rod {
                 elements, length, ..
             } => {
+                if *elements == 0 {
+                    return Err(Error::invalid("mesh.elements", 0, "must be at least 1"));
+                }
+                require_positive("mesh.length", *length)?;
+                let n = *elements as u64;
+                crate::limits::mesh_memory(n + 1, n, 2, 1).check("mesh.elements", n)?;
                 let mut m = Mesh::default();
                 let n = *elements;
                 for i in 0..=n {
@@ -1032,6 +1020,61 @@ fn outline(o: &ObstacleSpec, points: &[[f64; 3]], dim: usize) -> Outline {
     out
 }
 
+/// Checks a generator's request before anything is generated: the cell kind is one it
+/// makes, the counts are positive and their products fit the memory limit, the sizes
+/// are positive and finite, the origin is finite.
+fn generator_checks(
+    generator: &str,
+    cell: CellKind,
+    cells: &[usize],
+    size: &[f64],
+    origin: &[f64],
+) -> Result<(), Error> {
+    let (kinds, per_box): (&[CellKind], u64) = match (generator, cell) {
+        ("box", CellKind::Tet4) => (&[CellKind::Hex8, CellKind::Tet4], 6),
+        ("box", _) => (&[CellKind::Hex8, CellKind::Tet4], 1),
+        (_, CellKind::Tri3) => (&[CellKind::Quad4, CellKind::Tri3], 2),
+        _ => (&[CellKind::Quad4, CellKind::Tri3], 1),
+    };
+    if !kinds.contains(&cell) {
+        return Err(Error::invalid(
+            "mesh.cell",
+            cell.name(),
+            &format!(
+                "the `{generator}` generator makes {} cells",
+                kinds
+                    .iter()
+                    .map(|k| k.name())
+                    .collect::<Vec<_>>()
+                    .join(" or ")
+            ),
+        ));
+    }
+    if cells.contains(&0) {
+        return Err(Error::invalid(
+            "mesh.cells",
+            format!("{cells:?}"),
+            "needs counts of at least 1",
+        ));
+    }
+    for (i, s) in size.iter().enumerate() {
+        require_positive(&format!("mesh.size[{i}]"), *s)?;
+    }
+    for (i, o) in origin.iter().enumerate() {
+        crate::error::require_finite(&format!("mesh.origin[{i}]"), *o)?;
+    }
+    let prod = |extra: u64| {
+        cells
+            .iter()
+            .try_fold(1u64, |a, &c| a.checked_mul(c as u64 + extra))
+            .unwrap_or(u64::MAX)
+    };
+    let n_cells = prod(0).saturating_mul(per_box);
+    let dim = cells.len() as u64;
+    crate::limits::mesh_memory(prod(1), n_cells, cell.nodes() as u64, dim)
+        .check("mesh.cells", format!("{cells:?}"))
+}
+
 /// The time function of a `[[forces]]` / `[[prescribed]]` entry (1 when absent).
 fn time_function(
     field: &str,
@@ -1062,6 +1105,11 @@ fn node_set(mesh: &crate::model::solid::Mesh, name: &str) -> Result<Vec<usize>, 
             )
         })
     }
+}
+
+/// The first line of a parser's message (toml's messages carry a source excerpt after it).
+fn first_line(m: &str) -> &str {
+    m.lines().next().unwrap_or(m).trim()
 }
 
 fn prefix(p: &str, e: Error) -> Error {

@@ -95,12 +95,13 @@ impl SolidBarScene {
         require_finite("velocity", self.velocity)?;
         require_in("gap", self.gap, 0.0, f64::MAX)?;
         self.material.validate()?;
+        crate::limits::step_count(self.t_end, self.dt, "t_end", "dt")?;
         self.scheme.validate()
     }
 
     /// Number of steps.
     pub fn steps(&self) -> usize {
-        (self.t_end / self.dt).round() as usize
+        crate::limits::step_count(self.t_end, self.dt, "t_end", "dt").unwrap_or(0)
     }
 
     /// Meshes and assembles the bar, with its `x0` face nodes as contacts.

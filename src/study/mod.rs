@@ -37,7 +37,7 @@ use crate::analytic::oscillator::Oscillator;
 use crate::contact::block::BlockCorners;
 use crate::contact::plane::NodesOnPlane;
 use crate::error::Error;
-use crate::integrators::{self, Forecast, SchemeKind, SchemeParams};
+use crate::integrators::{self, Forecast, Integrator, SchemeKind, SchemeParams, StepStats};
 use crate::io::write_atomic;
 use crate::model::point_mass::{oscillator, point_mass, rigid_block};
 use crate::plot::{Curve, lines};
@@ -134,18 +134,35 @@ pub fn example_run(
     };
     let contact = NodesOnPlane::new(vec![vec![0]], vec![vec![reference]], vec![1.0], 0.0, e)?;
     let mut integ = integrators::build(params, sys, Box::new(contact), &[u0], &[v0], h)?;
-    let steps = (t_end / h).round() as usize;
+    let steps = crate::limits::step_count(t_end, h, "t_end", "h")?;
     let mut r = Trajectory::default();
-    for _ in 0..steps {
-        integ.step()?;
+    let mut record = |integ: &dyn Integrator, _: &StepStats, _: bool| {
         let s = integ.state();
         r.t.push(s.time);
         r.q.push(reference + s.q[0]);
         r.v.push(s.v[0]);
         r.p.push(s.impulse[0]);
         r.tau.push(s.projection[0]);
-    }
+        Ok(())
+    };
+    crate::run::drive(
+        integ.as_mut(),
+        steps,
+        &study_checks(params),
+        &mut [&mut record],
+        &mut crate::run::Quiet,
+    )?;
     Ok(r)
+}
+
+/// The run checks of a study's own runs: non-finite states stop them, but caps are
+/// counted, not fatal (the studies measure and report them, e.g. the chattering of
+/// Algorithm 1 with the explicit forecast).
+fn study_checks(params: &SchemeParams) -> crate::run::RunChecks {
+    crate::run::RunChecks {
+        allow_caps: true,
+        ..crate::run::RunChecks::new(params, 0.0)
+    }
 }
 
 /// Least-squares slope of `log err` against `log h` (zero errors skipped).
@@ -544,15 +561,22 @@ pub fn block_run(params: &SchemeParams) -> Result<BlockOutcome, Error> {
     let inertia = m * (len * len + thick * thick) / 12.0;
     let mut prev = [false; 2];
     let mut switches = 0;
-    for _ in 0..200 {
-        integ.step()?;
+    let mut count = |integ: &dyn Integrator, _: &StepStats, _: bool| {
         let s = integ.state();
         let closed = [s.impulse[0] > 0.0, s.impulse[1] > 0.0];
         if s.time > 1.0 && closed != prev {
             switches += 1;
         }
         prev = closed;
-    }
+        Ok(())
+    };
+    crate::run::drive(
+        integ.as_mut(),
+        200,
+        &study_checks(params),
+        &mut [&mut count],
+        &mut crate::run::Quiet,
+    )?;
     let s = integ.state();
     let energy = 0.5 * m * (s.v[0] * s.v[0] + s.v[1] * s.v[1])
         + 0.5 * inertia * s.v[2] * s.v[2]
@@ -627,7 +651,7 @@ fn energy(dir: &Path) -> Result<Vec<String>, Error> {
 /// Runs study `name` into `dir` and returns its verdict lines (also written to
 /// `dir/verdict.txt`).
 pub fn run(name: &str, dir: &Path) -> Result<Vec<String>, Error> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))?;
     let verdicts = match name {
         "convergence" => convergence(dir)?,
         "projection-multiplier" => projection_multiplier(dir)?,
