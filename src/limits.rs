@@ -35,7 +35,7 @@ pub fn step_count(t_end: f64, dt: f64, t_field: &str, dt_field: &str) -> Result<
     crate::error::require_positive(dt_field, dt)?;
     crate::error::require_positive(t_field, t_end)?;
     let steps = (t_end / dt).round();
-    if !(steps >= 1.0) {
+    if steps.is_nan() || steps < 1.0 {
         return Err(Error::invalid(
             t_field,
             num(t_end),

@@ -554,7 +554,7 @@ impl Observer for Writers {
         if let Some(w) = self
             .history
             .as_mut()
-            .filter(|_| k % self.history_stride == 0 || last)
+            .filter(|_| k.is_multiple_of(self.history_stride) || last)
         {
             let ke = integ.system().kinetic_energy(&s.v);
             let pe = integ.system().potential_energy(&s.q);
@@ -566,7 +566,7 @@ impl Observer for Writers {
         if let Some(w) = self
             .frames
             .as_mut()
-            .filter(|_| k % self.frame_stride == 0 || last || switch)
+            .filter(|_| k.is_multiple_of(self.frame_stride) || last || switch)
         {
             if let Some(hw) = self.history.as_mut() {
                 hw.flush()?;
