@@ -17,20 +17,52 @@ use crate::error::Error;
 use crate::model::solid::{CellKind, Mesh};
 
 fn bad(path: &Path, what: impl std::fmt::Display) -> Error {
-    Error::invalid(&path.display().to_string(), "mesh", &what.to_string())
+    Error::bad_file(path, "", what)
 }
 
-/// Reads a mesh, choosing the format by extension (`.msh`, `.vtu`, `.vtk`).
+fn bad_at(path: &Path, at: impl std::fmt::Display, what: impl std::fmt::Display) -> Error {
+    Error::bad_file(path, at, what)
+}
+
+/// The 1-based line holding byte `pos` of `bytes`.
+fn line_of(bytes: &[u8], pos: usize) -> usize {
+    1 + bytes[..pos.min(bytes.len())]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+}
+
+/// A third-party parser's message, cut to its first line and 200 characters (some
+/// quote the rest of the file).
+fn short_message(e: impl std::fmt::Display) -> String {
+    let s = e.to_string();
+    let line = s.lines().next().unwrap_or("");
+    if line.chars().count() > 200 {
+        format!("{}…", line.chars().take(200).collect::<String>())
+    } else {
+        line.to_string()
+    }
+}
+
+/// Reads a mesh, choosing the format by extension (`.msh`, `.vtu`, `.vtk`). The file
+/// must be a regular file of at most [`crate::limits::MAX_MESH_BYTES`].
 pub fn read_mesh(path: &Path) -> Result<Mesh, Error> {
+    let bytes = crate::limits::read_input(path, "mesh", crate::limits::MAX_MESH_BYTES)?;
+    parse_mesh(path, &bytes)
+}
+
+/// Parses the bytes of a mesh file; `path` chooses the format by extension and names
+/// the file in errors (the fuzz targets call this directly).
+pub fn parse_mesh(path: &Path, bytes: &[u8]) -> Result<Mesh, Error> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = bytes.to_vec();
     let raw = match ext.as_str() {
         "msh" => read_msh(path, &bytes)?,
-        "vtu" => read_vtu(path)?,
+        "vtu" => read_vtu(path, &bytes)?,
         "vtk" => read_legacy_vtk(path, &bytes)?,
         _ => {
             return Err(bad(
@@ -80,6 +112,17 @@ impl RawMesh {
             let kind = kind.clone().map_err(|name| {
                 bad(path, format!("cell {id}: unsupported element type {name} (signorini reads tri3, quad4, tet4, hex8)"))
             })?;
+            if nodes.len() != kind.nodes() {
+                return Err(bad(
+                    path,
+                    format!(
+                        "cell {id} ({}) has {} nodes; expected {}",
+                        kind.name(),
+                        nodes.len(),
+                        kind.nodes()
+                    ),
+                ));
+            }
             let mut c = Vec::with_capacity(nodes.len());
             for &v in nodes {
                 if v >= self.points.len() {
@@ -185,7 +228,7 @@ fn read_msh41(
     names: &HashMap<(usize, i64), String>,
 ) -> Result<RawMesh, Error> {
     let f = mshio::parse_msh_bytes(bytes)
-        .map_err(|e| bad(path, format!("Gmsh 4.1 parse error: {e}")))?;
+        .map_err(|e| bad(path, format!("Gmsh 4.1 parse error: {}", short_message(e))))?;
     let nodes = f.data.nodes.ok_or_else(|| bad(path, "no $Nodes section"))?;
     let elements = f
         .data
@@ -200,7 +243,12 @@ fn read_msh41(
             Some(tags) => {
                 let base = raw.points.len();
                 for (tag, &k) in tags {
-                    index.insert(*tag, base + k);
+                    if index.insert(*tag, base + k).is_some() {
+                        return Err(bad(
+                            path,
+                            format!("$Nodes: node tag {tag} is defined twice"),
+                        ));
+                    }
                 }
             }
             None if dense => {}
@@ -216,7 +264,14 @@ fn read_msh41(
     let min_tag = nodes.min_node_tag;
     let node_index = |t: u64| -> Result<usize, Error> {
         if dense {
-            Ok((t - min_tag) as usize)
+            t.checked_sub(min_tag)
+                .and_then(|i| usize::try_from(i).ok())
+                .ok_or_else(|| {
+                    bad(
+                        path,
+                        format!("element refers to node tag {t}, below the smallest tag {min_tag}"),
+                    )
+                })
         } else {
             index.get(&t).copied().ok_or_else(|| {
                 bad(
@@ -311,7 +366,12 @@ fn read_msh22(
     let mut raw = RawMesh::default();
     let mut index = HashMap::with_capacity(nodes.len());
     for (tag, x) in nodes {
-        index.insert(tag, raw.points.len());
+        if index.insert(tag, raw.points.len()).is_some() {
+            return Err(bad(
+                path,
+                format!("$Nodes: node tag {tag} is defined twice"),
+            ));
+        }
         raw.points.push(x);
     }
     for (num, t, phys, tags) in elements {
@@ -340,27 +400,62 @@ fn read_msh22(
 }
 
 /// The lines of section `$name` after its count line.
-fn section22<'a>(path: &Path, text: &'a str, name: &str) -> Result<Vec<&'a str>, Error> {
+/// The lines of section `$name` after its count line, with their 1-based line numbers;
+/// the count must match the lines.
+fn section22<'a>(path: &Path, text: &'a str, name: &str) -> Result<Vec<(usize, &'a str)>, Error> {
     let start = text
         .find(&format!("${name}"))
         .ok_or_else(|| bad(path, format!("no ${name} section")))?;
     let end = text[start..]
         .find(&format!("$End{name}"))
-        .ok_or_else(|| bad(path, format!("${name} is not closed")))?;
-    Ok(text[start..start + end]
-        .lines()
-        .skip(2)
-        .filter(|l| !l.trim().is_empty())
-        .collect())
+        .ok_or_else(|| {
+            bad_at(
+                path,
+                format!("line {}", line_of(text.as_bytes(), start)),
+                format!("${name} is not closed (truncated file?)"),
+            )
+        })?;
+    let first = line_of(text.as_bytes(), start);
+    let mut lines = text[start..start + end].lines().enumerate().skip(1);
+    let (count_line, count) = lines
+        .next()
+        .map(|(i, l)| (first + i, l.trim()))
+        .ok_or_else(|| bad(path, format!("${name} has no count line")))?;
+    let body: Vec<(usize, &str)> = lines
+        .map(|(i, l)| (first + i, l))
+        .filter(|(_, l)| !l.trim().is_empty())
+        .collect();
+    if count.parse::<usize>().ok() != Some(body.len()) {
+        return Err(bad_at(
+            path,
+            format!("line {count_line}"),
+            format!(
+                "${name} count `{count}` does not match its {} lines",
+                body.len()
+            ),
+        ));
+    }
+    Ok(body)
 }
 
 fn read_msh22_ascii(path: &Path, bytes: &[u8]) -> Result<Gmsh22, Error> {
-    let text = std::str::from_utf8(bytes)
-        .map_err(|_| bad(path, "Gmsh 2.2 ASCII file holds non-UTF-8 bytes"))?;
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        bad_at(
+            path,
+            format!("line {}", line_of(bytes, e.valid_up_to())),
+            "Gmsh 2.2 ASCII file holds non-UTF-8 bytes",
+        )
+    })?;
     let mut nodes = Vec::new();
-    for (i, line) in section22(path, text, "Nodes")?.iter().enumerate() {
+    for (ln, line) in section22(path, text, "Nodes")? {
         let v: Vec<&str> = line.split_whitespace().collect();
-        let err = || bad(path, format!("$Nodes line {}: `{line}`", i + 1));
+        let err = || {
+            bad_at(
+                path,
+                format!("line {ln}"),
+                format!("$Nodes: `{}`; expected `tag x y z`", line.trim()),
+            )
+        };
         let num = |k: usize| -> Result<f64, Error> {
             v.get(k).and_then(|s| s.parse().ok()).ok_or_else(err)
         };
@@ -368,21 +463,49 @@ fn read_msh22_ascii(path: &Path, bytes: &[u8]) -> Result<Gmsh22, Error> {
             .first()
             .and_then(|s| s.parse::<u64>().ok())
             .ok_or_else(err)?;
+        if v.len() != 4 {
+            return Err(err());
+        }
         nodes.push((tag, [num(1)?, num(2)?, num(3)?]));
     }
     let mut elements = Vec::new();
-    for (i, line) in section22(path, text, "Elements")?.iter().enumerate() {
+    for (ln, line) in section22(path, text, "Elements")? {
+        let err = || {
+            bad_at(
+                path,
+                format!("line {ln}"),
+                format!(
+                    "$Elements: `{}`; expected `number type ntags tags… nodes…` with non-negative integers",
+                    line.trim()
+                ),
+            )
+        };
         let v: Vec<u64> = line
             .split_whitespace()
             .map(|s| s.parse())
             .collect::<Result<_, _>>()
-            .map_err(|_| bad(path, format!("$Elements line {}: `{line}`", i + 1)))?;
-        if v.len() < 3 || v.len() < 3 + v[2] as usize {
-            return Err(bad(path, format!("$Elements line {}: `{line}`", i + 1)));
+            .map_err(|_| err())?;
+        let ntags = v.get(2).and_then(|&n| usize::try_from(n).ok()).ok_or_else(err)?;
+        if ntags > v.len().saturating_sub(3) {
+            return Err(err());
         }
-        let ntags = v[2] as usize;
+        let t = usize::try_from(v[1]).map_err(|_| err())?;
+        let nodes = &v[3 + ntags..];
+        if let Some(nn) = gmsh_nodes(t)
+            && nn != nodes.len()
+        {
+            return Err(bad_at(
+                path,
+                format!("line {ln}"),
+                format!(
+                    "$Elements: element {} of type {t} lists {} nodes; that type has {nn}",
+                    v[0],
+                    nodes.len()
+                ),
+            ));
+        }
         let phys = if ntags > 0 { Some(v[3]) } else { None };
-        elements.push((v[0], v[1] as usize, phys, v[3 + ntags..].to_vec()));
+        elements.push((v[0], t, phys, nodes.to_vec()));
     }
     Ok((nodes, elements))
 }
@@ -435,7 +558,12 @@ fn read_msh22_binary(path: &Path, bytes: &[u8], header: &[String]) -> Result<Gms
             .ok_or_else(|| bad(path, format!("${name} count is not a number")))?;
         Ok((start + nl + 1, count))
     };
-    let short = |name: &str| bad(path, format!("${name} data run past the end of the file"));
+    let short = |name: &str| {
+        bad(
+            path,
+            format!("truncated: ${name} data runs past the end of the file ({} bytes)", bytes.len()),
+        )
+    };
     let i32_at = |p: usize| -> Option<i32> {
         bytes
             .get(p..p + 4)
@@ -447,18 +575,37 @@ fn read_msh22_binary(path: &Path, bytes: &[u8], header: &[String]) -> Result<Gms
             .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
     };
     let (mut p, n) = open("Nodes")?;
-    let mut nodes = Vec::with_capacity(n.min(bytes.len() / 28));
+    let n = crate::limits::check_count(
+        path,
+        &format!("byte {p}"),
+        "$Nodes",
+        n as u64,
+        28,
+        (bytes.len() - p) as u64,
+    )?;
+    let mut nodes = Vec::with_capacity(n);
     for _ in 0..n {
         let tag = i32_at(p).ok_or_else(|| short("Nodes"))?;
         let x = [f64_at(p + 4), f64_at(p + 12), f64_at(p + 20)];
         let [Some(x0), Some(x1), Some(x2)] = x else {
             return Err(short("Nodes"));
         };
+        if tag < 0 {
+            return Err(bad_at(path, format!("byte {p}"), format!("$Nodes: negative node tag {tag}")));
+        }
         nodes.push((tag as u64, [x0, x1, x2]));
         p += 28;
     }
     let (mut p, n) = open("Elements")?;
-    let mut elements = Vec::with_capacity(n.min(bytes.len() / 8));
+    let n = crate::limits::check_count(
+        path,
+        &format!("byte {p}"),
+        "$Elements",
+        n as u64,
+        8,
+        (bytes.len() - p) as u64,
+    )?;
+    let mut elements = Vec::with_capacity(n);
     while elements.len() < n {
         let (Some(t), Some(count), Some(ntags)) = (i32_at(p), i32_at(p + 4), i32_at(p + 8)) else {
             return Err(short("Elements"));
@@ -471,10 +618,20 @@ fn read_msh22_binary(path: &Path, bytes: &[u8], header: &[String]) -> Result<Gms
                 format!("element type {t} is unknown (in a binary $Elements block)"),
             )
         })?;
-        if count <= 0 || ntags < 0 || elements.len() + count as usize > n {
-            return Err(bad(
+        let rec_bytes = 4 * (1 + ntags.max(0) as u64 + nn as u64);
+        if count <= 0
+            || ntags < 0
+            || elements.len() + count as usize > n
+            || (count as u64).saturating_mul(rec_bytes) > (bytes.len() - p.min(bytes.len())) as u64
+        {
+            return Err(bad_at(
                 path,
-                format!("$Elements block header (type {t}, count {count}, tags {ntags})"),
+                format!("byte {}", p - 12),
+                format!(
+                    "$Elements block header (type {t}, count {count}, tags {ntags}) does not fit \
+                     the {} elements announced and the bytes left",
+                    n
+                ),
             ));
         }
         let ntags = ntags as usize;
@@ -484,6 +641,13 @@ fn read_msh22_binary(path: &Path, bytes: &[u8], header: &[String]) -> Result<Gms
                 .collect::<Option<_>>()
                 .ok_or_else(|| short("Elements"))?;
             p += 4 * rec.len();
+            if rec.iter().any(|&v| v < 0) {
+                return Err(bad_at(
+                    path,
+                    format!("byte {}", p - 4 * rec.len()),
+                    format!("$Elements: element {} has a negative number or tag {rec:?}", rec[0]),
+                ));
+            }
             let phys = if ntags > 0 { Some(rec[1] as u64) } else { None };
             let tags = rec[1 + ntags..].iter().map(|&v| v as u64).collect();
             elements.push((rec[0] as u64, t, phys, tags));
@@ -506,23 +670,33 @@ fn vtk_kind(t: u8) -> (usize, Result<CellKind, String>) {
     }
 }
 
-fn read_vtu(path: &Path) -> Result<RawMesh, Error> {
+fn read_vtu(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
     use vtkio::model::{Attribute, DataSet, VertexNumbers};
-    let vtk =
-        vtkio::Vtk::import(path).map_err(|e| bad(path, format!("VTK XML read error: {e}")))?;
+    let vtk = vtkio::Vtk::parse_xml(bytes)
+        .map_err(|e| bad(path, format!("VTK XML read error: {}", short_message(e))))?;
     let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
         return Err(bad(path, "not an UnstructuredGrid"));
     };
     let mut raw = RawMesh::default();
-    for piece in pieces {
+    for (pi, piece) in pieces.into_iter().enumerate() {
         let p = piece
             .into_loaded_piece_data(Some(path))
-            .map_err(|e| bad(path, format!("piece: {e}")))?;
+            .map_err(|e| bad(path, format!("piece {pi}: {}", short_message(e))))?;
         let base = raw.points.len();
         let xyz: Vec<f64> = p
             .points
             .cast_into()
-            .ok_or_else(|| bad(path, "points are not numeric"))?;
+            .ok_or_else(|| bad(path, format!("piece {pi}: points are not numeric")))?;
+        if xyz.len() % 3 != 0 {
+            return Err(bad(
+                path,
+                format!(
+                    "piece {pi}: {} point coordinates, not a multiple of 3 (Points needs \
+                     NumberOfComponents=\"3\")",
+                    xyz.len()
+                ),
+            ));
+        }
         raw.points.extend(xyz.chunks(3).map(|c| [c[0], c[1], c[2]]));
         let (conn, offsets): (Vec<u64>, Vec<u64>) = match p.cells.cell_verts {
             VertexNumbers::XML {
@@ -531,20 +705,41 @@ fn read_vtu(path: &Path) -> Result<RawMesh, Error> {
             } => (connectivity, offsets),
             legacy => legacy.into_xml(),
         };
-        let mut start = 0usize;
-        let offs: Vec<u64> = if offsets.first() == Some(&0) {
-            offsets[1..].to_vec()
+        let offs: &[u64] = if offsets.first() == Some(&0) {
+            &offsets[1..]
         } else {
-            offsets
+            &offsets
         };
-        for (t, &end) in p.cells.types.iter().zip(&offs) {
+        if offs.len() != p.cells.types.len() {
+            return Err(bad(
+                path,
+                format!(
+                    "piece {pi}: {} cell offsets but {} cell types",
+                    offs.len(),
+                    p.cells.types.len()
+                ),
+            ));
+        }
+        let mut start = 0usize;
+        for (c, (t, &end)) in p.cells.types.iter().zip(offs).enumerate() {
+            let end = usize::try_from(end).unwrap_or(usize::MAX);
+            if end < start || end > conn.len() {
+                return Err(bad(
+                    path,
+                    format!(
+                        "piece {pi}, cell {c}: offset {end} is outside [{start}, {}] (offsets \
+                         must grow and stay within the connectivity)",
+                        conn.len()
+                    ),
+                ));
+            }
             let (d, kind) = vtk_kind(*t as u8);
-            let ns = conn[start..end as usize]
+            let ns = conn[start..end]
                 .iter()
-                .map(|&v| base + v as usize)
+                .map(|&v| base.saturating_add(usize::try_from(v).unwrap_or(usize::MAX)))
                 .collect();
             raw.cells.push((d, kind, ns));
-            start = end as usize;
+            start = end;
         }
         for a in p.data.point {
             if let Attribute::DataArray(da) = a
@@ -605,7 +800,8 @@ fn read_legacy_vtk(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
         match w[0] {
             "POINTS" => {
                 npoints = r.count(&w, 1)?;
-                let v = r.values(npoints * 3, w.get(2).copied().unwrap_or("float"))?;
+                let n3 = npoints.checked_mul(3).ok_or_else(|| r.err("POINTS count overflows"))?;
+                let v = r.values(n3, w.get(2).copied().unwrap_or("float"))?;
                 raw.points = v.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
             }
             "CELLS" => {
@@ -620,7 +816,7 @@ fn read_legacy_vtk(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
                         .nth(1)
                         .unwrap_or("vtktypeint64")
                         .to_string();
-                    offsets = r.values(n, &t)?.iter().map(|&x| x as u64).collect();
+                    offsets = r.indices(n, &t, "OFFSETS")?;
                     let c = r.next_keyword_line()?.unwrap_or_default();
                     if !c.starts_with("CONNECTIVITY") {
                         return Err(bad(path, "OFFSETS not followed by CONNECTIVITY"));
@@ -630,23 +826,48 @@ fn read_legacy_vtk(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
                         .nth(1)
                         .unwrap_or("vtktypeint64")
                         .to_string();
-                    conn = r.values(size, &t)?.iter().map(|&x| x as u64).collect();
+                    conn = r.indices(size, &t, "CONNECTIVITY")?;
                 } else {
                     r.pos = save;
-                    let list = r.values(size, "int")?;
+                    let at = r.where_();
+                    let list = r.indices(size, "int", "CELLS")?;
                     let mut k = 0;
                     offsets.push(0);
-                    for _ in 0..n {
-                        let m = list[k] as usize;
-                        conn.extend(list[k + 1..k + 1 + m].iter().map(|&x| x as u64));
+                    for c in 0..n {
+                        let m = list.get(k).map(|&m| m as usize);
+                        let Some(cell) = m.and_then(|m| list.get(k + 1..k.checked_add(1 + m)?))
+                        else {
+                            return Err(bad_at(
+                                path,
+                                at,
+                                format!(
+                                    "CELLS {n} {size}: cell {c} runs past the list's {size} \
+                                     values (each cell is its node count then its nodes)"
+                                ),
+                            ));
+                        };
+                        conn.extend_from_slice(cell);
                         offsets.push(conn.len() as u64);
-                        k += 1 + m;
+                        k += 1 + cell.len();
+                    }
+                    if k != list.len() {
+                        return Err(bad_at(
+                            path,
+                            at,
+                            format!(
+                                "CELLS {n} {size}: the {n} cells use {k} of the {size} values"
+                            ),
+                        ));
                     }
                 }
             }
             "CELL_TYPES" => {
                 let n = r.count(&w, 1)?;
-                types = r.values(n, "int")?.iter().map(|&x| x as u8).collect();
+                types = r
+                    .indices(n, "int", "CELL_TYPES")?
+                    .iter()
+                    .map(|&x| u8::try_from(x).unwrap_or(u8::MAX))
+                    .collect();
             }
             "POINT_DATA" | "CELL_DATA" => {
                 let on_points = w[0] == "POINT_DATA";
@@ -659,7 +880,19 @@ fn read_legacy_vtk(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
                     let v: Vec<&str> = l.split_whitespace().collect();
                     match v[0] {
                         "SCALARS" => {
-                            let ncomp = v.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
+                            let ncomp: usize = match v.get(3) {
+                                None => 1,
+                                Some(s) => s
+                                    .parse()
+                                    .ok()
+                                    .filter(|&c| (1..=4).contains(&c))
+                                    .ok_or_else(|| {
+                                        r.err(format!(
+                                            "SCALARS {}: component count `{s}` is not in 1..=4",
+                                            v.get(1).unwrap_or(&"")
+                                        ))
+                                    })?,
+                            };
                             let lt = r.next_keyword_line()?.unwrap_or_default();
                             if !lt.starts_with("LOOKUP_TABLE") {
                                 return Err(bad(path, "SCALARS without LOOKUP_TABLE"));
@@ -675,15 +908,21 @@ fn read_legacy_vtk(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
                                 let a = r.next_keyword_line()?.unwrap_or_default();
                                 let f: Vec<&str> = a.split_whitespace().collect();
                                 let (ncomp, ntup) = (r.count(&f, 1)?, r.count(&f, 2)?);
+                                let total = ncomp
+                                    .checked_mul(ntup)
+                                    .ok_or_else(|| r.err("FIELD array size overflows"))?;
                                 let vals =
-                                    r.values(ncomp * ntup, f.get(3).copied().unwrap_or("float"))?;
+                                    r.values(total, f.get(3).copied().unwrap_or("float"))?;
                                 if on_points && ncomp == 1 && ntup == n {
                                     add_flag_set(&mut raw, f[0], &vals);
                                 }
                             }
                         }
                         "VECTORS" | "NORMALS" => {
-                            r.values(n * 3, v.get(2).copied().unwrap_or("float"))?;
+                            let n3 = n
+                                .checked_mul(3)
+                                .ok_or_else(|| r.err("VECTORS count overflows"))?;
+                            r.values(n3, v.get(2).copied().unwrap_or("float"))?;
                         }
                         _ => {
                             r.pos = save;
@@ -700,11 +939,16 @@ fn read_legacy_vtk(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
                     }
                 }
             }
-            other => return Err(bad(path, format!("unexpected section `{other}`"))),
+            other => {
+                return Err(r.err(format!(
+                    "unexpected section `{other}` (expected POINTS, CELLS, CELL_TYPES, \
+                     POINT_DATA, CELL_DATA or METADATA)"
+                )));
+            }
         }
     }
     if raw.points.len() != npoints || npoints == 0 {
-        return Err(bad(path, "no POINTS"));
+        return Err(bad(path, "no POINTS section (or POINTS 0)"));
     }
     let offs: Vec<u64> = if offsets.first() == Some(&0) {
         offsets[1..].to_vec()
@@ -751,9 +995,38 @@ struct Reader<'a> {
 }
 
 impl Reader<'_> {
+    /// `line L` of the current position.
+    fn where_(&self) -> String {
+        format!("line {}", line_of(self.b, self.pos.saturating_sub(1)))
+    }
+
+    /// An error at the current line.
+    fn err(&self, what: impl std::fmt::Display) -> Error {
+        bad_at(self.path, self.where_(), what)
+    }
+
+    /// `n` values read as indices or counts: whole numbers in `[0, 2⁵³]`.
+    fn indices(&mut self, n: usize, ty: &str, what: &str) -> Result<Vec<u64>, Error> {
+        let at = self.where_();
+        let v = self.values(n, ty)?;
+        v.iter()
+            .map(|&x| {
+                if x >= 0.0 && x.fract() == 0.0 && x <= 9.007_199_254_740_992e15 {
+                    Ok(x as u64)
+                } else {
+                    Err(bad_at(
+                        self.path,
+                        &at,
+                        format!("{what}: {x} is not a valid index (expected a whole number ≥ 0)"),
+                    ))
+                }
+            })
+            .collect()
+    }
+
     fn line(&mut self) -> Result<String, Error> {
         if self.pos >= self.b.len() {
-            return Err(bad(self.path, "unexpected end of file"));
+            return Err(self.err("truncated: the file ends where more was expected"));
         }
         let end = self.b[self.pos..]
             .iter()
@@ -778,22 +1051,43 @@ impl Reader<'_> {
     fn count(&self, w: &[&str], k: usize) -> Result<usize, Error> {
         w.get(k)
             .and_then(|s| s.parse().ok())
-            .ok_or_else(|| bad(self.path, format!("bad count in `{}`", w.join(" "))))
+            .ok_or_else(|| {
+                self.err(format!(
+                    "`{}`: count {} is not a whole number",
+                    w.join(" "),
+                    w.get(k).unwrap_or(&"(missing)")
+                ))
+            })
     }
 
     fn values(&mut self, n: usize, ty: &str) -> Result<Vec<f64>, Error> {
+        let left = (self.b.len() - self.pos) as u64;
         if !self.binary {
+            // each ASCII value takes at least two bytes (a digit and a separator)
+            let n = crate::limits::check_count(
+                self.path,
+                &self.where_(),
+                "value",
+                n as u64,
+                2,
+                left + 1,
+            )?;
             let mut out = Vec::with_capacity(n);
             while out.len() < n {
                 let l = self.line()?;
                 for t in l.split_whitespace() {
                     out.push(
                         t.parse::<f64>()
-                            .map_err(|_| bad(self.path, format!("bad number `{t}`")))?,
+                            .map_err(|_| self.err(format!("`{t}` is not a number")))?,
                     );
                 }
             }
-            out.truncate(n);
+            if out.len() > n {
+                return Err(self.err(format!(
+                    "{} values on the lines of a block of {n}",
+                    out.len()
+                )));
+            }
             return Ok(out);
         }
         let size = match ty {
@@ -801,12 +1095,18 @@ impl Reader<'_> {
             "float" | "int" | "vtktypeint32" | "unsigned_int" | "vtktypeuint32" => 4,
             "short" | "unsigned_short" => 2,
             "char" | "unsigned_char" | "bit" => 1,
-            other => return Err(bad(self.path, format!("unsupported data type `{other}`"))),
+            other => return Err(self.err(format!("unsupported data type `{other}`"))),
         };
+        crate::limits::check_count(self.path, &self.where_(), "value", n as u64, size as u64, left)
+            .map_err(|_| {
+                self.err(format!(
+                    "truncated: {n} binary values of {size} bytes from byte {}, but the file \
+                     ends at byte {}",
+                    self.pos,
+                    self.b.len()
+                ))
+            })?;
         let end = self.pos + n * size;
-        if end > self.b.len() {
-            return Err(bad(self.path, "binary data runs past the end of the file"));
-        }
         let out = self.b[self.pos..end]
             .chunks(size)
             .map(|c| match (ty, size) {
