@@ -143,6 +143,15 @@ impl Error {
                     format!("value {value}: {reason}")
                 },
             },
+            Error::BadFile {
+                file: f,
+                where_,
+                detail,
+            } if f != file => Error::BadFile {
+                file: f,
+                where_,
+                detail: format!("{detail} (read for {})", file.display()),
+            },
             other => other,
         }
     }

@@ -493,7 +493,8 @@ fn run_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
         dir: &out,
         options: &options,
     };
-    let result = run::run_scene(&scene, Some(o), progress_sink(args.quiet).as_mut())?;
+    let result = run::run_scene(&scene, Some(o), progress_sink(args.quiet).as_mut())
+        .map_err(|e| e.in_file(&args.scene))?;
     if !args.quiet {
         print_summary(&result.summary, &out);
     }
@@ -587,8 +588,11 @@ fn fclib(a: &FclibArgs) -> Result<bool, signorini::Error> {
 
 fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     let scene = Scene::from_file(&args.scene)?;
-    let (model, report) = scene.build()?;
-    let integ = model.into_integrator(&scene.scheme, scene.time.dt)?;
+    let in_file = |e: signorini::Error| e.in_file(&args.scene);
+    let (model, report) = scene.build().map_err(in_file)?;
+    let integ = model
+        .into_integrator(&scene.scheme, scene.time.dt)
+        .map_err(in_file)?;
     out!("scene               {} (valid)", args.scene.display());
     out!(
         "model               {} bodies, {} cells, {} dofs ({} fixed dofs removed), {} candidate contacts",

@@ -106,6 +106,10 @@ fn draw_labeled<DB: DrawingBackend>(
     if x0 > x1 {
         (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
     }
+    // a history spanning ±1e308 has an infinite span: plotters' tick search then never
+    // ends; hold the axes to half the float range
+    let lim = f64::MAX / 4.0;
+    (x0, x1, y0, y1) = (x0.max(-lim), x1.min(lim), y0.max(-lim), y1.min(lim));
     if x1 <= x0 {
         x1 = x0 + 1.0;
     }
@@ -154,6 +158,14 @@ fn draw_labeled<DB: DrawingBackend>(
     root.present().map_err(e)
 }
 
+/// The complete lines of a history: a row is complete when its newline was written, so
+/// the row a kill cut (even one cut between two digits, which still parses) is left out.
+pub fn complete_lines(text: &str) -> impl Iterator<Item = &str> {
+    text.split_inclusive('\n')
+        .filter(|l| l.ends_with('\n'))
+        .map(|l| l.trim_end_matches(['\n', '\r']))
+}
+
 /// Reads `dir/history.csv` (or its `.part` when the run was killed) and
 /// `dir/summary.json` (optional) and writes `contact_force`, `energy` and `violation`
 /// as `.png` and `.svg` into `dir`. Returns the files written.
@@ -163,8 +175,8 @@ pub fn plot_run(dir: &Path) -> Result<Vec<PathBuf>, Error> {
     if !hist.exists() && dir.join("history.csv.part").exists() {
         hist = dir.join("history.csv.part");
     }
-    let text = std::fs::read_to_string(&hist).map_err(|e| Error::io(&hist, e))?;
-    let mut lines = text.lines();
+    let text = crate::limits::read_text(&hist, "history", crate::limits::MAX_TEXT_BYTES)?;
+    let mut lines = complete_lines(&text);
     let header: Vec<&str> = lines
         .next()
         .ok_or_else(|| plot_error(&hist, "empty file"))?
@@ -189,7 +201,17 @@ pub fn plot_run(dir: &Path) -> Result<Vec<PathBuf>, Error> {
             Ok(r) if r.len() == header.len() => rows.push(r),
             // the last line of a killed run's .part may be cut short
             _ if hist.extension().is_some_and(|e| e == "part") => break,
-            _ => return Err(plot_error(&hist, format!("line {}: `{l}`", i + 2))),
+            _ => {
+                return Err(Error::bad_file(
+                    &hist,
+                    format!("line {}", i + 2),
+                    format!(
+                        "`{}`: expected {} numbers separated by commas",
+                        l.chars().take(120).collect::<String>(),
+                        header.len()
+                    ),
+                ));
+            }
         }
     }
     let summary: Option<serde_json::Value> = std::fs::read_to_string(dir.join("summary.json"))

@@ -348,6 +348,14 @@ pub fn build(
 ) -> Result<Box<dyn Integrator>, Error> {
     params.validate()?;
     crate::error::require_positive("dt", h)?;
+    if system.ndof() == 0 {
+        return Err(Error::invalid(
+            "bodies",
+            "0 free degrees of freedom",
+            "every node is fixed or prescribed: there is nothing to integrate (free some \
+             nodes of `fixed`, or drop the [[prescribed]] entries that cover every node)",
+        ));
+    }
     if system.prescribed.is_some() && params.kind == SchemeKind::SchatzmanPaoli {
         return Err(Error::invalid(
             "scheme.kind",

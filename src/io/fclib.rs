@@ -125,15 +125,12 @@ pub fn read(path: &Path) -> Result<FrictionContactProblem, Error> {
 
 /// Reads Siconos' `.dat` text format (module doc).
 pub fn read_dat(path: &Path) -> Result<FrictionContactProblem, Error> {
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    if meta.len() > MAX_DAT_BYTES {
-        return Err(Error::invalid(
-            &path.display().to_string(),
-            format!("{} bytes", meta.len()),
-            "larger than the 1 GiB a .dat problem may have",
-        ));
-    }
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::limits::read_text(path, "Siconos .dat", MAX_DAT_BYTES)?;
+    parse_dat(path, &text)
+}
+
+/// Parses the text of a `.dat` problem; `path` names the file in errors.
+pub fn parse_dat(path: &Path, text: &str) -> Result<FrictionContactProblem, Error> {
     let mut tok = text.split_whitespace().enumerate();
     let file = path.display().to_string();
     let mut next = |what: &str| -> Result<&str, Error> {
@@ -190,7 +187,7 @@ pub fn read_dat(path: &Path) -> Result<FrictionContactProblem, Error> {
     }
     // every value needs at least two bytes (digit and separator)
     let needed = n.saturating_mul(n).saturating_add(n).saturating_add(nc);
-    if n > MAX_ROWS || needed.saturating_mul(2) as u64 > meta.len() {
+    if n > MAX_ROWS || needed.saturating_mul(2) as u64 > text.len() as u64 {
         return Err(Error::invalid(
             &format!("{}: contact count", path.display()),
             nc,

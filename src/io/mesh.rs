@@ -227,8 +227,9 @@ fn read_msh41(
     bytes: &[u8],
     names: &HashMap<(usize, i64), String>,
 ) -> Result<RawMesh, Error> {
-    let f = mshio::parse_msh_bytes(bytes)
-        .map_err(|e| bad(path, format!("Gmsh 4.1 parse error: {}", short_message(e))))?;
+    let f = guarded(|| mshio::parse_msh_bytes(bytes).map_err(|e| short_message(e)))
+        .unwrap_or_else(|| Err("the file is malformed (mshio could not read it)".into()))
+        .map_err(|e| bad(path, format!("Gmsh 4.1 parse error: {e}")))?;
     let nodes = f.data.nodes.ok_or_else(|| bad(path, "no $Nodes section"))?;
     let elements = f
         .data
@@ -406,15 +407,13 @@ fn section22<'a>(path: &Path, text: &'a str, name: &str) -> Result<Vec<(usize, &
     let start = text
         .find(&format!("${name}"))
         .ok_or_else(|| bad(path, format!("no ${name} section")))?;
-    let end = text[start..]
-        .find(&format!("$End{name}"))
-        .ok_or_else(|| {
-            bad_at(
-                path,
-                format!("line {}", line_of(text.as_bytes(), start)),
-                format!("${name} is not closed (truncated file?)"),
-            )
-        })?;
+    let end = text[start..].find(&format!("$End{name}")).ok_or_else(|| {
+        bad_at(
+            path,
+            format!("line {}", line_of(text.as_bytes(), start)),
+            format!("${name} is not closed (truncated file?)"),
+        )
+    })?;
     let first = line_of(text.as_bytes(), start);
     let mut lines = text[start..start + end].lines().enumerate().skip(1);
     let (count_line, count) = lines
@@ -485,7 +484,10 @@ fn read_msh22_ascii(path: &Path, bytes: &[u8]) -> Result<Gmsh22, Error> {
             .map(|s| s.parse())
             .collect::<Result<_, _>>()
             .map_err(|_| err())?;
-        let ntags = v.get(2).and_then(|&n| usize::try_from(n).ok()).ok_or_else(err)?;
+        let ntags = v
+            .get(2)
+            .and_then(|&n| usize::try_from(n).ok())
+            .ok_or_else(err)?;
         if ntags > v.len().saturating_sub(3) {
             return Err(err());
         }
@@ -561,7 +563,10 @@ fn read_msh22_binary(path: &Path, bytes: &[u8], header: &[String]) -> Result<Gms
     let short = |name: &str| {
         bad(
             path,
-            format!("truncated: ${name} data runs past the end of the file ({} bytes)", bytes.len()),
+            format!(
+                "truncated: ${name} data runs past the end of the file ({} bytes)",
+                bytes.len()
+            ),
         )
     };
     let i32_at = |p: usize| -> Option<i32> {
@@ -591,7 +596,11 @@ fn read_msh22_binary(path: &Path, bytes: &[u8], header: &[String]) -> Result<Gms
             return Err(short("Nodes"));
         };
         if tag < 0 {
-            return Err(bad_at(path, format!("byte {p}"), format!("$Nodes: negative node tag {tag}")));
+            return Err(bad_at(
+                path,
+                format!("byte {p}"),
+                format!("$Nodes: negative node tag {tag}"),
+            ));
         }
         nodes.push((tag as u64, [x0, x1, x2]));
         p += 28;
@@ -645,7 +654,10 @@ fn read_msh22_binary(path: &Path, bytes: &[u8], header: &[String]) -> Result<Gms
                 return Err(bad_at(
                     path,
                     format!("byte {}", p - 4 * rec.len()),
-                    format!("$Elements: element {} has a negative number or tag {rec:?}", rec[0]),
+                    format!(
+                        "$Elements: element {} has a negative number or tag {rec:?}",
+                        rec[0]
+                    ),
                 ));
             }
             let phys = if ntags > 0 { Some(rec[1] as u64) } else { None };
@@ -670,7 +682,27 @@ fn vtk_kind(t: u8) -> (usize, Result<CellKind, String>) {
     }
 }
 
+/// Runs a third-party parser that may panic on malformed input (vtkio 0.7.0-rc2 indexes
+/// its buffers unchecked: fuzzing found panics within seconds) and turns a panic into
+/// `None`, with the panic message silenced: a bad file is an error, not a crash.
+fn guarded<T>(f: impl FnOnce() -> T + std::panic::UnwindSafe) -> Option<T> {
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let r = std::panic::catch_unwind(f);
+    std::panic::set_hook(hook);
+    r.ok()
+}
+
 fn read_vtu(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
+    guarded(|| read_vtu_unguarded(path, bytes)).unwrap_or_else(|| {
+        Err(bad(
+            path,
+            "VTK XML read error: the file is malformed (vtkio could not read it)",
+        ))
+    })
+}
+
+fn read_vtu_unguarded(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
     use vtkio::model::{Attribute, DataSet, VertexNumbers};
     let vtk = vtkio::Vtk::parse_xml(bytes)
         .map_err(|e| bad(path, format!("VTK XML read error: {}", short_message(e))))?;
@@ -800,7 +832,9 @@ fn read_legacy_vtk(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
         match w[0] {
             "POINTS" => {
                 npoints = r.count(&w, 1)?;
-                let n3 = npoints.checked_mul(3).ok_or_else(|| r.err("POINTS count overflows"))?;
+                let n3 = npoints
+                    .checked_mul(3)
+                    .ok_or_else(|| r.err("POINTS count overflows"))?;
                 let v = r.values(n3, w.get(2).copied().unwrap_or("float"))?;
                 raw.points = v.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
             }
@@ -854,9 +888,7 @@ fn read_legacy_vtk(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
                         return Err(bad_at(
                             path,
                             at,
-                            format!(
-                                "CELLS {n} {size}: the {n} cells use {k} of the {size} values"
-                            ),
+                            format!("CELLS {n} {size}: the {n} cells use {k} of the {size} values"),
                         ));
                     }
                 }
@@ -911,8 +943,7 @@ fn read_legacy_vtk(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
                                 let total = ncomp
                                     .checked_mul(ntup)
                                     .ok_or_else(|| r.err("FIELD array size overflows"))?;
-                                let vals =
-                                    r.values(total, f.get(3).copied().unwrap_or("float"))?;
+                                let vals = r.values(total, f.get(3).copied().unwrap_or("float"))?;
                                 if on_points && ncomp == 1 && ntup == n {
                                     add_flag_set(&mut raw, f[0], &vals);
                                 }
@@ -1049,15 +1080,13 @@ impl Reader<'_> {
     }
 
     fn count(&self, w: &[&str], k: usize) -> Result<usize, Error> {
-        w.get(k)
-            .and_then(|s| s.parse().ok())
-            .ok_or_else(|| {
-                self.err(format!(
-                    "`{}`: count {} is not a whole number",
-                    w.join(" "),
-                    w.get(k).unwrap_or(&"(missing)")
-                ))
-            })
+        w.get(k).and_then(|s| s.parse().ok()).ok_or_else(|| {
+            self.err(format!(
+                "`{}`: count {} is not a whole number",
+                w.join(" "),
+                w.get(k).unwrap_or(&"(missing)")
+            ))
+        })
     }
 
     fn values(&mut self, n: usize, ty: &str) -> Result<Vec<f64>, Error> {
@@ -1097,15 +1126,22 @@ impl Reader<'_> {
             "char" | "unsigned_char" | "bit" => 1,
             other => return Err(self.err(format!("unsupported data type `{other}`"))),
         };
-        crate::limits::check_count(self.path, &self.where_(), "value", n as u64, size as u64, left)
-            .map_err(|_| {
-                self.err(format!(
-                    "truncated: {n} binary values of {size} bytes from byte {}, but the file \
+        crate::limits::check_count(
+            self.path,
+            &self.where_(),
+            "value",
+            n as u64,
+            size as u64,
+            left,
+        )
+        .map_err(|_| {
+            self.err(format!(
+                "truncated: {n} binary values of {size} bytes from byte {}, but the file \
                      ends at byte {}",
-                    self.pos,
-                    self.b.len()
-                ))
-            })?;
+                self.pos,
+                self.b.len()
+            ))
+        })?;
         let end = self.pos + n * size;
         let out = self.b[self.pos..end]
             .chunks(size)

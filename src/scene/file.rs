@@ -250,6 +250,57 @@ fn outside() -> Side {
 }
 
 impl ObstacleSpec {
+    /// Checks the geometry in a scene of dimension `dim`, whether or not a contact uses
+    /// the obstacle: finite points, non-zero normals and axes, positive radii.
+    fn validate(&self, dim: usize) -> Result<(), Error> {
+        let vector = |key: &str, v: &[f64], n: usize, nonzero: bool| -> Result<(), Error> {
+            if v.len() != n || v.iter().any(|x| !x.is_finite()) {
+                return Err(Error::invalid(
+                    key,
+                    format!("{v:?}"),
+                    &format!("needs {n} finite components"),
+                ));
+            }
+            if nonzero && v.iter().map(|x| x * x).sum::<f64>().sqrt() < 1e-300 {
+                return Err(Error::invalid(
+                    key,
+                    format!("{v:?}"),
+                    "must not be the zero vector (it gives the direction)",
+                ));
+            }
+            Ok(())
+        };
+        match self {
+            ObstacleSpec::Plane { point, normal, .. } => {
+                vector("point", point, dim, false)?;
+                vector("normal", normal, dim, true)
+            }
+            ObstacleSpec::Sphere { center, radius, .. } => {
+                vector("center", center, dim, false)?;
+                require_positive("radius", *radius).map(|_| ())
+            }
+            ObstacleSpec::Cylinder {
+                point,
+                axis,
+                radius,
+                ..
+            } => {
+                if dim != 3 {
+                    return Err(Error::invalid(
+                        "type",
+                        "cylinder",
+                        &format!(
+                            "is a 3-D obstacle; this scene is {dim}-D (use a sphere: a circle in 2-D)"
+                        ),
+                    ));
+                }
+                vector("point", point, 3, false)?;
+                vector("axis", axis, 3, true)?;
+                require_positive("radius", *radius).map(|_| ())
+            }
+        }
+    }
+
     fn name(&self) -> &str {
         match self {
             ObstacleSpec::Plane { name, .. }
@@ -407,9 +458,61 @@ impl Scene {
             ));
         }
         for (i, b) in self.bodies.iter().enumerate() {
+            if b.name.trim().is_empty() {
+                return Err(Error::invalid(
+                    &format!("bodies[{i}].name"),
+                    "\"\"",
+                    "a body needs a name",
+                ));
+            }
+            if let Some(j) = self.bodies[..i].iter().position(|o| o.name == b.name) {
+                return Err(Error::invalid(
+                    &format!("bodies[{i}].name"),
+                    &b.name,
+                    &format!("bodies[{j}] has that name already; names must be unique"),
+                ));
+            }
             b.material
                 .validate()
                 .map_err(|e| prefix(&format!("bodies[{i}].material"), e))?;
+            if let Some(r) = b.damping {
+                crate::error::require_in(
+                    &format!("bodies[{i}].damping.alpha"),
+                    r.alpha,
+                    0.0,
+                    f64::MAX,
+                )?;
+                crate::error::require_in(
+                    &format!("bodies[{i}].damping.beta"),
+                    r.beta,
+                    0.0,
+                    f64::MAX,
+                )?;
+            }
+        }
+        let dim = self.bodies[0].dim();
+        for (j, o) in self.obstacles.iter().enumerate() {
+            if let Some(k) = self.obstacles[..j]
+                .iter()
+                .position(|p| p.name() == o.name())
+            {
+                return Err(Error::invalid(
+                    &format!("obstacles[{j}].name"),
+                    o.name(),
+                    &format!("obstacles[{k}] has that name already; names must be unique"),
+                ));
+            }
+            o.validate(dim)
+                .map_err(|e| prefix(&format!("obstacles[{j}]"), e))?;
+        }
+        if let Some(g) = &self.loads.gravity
+            && (g.len() != dim || g.iter().any(|x| !x.is_finite()))
+        {
+            return Err(Error::invalid(
+                "loads.gravity",
+                format!("{g:?}"),
+                &format!("needs {dim} finite components (m/s²)"),
+            ));
         }
         for (i, c) in self.contacts.iter().enumerate() {
             if !self.bodies.iter().any(|b| b.name == c.body) {
@@ -522,13 +625,22 @@ impl Scene {
                 MeshSpec::Rod { elements, .. } => elements,
                 _ => 0,
             });
-            // contact nodes of this body (for the redistributed mass)
+            // contact nodes of this body (for the redistributed mass): the same nodes
+            // as the contacts below, `boundary`, `all` and `within` included
             let mut contact_nodes = Vec::new();
-            for c in self.contacts.iter().filter(|c| c.body == b.name) {
-                if let Some(set) = mesh.node_sets.get(&c.nodes) {
-                    contact_nodes.extend_from_slice(set);
-                }
+            for (ci, c) in self
+                .contacts
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.body == b.name)
+            {
+                let nodes = self
+                    .contact_nodes(&mesh, c, dim)
+                    .map_err(|e| prefix(&format!("contacts[{ci}]"), e))?;
+                contact_nodes.extend(nodes);
             }
+            contact_nodes.sort_unstable();
+            contact_nodes.dedup();
             let mut sys = match &b.mesh {
                 MeshSpec::Rod {
                     elements,
@@ -711,14 +823,7 @@ impl Scene {
                 .iter()
                 .find(|o| o.name() == c.obstacle)
                 .expect("validated");
-            let nodes = node_set(mesh, &c.nodes).map_err(at)?;
-            if nodes.is_empty() {
-                return Err(at(Error::invalid(
-                    "nodes",
-                    &c.nodes,
-                    "the node set is empty",
-                )));
-            }
+            let nodes = self.contact_nodes(mesh, c, dim).map_err(at)?;
             let mut dofs = Vec::new();
             let mut refs = Vec::new();
             for &v in &nodes {
@@ -734,40 +839,9 @@ impl Scene {
                 dofs.push(d);
                 refs.push(mesh.points[v][..dim].to_vec());
             }
-            let mut set = self
+            let set = self
                 .obstacle_set(obstacle, dofs, refs, (c.restitution, c.friction))
                 .map_err(at)?;
-            if let Some(d) = c.within {
-                require_positive("within", d).map_err(at)?;
-                // keep the nodes whose initial gap is below d
-                let mut jac = crate::contact::ContactJacobian::for_set(set.as_ref());
-                let mut gap = vec![0.0; set.len()];
-                let q0 = vec![0.0; system.ndof()];
-                set.evaluate(&q0, &mut gap, &mut jac);
-                let (dofs, refs): (Vec<_>, Vec<_>) = nodes
-                    .iter()
-                    .enumerate()
-                    .filter(|(k, _)| gap[*k] <= d)
-                    .map(|(_, &v)| {
-                        (
-                            (0..dim)
-                                .map(|i| map[offsets[bi] + v * dim + i].unwrap())
-                                .collect::<Vec<_>>(),
-                            mesh.points[v][..dim].to_vec(),
-                        )
-                    })
-                    .unzip();
-                if dofs.is_empty() {
-                    return Err(at(Error::invalid(
-                        "within",
-                        d,
-                        "no node lies that close to the obstacle",
-                    )));
-                }
-                set = self
-                    .obstacle_set(obstacle, dofs, refs, (c.restitution, c.friction))
-                    .map_err(at)?;
-            }
             sets.push(set);
         }
         geometry.outlines = self
@@ -808,6 +882,55 @@ impl Scene {
             },
             report,
         ))
+    }
+
+    /// The nodes of contact `c` on `mesh`: its node set (`boundary` and `all`
+    /// included), kept where the initial gap to the obstacle is at most `within`.
+    fn contact_nodes(&self, mesh: &Mesh, c: &ContactSpec, dim: usize) -> Result<Vec<usize>, Error> {
+        let nodes = node_set(mesh, &c.nodes)?;
+        if nodes.is_empty() {
+            return Err(Error::invalid("nodes", &c.nodes, "the node set is empty"));
+        }
+        let Some(d) = c.within else {
+            return Ok(nodes);
+        };
+        require_positive("within", d)?;
+        let obstacle = self
+            .obstacles
+            .iter()
+            .find(|o| o.name() == c.obstacle)
+            .expect("validated");
+        // the gaps at the reference positions, through the obstacle's own gap function
+        // (node-local dofs: q = 0 there)
+        let dofs: Vec<Vec<usize>> = (0..nodes.len())
+            .map(|k| (0..dim).map(|i| k * dim + i).collect())
+            .collect();
+        let refs: Vec<Vec<f64>> = nodes
+            .iter()
+            .map(|&v| mesh.points[v][..dim].to_vec())
+            .collect();
+        let set = self.obstacle_set(obstacle, dofs, refs, (c.restitution, c.friction))?;
+        let mut jac = crate::contact::ContactJacobian::for_set(set.as_ref());
+        let mut gap = vec![0.0; set.len()];
+        set.evaluate(&vec![0.0; nodes.len() * dim], &mut gap, &mut jac);
+        let kept: Vec<usize> = nodes
+            .iter()
+            .zip(&gap)
+            .filter(|(_, g)| **g <= d)
+            .map(|(&v, _)| v)
+            .collect();
+        if kept.is_empty() {
+            return Err(Error::invalid(
+                "within",
+                d,
+                &format!(
+                    "no node of `{}` lies that close to the obstacle (the nearest is {:.3e} m away)",
+                    c.nodes,
+                    gap.iter().copied().fold(f64::INFINITY, f64::min)
+                ),
+            ));
+        }
+        Ok(kept)
     }
 
     fn obstacle_set(
