@@ -24,7 +24,7 @@ import numpy as np
 import vtk
 from vtk.util.numpy_support import vtk_to_numpy
 
-POINT = {"displacement": 3, "velocity": 3, "contact_force": 3, "gap": 1}
+POINT = {"displacement": 3, "velocity": 3, "contact_force": 3, "gap": 1, "node_id": 1}
 CELL = {"strain": 6, "stress": 6, "von_mises": 1}
 
 

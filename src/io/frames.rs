@@ -35,6 +35,14 @@ use crate::model::solid::{CellKind, Formulation, Material, centre_strain, hooke,
 pub use crate::model::geometry::{GeomCell, Geometry, Outline};
 
 /// The VTK cell type of a geometry cell.
+/// The `node_id` point array: the input mesh's id of each point (Gmsh node tag, VTK
+/// point index; the index for generated meshes).
+fn node_ids(g: &Geometry) -> Vec<i64> {
+    (0..g.points.len())
+        .map(|k| g.node_ids.get(k).map_or(k as i64, |&id| id as i64))
+        .collect()
+}
+
 fn vtk_type(c: &GeomCell) -> u8 {
     match c {
         GeomCell::Line => 3,
@@ -278,8 +286,10 @@ impl FrameWriter {
             })
             .collect();
         let types: Vec<u8> = g.cells.iter().map(|(k, _, _)| vtk_type(k)).collect();
+        let ids = node_ids(g);
         self.h5 = Some(super::h5::VtkHdf::create(
             run,
+            &ids,
             &g.points,
             &conn,
             &offs,
@@ -469,6 +479,8 @@ impl FrameWriter {
             self.array_f64(&mut x, "contact_status", 1, &status);
             self.status = status;
         }
+        let ids = node_ids(&self.geom);
+        self.array_i64(&mut x, "node_id", 1, &ids);
         x.push_str("</PointData>\n<CellData Tensors=\"stress\" Scalars=\"von_mises\">\n");
         let (strain, stress, mises) = (
             std::mem::take(&mut self.strain),

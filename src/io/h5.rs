@@ -119,13 +119,17 @@ pub struct VtkHdf {
     np: usize,
     nc: usize,
     frames: usize,
+    node_id_offsets: Growing,
 }
 
 impl VtkHdf {
     /// Writes the static mesh and prepares the transient arrays: `point` and `cell`
-    /// list (name, components).
+    /// list (name, components). `node_id` is a static point array: written once, every
+    /// step's offset points at it.
+    #[allow(clippy::too_many_arguments)]
     pub fn create(
         run: &RunFile,
+        node_id: &[i64],
         points: &[[f64; 3]],
         connectivity: &[i64],
         offsets: &[i64],
@@ -176,6 +180,10 @@ impl VtkHdf {
                 .write_raw(types)?;
             root.create_group("FieldData")?;
             let pd = root.create_group("PointData")?;
+            pd.new_dataset::<i64>()
+                .shape(np)
+                .create("node_id")?
+                .write_raw(node_id)?;
             let cd = root.create_group("CellData")?;
             let steps = root.create_group("Steps")?;
             steps
@@ -194,6 +202,7 @@ impl VtkHdf {
                 geometry_offsets.push(Growing::create::<i64>(&steps, name, 0, 256)?);
             }
             let pdo = steps.create_group("PointDataOffsets")?;
+            let node_id_offsets = Growing::create::<i64>(&pdo, "node_id", 0, 256)?;
             let cdo = steps.create_group("CellDataOffsets")?;
             steps.create_group("FieldDataOffsets")?;
             steps.create_group("FieldDataSizes")?;
@@ -213,6 +222,7 @@ impl VtkHdf {
                 values,
                 geometry_offsets,
                 point: arrays(&pd, &pdo, point, np)?,
+                node_id_offsets,
                 cell: arrays(&cd, &cdo, cell, nc)?,
                 steps,
                 np,
@@ -232,6 +242,7 @@ impl VtkHdf {
                 offs.append(&[k * self.np as i64])?;
                 data.append(v)?;
             }
+            self.node_id_offsets.append(&[0])?;
             for ((data, offs), v) in self.cell.iter_mut().zip(cell) {
                 offs.append(&[k * self.nc as i64])?;
                 data.append(v)?;

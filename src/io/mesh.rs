@@ -82,6 +82,8 @@ struct RawMesh {
     cells: Vec<(usize, Result<CellKind, String>, Vec<usize>)>,
     /// node sets by name (indices into `points`)
     sets: BTreeMap<String, Vec<usize>>,
+    /// the file's id of each point (Gmsh node tag; empty: the 0-based index in the file)
+    ids: Vec<u64>,
 }
 
 impl RawMesh {
@@ -137,6 +139,8 @@ impl RawMesh {
                 if used[v] == usize::MAX {
                     used[v] = mesh.points.len();
                     mesh.points.push(self.points[v]);
+                    mesh.node_ids
+                        .push(self.ids.get(v).copied().unwrap_or(v as u64));
                 }
                 c.push(used[v]);
             }
@@ -243,7 +247,11 @@ fn read_msh41(
         match &b.node_tags {
             Some(tags) => {
                 let base = raw.points.len();
+                raw.ids.resize(base + b.nodes.len(), 0);
                 for (tag, &k) in tags {
+                    if let Some(id) = raw.ids.get_mut(base + k) {
+                        *id = *tag;
+                    }
                     if index.insert(*tag, base + k).is_some() {
                         return Err(bad(
                             path,
@@ -252,7 +260,11 @@ fn read_msh41(
                     }
                 }
             }
-            None if dense => {}
+            None if dense => {
+                let base = raw.points.len() as u64;
+                raw.ids
+                    .extend((0..b.nodes.len() as u64).map(|k| nodes.min_node_tag + base + k));
+            }
             None => {
                 return Err(bad(
                     path,
@@ -374,6 +386,7 @@ fn read_msh22(
             ));
         }
         raw.points.push(x);
+        raw.ids.push(tag);
     }
     for (num, t, phys, tags) in elements {
         let (d, kind) = gmsh_kind(t);

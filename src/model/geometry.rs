@@ -20,6 +20,10 @@ pub enum GeomCell {
 pub struct Geometry {
     /// Reference coordinates (m).
     pub points: Vec<[f64; 3]>,
+    /// The input's id of each point (the mesh file's node tag or point index; the index
+    /// within its body for generated meshes), written as the `node_id` point array.
+    /// Empty: the point indices.
+    pub node_ids: Vec<u64>,
     /// Cells: kind, nodes, body index (into `bodies`).
     pub cells: Vec<(GeomCell, Vec<usize>, usize)>,
     /// Material and formulation per body.

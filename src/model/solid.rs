@@ -166,6 +166,11 @@ pub struct Mesh {
     pub cells: Vec<(CellKind, Vec<usize>)>,
     /// Named node sets (physical groups, point-data flags).
     pub node_sets: std::collections::BTreeMap<String, Vec<usize>>,
+    /// The file's id of each point (Gmsh node tag, VTK point index); empty for generated
+    /// meshes, whose ids are the indices. Readers drop the nodes no cell uses and number
+    /// the rest in the order the cells first use them; the frames write these ids as
+    /// the `node_id` point array, to map results back to the input file.
+    pub node_ids: Vec<u64>,
 }
 
 impl Mesh {

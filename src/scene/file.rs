@@ -715,6 +715,9 @@ impl Scene {
                     )
                 })),
             }
+            geometry.node_ids.extend(
+                (0..mesh.points.len()).map(|k| mesh.node_ids.get(k).copied().unwrap_or(k as u64)),
+            );
             geometry.points.extend_from_slice(&mesh.points);
             geometry.bodies.push((b.material, b.formulation));
             systems.push(sys);
