@@ -81,6 +81,15 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Finish a killed run from the checkpoint in its directory (written by
+    /// `--checkpoint-every K`): the directory then holds what an uninterrupted run writes.
+    Resume {
+        /// The run's output directory.
+        dir: PathBuf,
+        /// Print nothing but errors.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Redraw the plots (contact force, energy, violation; PNG and SVG) of a run directory
     /// from its history.csv and summary.json.
     Plot {
@@ -150,6 +159,13 @@ struct OutputArgs {
     /// Draw no plots at the end of the run.
     #[arg(long)]
     no_plots: bool,
+    /// Write no HDF5 file (builds with the `hdf5` feature write one by default).
+    #[arg(long)]
+    no_hdf5: bool,
+    /// Write a checkpoint every K steps (`checkpoint.json` in the output directory);
+    /// `signorini resume DIR` finishes a killed run from it.
+    #[arg(long, value_name = "K")]
+    checkpoint_every: Option<usize>,
 }
 
 impl OutputArgs {
@@ -181,6 +197,12 @@ impl OutputArgs {
         }
         if self.no_plots {
             o.plots = false;
+        }
+        if self.no_hdf5 {
+            o.hdf5 = Some(false);
+        }
+        if let Some(k) = self.checkpoint_every {
+            o.checkpoint_every = k;
         }
     }
 }
@@ -750,6 +772,12 @@ fn main() -> ExitCode {
                 out!("wrote {}/ {{{}}}", dir.display(), files.join(", "));
             })
         }
+        Some(Command::Resume { dir, quiet }) => run::resume(&dir, progress_sink(quiet).as_mut())
+            .map(|r| {
+                if !quiet {
+                    print_summary(&r.summary, &dir);
+                }
+            }),
         Some(Command::Plot { dir }) => signorini::plot::plot_run(&dir).map(|files| {
             for f in files {
                 out!("wrote {}", f.display());

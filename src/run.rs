@@ -4,12 +4,13 @@
 //! The loop allocates nothing per step: the integrator works in its own buffers and the
 //! force record is reserved for every step up front.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde::Serialize;
 
 use crate::analytic::ImpactingBar;
+use crate::checkpoint::{Bits, Checkpoint, Floats, RunSource, RunState};
 use crate::error::Error;
 use crate::integrators::{Forecast, Integrator, StepStats};
 use crate::io::frames::{FrameStream, FrameWriter, Geometry};
@@ -261,6 +262,15 @@ pub fn run_bar(
     out: Option<Output>,
     progress: &mut dyn Progress,
 ) -> Result<RunResult, Error> {
+    run_bar_from(scene, out, progress, None)
+}
+
+fn run_bar_from(
+    scene: &BarScene,
+    out: Option<Output>,
+    progress: &mut dyn Progress,
+    resume: Option<&Checkpoint>,
+) -> Result<RunResult, Error> {
     let t0 = Instant::now();
     progress.phase("building the model");
     let mut model = scene.build()?;
@@ -271,7 +281,13 @@ pub fn run_bar(
     let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
     let parameters = serde_json::to_value(scene).expect("scene serializes");
     let checks = RunChecks::new(&scene.scheme, geometry.size());
-    run(
+    let ckpt = Checkpointing {
+        source: RunSource::Bar {
+            scene: scene.clone(),
+        },
+        resume,
+    };
+    run_checkpointed(
         integ.as_mut(),
         scene.steps(),
         scene.elements,
@@ -281,6 +297,7 @@ pub fn run_bar(
         parameters,
         out.map(|o| (o, geometry)),
         progress,
+        Some(ckpt),
     )
     .and_then(|r| finish(r, setup, out))
 }
@@ -293,6 +310,15 @@ pub fn run_scene(
     out: Option<Output>,
     progress: &mut dyn Progress,
 ) -> Result<RunResult, Error> {
+    run_scene_from(scene, out, progress, None)
+}
+
+fn run_scene_from(
+    scene: &crate::scene::file::Scene,
+    out: Option<Output>,
+    progress: &mut dyn Progress,
+    resume: Option<&Checkpoint>,
+) -> Result<RunResult, Error> {
     let t0 = Instant::now();
     progress.phase("building the model (mesh, assembly, contacts)");
     let (mut model, report) = scene.build()?;
@@ -303,7 +329,24 @@ pub fn run_scene(
     let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
     let parameters = serde_json::to_value(scene).expect("scene serializes");
     let checks = RunChecks::new(&scene.scheme, geometry.size());
-    run(
+    let source = match resume {
+        Some(c) => c.source.clone(),
+        None if out.is_some_and(|o| o.options.checkpoint_every > 0) => RunSource::Scene {
+            file: scene.file.clone().unwrap_or_default(),
+            toml: toml::to_string(scene).map_err(|e| {
+                Error::Numerical(format!(
+                    "the scene does not serialize for a checkpoint: {e}"
+                ))
+            })?,
+            base_dir: std::path::absolute(&scene.base_dir).unwrap_or(scene.base_dir.clone()),
+        },
+        None => RunSource::Scene {
+            file: PathBuf::new(),
+            toml: String::new(),
+            base_dir: PathBuf::new(),
+        },
+    };
+    run_checkpointed(
         integ.as_mut(),
         scene.steps(),
         report.cells,
@@ -313,8 +356,40 @@ pub fn run_scene(
         parameters,
         out.map(|o| (o, geometry)),
         progress,
+        Some(Checkpointing { source, resume }),
     )
     .and_then(|r| finish(r, setup, out))
+}
+
+/// Finishes the killed run in `dir` from its `checkpoint.json` (see
+/// [`crate::checkpoint`]): rebuilds the model from the scene the checkpoint holds,
+/// restores the state and the outputs' cursors, and steps to the end, writing the same
+/// files an uninterrupted run writes.
+pub fn resume(dir: &Path, progress: &mut dyn Progress) -> Result<RunResult, Error> {
+    let c = Checkpoint::read(dir)?;
+    let out = Output {
+        dir,
+        options: &c.output,
+    };
+    let file = dir.join(crate::checkpoint::FILE);
+    let r = match &c.source {
+        RunSource::Bar { scene } => {
+            scene.validate().map_err(|e| e.in_file(&file))?;
+            run_bar_from(scene, Some(out), progress, Some(&c))
+        }
+        RunSource::Scene {
+            file: scene_file,
+            toml,
+            base_dir,
+        } => {
+            let mut scene =
+                crate::scene::file::Scene::from_toml(toml).map_err(|e| e.in_file(&file))?;
+            scene.base_dir = base_dir.clone();
+            scene.file = Some(scene_file.clone());
+            run_scene_from(&scene, Some(out), progress, Some(&c))
+        }
+    }?;
+    Ok(r)
 }
 
 /// What the driver checks after every step (DESIGN.md §9): a state that turned
@@ -540,10 +615,12 @@ struct Writers {
     frame_stride: usize,
     history_stride: usize,
     closed_before: bool,
+    /// Times of the frames pushed (the `.pvd` entries, for checkpoints).
+    frame_times: Vec<f64>,
     seconds: f64,
 }
 
-impl Observer for Writers {
+impl Writers {
     fn observe(&mut self, integ: &dyn Integrator, st: &StepStats, last: bool) -> Result<(), Error> {
         if self.history.is_none() {
             return Ok(());
@@ -572,10 +649,143 @@ impl Observer for Writers {
                 hw.flush()?;
             }
             w.push(s, integ.jacobian(), integ.dt())?;
+            self.frame_times.push(s.time);
         }
         self.seconds += t0.elapsed().as_secs_f64();
         Ok(())
     }
+}
+
+/// When and where a run writes its checkpoints.
+struct CheckpointPlan {
+    every: usize,
+    dir: PathBuf,
+    source: RunSource,
+    output: OutputOptions,
+    steps: usize,
+    energy0: f64,
+    /// Test hook (`SIGNORINI_ABORT_AFTER_STEP`): abort the process right after this
+    /// step's checkpoint and output, as a SIGKILL would, to test `resume`.
+    abort_after: Option<usize>,
+}
+
+/// The run's own observer: statistics, contact measurement, output, checkpoints.
+struct RunObserver {
+    acc: Acc,
+    tracker: ContactTracker,
+    writers: Writers,
+    h: f64,
+    plan: Option<CheckpointPlan>,
+}
+
+impl Observer for RunObserver {
+    fn observe(&mut self, integ: &dyn Integrator, st: &StepStats, last: bool) -> Result<(), Error> {
+        self.acc.add(st);
+        let s = integ.state();
+        let f = s.impulse.iter().sum::<f64>() / self.h;
+        let g = s.gap.iter().copied().fold(f64::INFINITY, f64::min);
+        self.tracker.push(s.step - 1, f, g);
+        self.writers.observe(integ, st, last)?;
+        if let Some((every, abort_after)) = self.plan.as_ref().map(|p| (p.every, p.abort_after)) {
+            if !last && s.step.is_multiple_of(every) {
+                let t0 = Instant::now();
+                self.checkpoint(integ)?;
+                self.writers.seconds += t0.elapsed().as_secs_f64();
+            }
+            if abort_after == Some(s.step) {
+                if let Some(h) = self.writers.history.as_mut() {
+                    h.flush()?;
+                }
+                std::process::abort();
+            }
+        }
+        Ok(())
+    }
+}
+
+impl RunObserver {
+    /// Flushes the history, waits for the queued frames and writes the checkpoint.
+    fn checkpoint(&mut self, integ: &dyn Integrator) -> Result<(), Error> {
+        let Some(p) = &self.plan else {
+            return Ok(());
+        };
+        if let Some(h) = self.writers.history.as_mut() {
+            h.flush()?;
+        }
+        if let Some(f) = self.writers.frames.as_mut() {
+            f.sync()?;
+        }
+        let a = &self.acc;
+        let t = &self.tracker;
+        let run = RunState {
+            sum: a.sum,
+            max: a.max,
+            caps: a.caps,
+            lcp_res: Bits(a.lcp_res),
+            violation: Bits(a.violation),
+            friction_counts: [
+                a.fr_solves,
+                a.fr_sweeps,
+                a.fr_sweeps_max,
+                a.fr_steps,
+                a.fr_caps,
+            ],
+            friction_residual: [Bits(a.fr_res_sum), Bits(a.fr_res_max)],
+            trace: t.trace.clone().map(Floats),
+            first_contact: t.first,
+            contact_force: Floats(t.force.clone()),
+            contact_min_gap: Floats(t.min_gap.clone()),
+            contact_done: t.done,
+            total_force: Bits(t.total_force),
+            energy0: Bits(p.energy0),
+            history_bytes: self.writers.history.as_ref().map_or(0, |h| h.bytes()),
+            frames: self.writers.frame_times.iter().map(|&t| Bits(t)).collect(),
+            closed_before: self.writers.closed_before,
+        };
+        Checkpoint {
+            format: crate::checkpoint::FORMAT.to_string(),
+            version: crate::checkpoint::VERSION,
+            source: p.source.clone(),
+            output: p.output.clone(),
+            every: p.every,
+            steps: p.steps,
+            integrator: integ.save(),
+            run,
+        }
+        .write(&p.dir)
+    }
+
+    /// The accumulators of a checkpoint.
+    fn restore(&mut self, r: &RunState) {
+        let a = &mut self.acc;
+        (a.sum, a.max, a.caps) = (r.sum, r.max, r.caps);
+        (a.lcp_res, a.violation) = (r.lcp_res.0, r.violation.0);
+        [
+            a.fr_solves,
+            a.fr_sweeps,
+            a.fr_sweeps_max,
+            a.fr_steps,
+            a.fr_caps,
+        ] = r.friction_counts;
+        (a.fr_res_sum, a.fr_res_max) = (r.friction_residual[0].0, r.friction_residual[1].0);
+        let t = &mut self.tracker;
+        t.trace = r.trace.as_ref().map(|f| f.0.clone());
+        t.first = r.first_contact;
+        t.force = r.contact_force.0.clone();
+        t.min_gap = r.contact_min_gap.0.clone();
+        t.done = r.contact_done;
+        t.total_force = r.total_force.0;
+        self.writers.closed_before = r.closed_before;
+        self.writers.frame_times = r.frames.iter().map(|b| b.0).collect();
+    }
+}
+
+/// What [`run`] needs to checkpoint a run or to resume one.
+pub struct Checkpointing<'a> {
+    /// What to rebuild on resume.
+    pub source: RunSource,
+    /// The checkpoint to resume from (`None`: a new run).
+    pub resume: Option<&'a Checkpoint>,
 }
 
 /// Steps `integ` `steps` times through [`drive`], streaming the history and the field
@@ -598,8 +808,39 @@ pub fn run(
     out: Option<(Output, Geometry)>,
     progress: &mut dyn Progress,
 ) -> Result<RunResult, Error> {
+    run_checkpointed(
+        integ, steps, elements, theta, checks, reference, parameters, out, progress, None,
+    )
+}
+
+/// [`run`], writing checkpoints when `out.options.checkpoint_every > 0` (then `ckpt`
+/// says what to rebuild), or resuming from `ckpt.resume`.
+#[allow(clippy::too_many_arguments)]
+pub fn run_checkpointed(
+    integ: &mut dyn Integrator,
+    steps: usize,
+    elements: usize,
+    theta: f64,
+    checks: &RunChecks,
+    reference: Option<ImpactingBar>,
+    parameters: serde_json::Value,
+    out: Option<(Output, Geometry)>,
+    progress: &mut dyn Progress,
+    ckpt: Option<Checkpointing>,
+) -> Result<RunResult, Error> {
     let h = integ.dt();
     let m = integ.state().gap.len();
+    let resume = ckpt.as_ref().and_then(|c| c.resume);
+    if let Some(c) = resume {
+        if c.steps != steps || c.integrator.step >= steps {
+            return Err(Error::invalid(
+                "checkpoint steps",
+                format!("{} (at step {})", c.steps, c.integrator.step),
+                &format!("the scene makes {steps} steps"),
+            ));
+        }
+        integ.restore(&c.integrator)?;
+    }
     let t0 = Instant::now();
     let mut writers = Writers {
         history: None,
@@ -607,13 +848,28 @@ pub fn run(
         frame_stride: usize::MAX,
         history_stride: usize::MAX,
         closed_before: false,
+        frame_times: Vec::new(),
         seconds: 0.0,
+    };
+    let mut plan = None;
+    let energy0 = match resume {
+        Some(c) => c.run.energy0.0,
+        None => {
+            let s = integ.state();
+            integ.system().kinetic_energy(&s.v) + integ.system().potential_energy(&s.q)
+        }
     };
     if let Some((o, geom)) = out {
         o.options.validate()?;
         let geom_outlines = geom.outlines.clone();
-        crate::io::prepare_run_dir(o.dir)?;
-        let hist = HistoryWriter::create(&o.dir.join("history.csv"), m, integ.state().tangent_dim)?;
+        let hist_path = o.dir.join("history.csv");
+        let hist = match resume {
+            Some(c) => HistoryWriter::resume(&hist_path, c.run.history_bytes)?,
+            None => {
+                crate::io::prepare_run_dir(o.dir)?;
+                HistoryWriter::create(&hist_path, m, integ.state().tangent_dim)?
+            }
+        };
         #[cfg(feature = "hdf5")]
         let h5 = if o.options.hdf5() {
             Some(crate::io::h5::RunFile::create(o.dir)?)
@@ -635,8 +891,26 @@ pub fn run(
         };
         // a model without field geometry (the academic examples) writes no frames
         if o.options.fields && !geom.points.is_empty() {
-            let w =
-                FrameWriter::create(o.dir, "fields", geom, integ.jacobian(), o.options.encoding)?;
+            let w = match resume {
+                Some(c) => {
+                    let times: Vec<f64> = c.run.frames.iter().map(|b| b.0).collect();
+                    FrameWriter::resume(
+                        o.dir,
+                        "fields",
+                        geom,
+                        integ.jacobian(),
+                        o.options.encoding,
+                        &times,
+                    )?
+                }
+                None => FrameWriter::create(
+                    o.dir,
+                    "fields",
+                    geom,
+                    integ.jacobian(),
+                    o.options.encoding,
+                )?,
+            };
             if !geom_outlines.is_empty() {
                 crate::io::frames::write_outlines(&o.dir.join("obstacles.vtu"), &geom_outlines)?;
             }
@@ -648,37 +922,51 @@ pub fn run(
             let s = integ.state();
             let mut w =
                 FrameStream::spawn_with_statuses(w, s.q.len(), m, s.status.len(), FRAME_POOL);
-            w.push(s, integ.jacobian(), h)?;
+            if resume.is_none() {
+                w.push(s, integ.jacobian(), h)?;
+                writers.frame_times.push(s.time);
+            }
             writers.frames = Some(w);
         }
         writers.history = Some(hist);
         writers.frame_stride = o.options.frame_stride(steps);
         writers.history_stride = o.options.history_stride;
+        let every = resume.map_or(o.options.checkpoint_every, |c| c.every);
+        if let Some(c) = ckpt.as_ref().filter(|_| every > 0) {
+            plan = Some(CheckpointPlan {
+                every,
+                dir: o.dir.to_path_buf(),
+                source: c.source.clone(),
+                output: o.options.clone(),
+                steps,
+                energy0,
+                abort_after: std::env::var("SIGNORINI_ABORT_AFTER_STEP")
+                    .ok()
+                    .and_then(|v| v.parse().ok()),
+            });
+        }
     }
     let mut output_seconds = t0.elapsed().as_secs_f64();
-    let energy0 = {
-        let s = integ.state();
-        integ.system().kinetic_energy(&s.v) + integ.system().potential_energy(&s.q)
+    let mut obs = RunObserver {
+        acc: Acc::default(),
+        tracker: ContactTracker::new(steps),
+        writers,
+        h,
+        plan,
     };
-    let mut tracker = ContactTracker::new(steps);
-    let mut acc = Acc::default();
-    let mut measure = |integ: &dyn Integrator, st: &StepStats, _last: bool| {
-        acc.add(st);
-        let s = integ.state();
-        let f = s.impulse.iter().sum::<f64>() / h;
-        let g = s.gap.iter().copied().fold(f64::INFINITY, f64::min);
-        tracker.push(s.step - 1, f, g);
-        Ok(())
-    };
+    if let Some(c) = resume {
+        obs.restore(&c.run);
+    }
     let start = Instant::now();
-    drive(
-        integ,
-        steps,
-        checks,
-        &mut [&mut measure, &mut writers],
-        progress,
-    )?;
+    drive(integ, steps, checks, &mut [&mut obs], progress)?;
     let t_fin = Instant::now();
+    let RunObserver {
+        acc,
+        tracker,
+        mut writers,
+        plan,
+        ..
+    } = obs;
     output_seconds += writers.seconds;
     if let Some(w) = writers.history.take() {
         w.finish()?;
@@ -691,6 +979,13 @@ pub fn run(
         }
         None => (0, 0.0, 0.0),
     };
+    // the run is complete: its checkpoint would only resume a finished run
+    if let Some(p) = plan {
+        let path = p.dir.join(crate::checkpoint::FILE);
+        if path.exists() {
+            std::fs::remove_file(&path).map_err(|e| Error::write(&path, e))?;
+        }
+    }
     output_seconds += t_fin.elapsed().as_secs_f64();
     let wall = start.elapsed().as_secs_f64();
     let s = integ.state();

@@ -283,6 +283,16 @@ macro_rules! delegate_to_core {
         fn jacobian(&self) -> &$crate::contact::ContactJacobian {
             &self.core.del.jac
         }
+        fn save(&self) -> $crate::checkpoint::IntegratorState {
+            self.core.state.save(self.name())
+        }
+        fn restore(
+            &mut self,
+            s: &$crate::checkpoint::IntegratorState,
+        ) -> Result<(), $crate::error::Error> {
+            let name = self.name();
+            self.core.restore(name, s)
+        }
     };
 }
 pub(crate) use delegate_to_core;
@@ -927,6 +937,25 @@ impl ThetaCore {
 
     /// Accepts `v_new`, `q_new`, `P`, `τ` as the state at `t_{k+1}` and evaluates the
     /// contacts there (re-condensing for nonlinear contacts).
+    /// Restores a checkpointed state and evaluates again what [`ThetaCore::commit`]
+    /// derives from it: the gaps and Jacobian at `q`, the Delassus data of a nonlinear
+    /// contact set, `U = Gᵀ v`.
+    pub fn restore(
+        &mut self,
+        scheme: &str,
+        s: &crate::checkpoint::IntegratorState,
+    ) -> Result<(), Error> {
+        self.state.restore(scheme, s)?;
+        self.contacts
+            .evaluate(&self.state.q, &mut self.state.gap, &mut self.del.jac);
+        if !self.linear {
+            self.del.refresh(&self.sys.stiffness);
+            self.jac_at_qk = true;
+        }
+        self.del.jac.transpose_mul(&self.state.v, &mut self.u_rows);
+        Ok(())
+    }
+
     pub fn commit(&mut self, stats: &mut StepStats) {
         if self.linear {
             self.form();

@@ -152,6 +152,84 @@ pub trait Integrator {
     /// The contact Jacobian `G` of the last evaluation (at the end of the last step;
     /// for nonlinear gaps, at the last Newton iterate), for the output of `G P / h`.
     fn jacobian(&self) -> &crate::contact::ContactJacobian;
+    /// What the next step reads beyond the model, for a checkpoint
+    /// ([`crate::checkpoint`]).
+    fn save(&self) -> crate::checkpoint::IntegratorState;
+    /// Restores a state saved by an integrator built from the same model and parameters;
+    /// the gaps, Jacobians and Delassus data are evaluated again at the restored `q`.
+    fn restore(&mut self, s: &crate::checkpoint::IntegratorState) -> Result<(), Error>;
+}
+
+impl State {
+    /// The vectors every scheme's state holds, for a checkpoint.
+    pub fn save(&self, scheme: &str) -> crate::checkpoint::IntegratorState {
+        use crate::checkpoint::{Bits, Floats};
+        let mut vectors = std::collections::BTreeMap::new();
+        for (name, v) in [
+            ("q", &self.q),
+            ("v", &self.v),
+            ("local_velocity", &self.local_velocity),
+            ("impulse", &self.impulse),
+            ("projection", &self.projection),
+            ("tangent_velocity", &self.tangent_velocity),
+            ("tangent_impulse", &self.tangent_impulse),
+            ("impulse_rows", &self.impulse_rows),
+        ] {
+            vectors.insert(name.to_string(), Floats(v.clone()));
+        }
+        crate::checkpoint::IntegratorState {
+            scheme: scheme.to_string(),
+            step: self.step,
+            time: Bits(self.time),
+            vectors,
+            status: self.status.iter().map(|s| s.code()).collect(),
+        }
+    }
+
+    /// Restores the vectors of [`State::save`] (same sizes) into this state.
+    pub fn restore(
+        &mut self,
+        scheme: &str,
+        s: &crate::checkpoint::IntegratorState,
+    ) -> Result<(), Error> {
+        if s.scheme != scheme {
+            return Err(Error::invalid(
+                "checkpoint integrator.scheme",
+                &s.scheme,
+                &format!("the run's scheme is {scheme}"),
+            ));
+        }
+        for (name, v) in [
+            ("q", &mut self.q),
+            ("v", &mut self.v),
+            ("local_velocity", &mut self.local_velocity),
+            ("impulse", &mut self.impulse),
+            ("projection", &mut self.projection),
+            ("tangent_velocity", &mut self.tangent_velocity),
+            ("tangent_impulse", &mut self.tangent_impulse),
+            ("impulse_rows", &mut self.impulse_rows),
+        ] {
+            let saved = s.vector(name, v.len())?;
+            v.copy_from_slice(saved);
+        }
+        if s.status.len() != self.status.len() || s.status.iter().any(|&c| c > 2) {
+            return Err(Error::invalid(
+                "checkpoint integrator.status",
+                format!("{} codes", s.status.len()),
+                &format!("expected {} codes in 0..=2", self.status.len()),
+            ));
+        }
+        for (st, &c) in self.status.iter_mut().zip(&s.status) {
+            *st = match c {
+                0 => ContactStatus::Open,
+                1 => ContactStatus::Stick,
+                _ => ContactStatus::Slip,
+            };
+        }
+        self.step = s.step;
+        self.time = s.time.0;
+        Ok(())
+    }
 }
 
 /// Which scheme to run (also the CLI's `--scheme` values).

@@ -216,6 +216,43 @@ impl FrameWriter {
         let frames_dir = dir.join(stem);
         std::fs::create_dir_all(&frames_dir).map_err(|e| Error::write(&frames_dir, e))?;
         remove_stale_frames(&frames_dir)?;
+        Self::new_unchecked(dir, stem, geom, jac, encoding)
+    }
+
+    /// Continues the frames of a checkpointed run: the frames at `times` are on disk
+    /// (`<stem>/frame_000000.vtu` …) and stay listed in the `.pvd`; the next frame
+    /// takes the next number (frames a killed run wrote after its checkpoint are
+    /// written again, identically).
+    pub fn resume(
+        dir: &Path,
+        stem: &str,
+        geom: Geometry,
+        jac: &ContactJacobian,
+        encoding: Encoding,
+        times: &[f64],
+    ) -> Result<Self, Error> {
+        let mut w = Self::new_unchecked(dir, stem, geom, jac, encoding)?;
+        for (k, &t) in times.iter().enumerate() {
+            let name = format!("{stem}/frame_{k:06}.vtu");
+            if !dir.join(&name).is_file() {
+                return Err(Error::bad_file(
+                    dir.join(&name),
+                    "",
+                    "is listed by the checkpoint but missing: the run directory was changed",
+                ));
+            }
+            w.frames.push((t, name));
+        }
+        Ok(w)
+    }
+
+    fn new_unchecked(
+        dir: &Path,
+        stem: &str,
+        geom: Geometry,
+        jac: &ContactJacobian,
+        encoding: Encoding,
+    ) -> Result<Self, Error> {
         let mut point_of_dof = vec![usize::MAX; geom.dof_of.iter().flatten().count()];
         for (k, d) in geom.dof_of.iter().enumerate() {
             if let Some(d) = d {
@@ -714,6 +751,9 @@ pub struct FrameStream {
     free: std::sync::mpsc::Receiver<Snapshot>,
     thread: Option<std::thread::JoinHandle<Result<FrameWriter, Error>>>,
     waited: f64,
+    /// Snapshots taken back by [`FrameStream::sync`], used before the pool's.
+    spare: Vec<Snapshot>,
+    pool: usize,
 }
 
 impl FrameStream {
@@ -755,20 +795,38 @@ impl FrameStream {
             free: free_rx,
             thread: Some(thread),
             waited: 0.0,
+            spare: Vec::with_capacity(pool),
+            pool,
         }
     }
 
     /// Queues a frame of `state`; waits for a free snapshot if all are in flight.
     pub fn push(&mut self, state: &State, jac: &ContactJacobian, h: f64) -> Result<(), Error> {
         let t0 = std::time::Instant::now();
-        let Ok(mut snap) = self.free.recv() else {
-            return Err(self.failure());
+        let mut snap = match self.spare.pop() {
+            Some(s) => s,
+            None => match self.free.recv() {
+                Ok(s) => s,
+                Err(_) => return Err(self.failure()),
+            },
         };
         self.waited += t0.elapsed().as_secs_f64();
         snap.copy_from(state, jac, h);
         // the snapshot comes back in a send error only when the writer has stopped
         let sent = self.work.as_ref().is_some_and(|w| w.send(snap).is_ok());
         if sent { Ok(()) } else { Err(self.failure()) }
+    }
+
+    /// Waits until every queued frame is on disk (a checkpoint's barrier): takes every
+    /// snapshot of the pool back, then keeps them for the next pushes.
+    pub fn sync(&mut self) -> Result<(), Error> {
+        while self.spare.len() < self.pool {
+            match self.free.recv() {
+                Ok(s) => self.spare.push(s),
+                Err(_) => return Err(self.failure()),
+            }
+        }
+        Ok(())
     }
 
     /// Seconds the run spent waiting for a free snapshot.

@@ -231,7 +231,7 @@ fn read_msh41(
     bytes: &[u8],
     names: &HashMap<(usize, i64), String>,
 ) -> Result<RawMesh, Error> {
-    let f = guarded(|| mshio::parse_msh_bytes(bytes).map_err(|e| short_message(e)))
+    let f = guarded(|| mshio::parse_msh_bytes(bytes).map_err(short_message))
         .unwrap_or_else(|| Err("the file is malformed (mshio could not read it)".into()))
         .map_err(|e| bad(path, format!("Gmsh 4.1 parse error: {e}")))?;
     let nodes = f.data.nodes.ok_or_else(|| bad(path, "no $Nodes section"))?;
@@ -732,7 +732,7 @@ fn read_vtu_unguarded(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
             .points
             .cast_into()
             .ok_or_else(|| bad(path, format!("piece {pi}: points are not numeric")))?;
-        if xyz.len() % 3 != 0 {
+        if !xyz.len().is_multiple_of(3) {
             return Err(bad(
                 path,
                 format!(

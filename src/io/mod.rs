@@ -103,10 +103,27 @@ fn fmt_f64(buf: &mut ryu::Buffer, x: f64) -> &[u8] {
 pub struct HistoryWriter {
     #[cfg(feature = "hdf5")]
     h5: Option<h5::History>,
-    out: BufWriter<File>,
+    out: BufWriter<Counting>,
     tmp: PathBuf,
     path: PathBuf,
     rows_since_flush: usize,
+}
+
+/// A file that counts the bytes written to it (the history's checkpoint cursor).
+struct Counting {
+    f: File,
+    n: u64,
+}
+
+impl Write for Counting {
+    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+        let k = self.f.write(b)?;
+        self.n += k as u64;
+        Ok(k)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.f.flush()
+    }
 }
 
 impl HistoryWriter {
@@ -121,7 +138,7 @@ impl HistoryWriter {
     pub fn create(path: &Path, m: usize, tangent_dim: usize) -> Result<Self, Error> {
         let tmp = part_path(path);
         let f = File::create(&tmp).map_err(|e| Error::write(&tmp, e))?;
-        let mut out = BufWriter::with_capacity(1 << 16, f);
+        let mut out = BufWriter::with_capacity(1 << 16, Counting { f, n: 0 });
         let mut header = String::from(
             "step,time,kinetic_energy,potential_energy,max_violation,newton_iterations,\
              projection_iterations,index_set_iterations",
@@ -147,6 +164,46 @@ impl HistoryWriter {
             path: path.to_path_buf(),
             rows_since_flush: 0,
         })
+    }
+
+    /// Reopens the `.part` of a checkpointed run, cut to the `bytes` that belong to the
+    /// checkpointed steps (rows a killed run wrote after its checkpoint, and a row the
+    /// kill cut, are dropped: the resumed run writes them again).
+    pub fn resume(path: &Path, bytes: u64) -> Result<Self, Error> {
+        let tmp = part_path(path);
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&tmp)
+            .map_err(|e| Error::io(&tmp, e))?;
+        let len = f.metadata().map_err(|e| Error::io(&tmp, e))?.len();
+        if len < bytes {
+            return Err(Error::bad_file(
+                &tmp,
+                "",
+                format!(
+                    "holds {len} bytes, fewer than the {bytes} the checkpoint recorded (the \
+                     history was cut or replaced)"
+                ),
+            ));
+        }
+        f.set_len(bytes).map_err(|e| Error::write(&tmp, e))?;
+        let mut f = f;
+        use std::io::Seek as _;
+        f.seek(std::io::SeekFrom::End(0))
+            .map_err(|e| Error::write(&tmp, e))?;
+        Ok(HistoryWriter {
+            #[cfg(feature = "hdf5")]
+            h5: None,
+            out: BufWriter::with_capacity(1 << 16, Counting { f, n: bytes }),
+            tmp,
+            path: path.to_path_buf(),
+            rows_since_flush: 0,
+        })
+    }
+
+    /// Bytes on disk; after a [`HistoryWriter::flush`], every row written so far.
+    pub fn bytes(&self) -> u64 {
+        self.out.get_ref().n
     }
 
     /// Also writes every row to `/history` of the run's HDF5 file.
@@ -276,6 +333,12 @@ pub struct OutputOptions {
     /// the `hdf5` feature, and asking for it without the feature is an error.
     #[serde(default)]
     pub hdf5: Option<bool>,
+    /// Write a checkpoint (`checkpoint.json`, [`crate::checkpoint`]) every this many
+    /// steps (default 0: none); `signorini resume DIR` finishes a killed run from it.
+    /// Checkpoints cover `history.csv` and the `.vtu` frames: a run that also writes the
+    /// HDF5 file refuses them (set `hdf5 = false`).
+    #[serde(default)]
+    pub checkpoint_every: usize,
 }
 
 fn one() -> usize {
@@ -295,6 +358,7 @@ impl Default for OutputOptions {
             encoding: frames::Encoding::Zlib,
             plots: true,
             hdf5: None,
+            checkpoint_every: 0,
         }
     }
 }
@@ -324,6 +388,14 @@ impl OutputOptions {
         }
         if self.history_stride == 0 {
             return Err(Error::invalid("history_stride", 0, "must be at least 1"));
+        }
+        if self.checkpoint_every > 0 && self.hdf5() {
+            return Err(Error::invalid(
+                "checkpoint_every",
+                self.checkpoint_every,
+                "checkpoints cover history.csv and the .vtu frames, not the HDF5 file: set \
+                 output.hdf5 = false (--no-hdf5) to checkpoint this run",
+            ));
         }
         Ok(())
     }

@@ -93,6 +93,9 @@ pub struct Scene {
     /// Directory that relative mesh paths start from (the scene file's directory).
     #[serde(skip)]
     pub base_dir: PathBuf,
+    /// The scene file, when read from one (checkpoints name it).
+    #[serde(skip)]
+    pub file: Option<PathBuf>,
     /// Analytic reference to compare with (the impacting bar).
     #[serde(default)]
     pub reference: Option<Reference>,
@@ -405,6 +408,7 @@ impl Scene {
         let text = crate::limits::read_text(path, "scene", crate::limits::MAX_SCENE_BYTES)?;
         let mut scene = Self::from_toml(&text).map_err(|e| e.in_file(path))?;
         scene.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        scene.file = Some(path.to_path_buf());
         Ok(scene)
     }
 
