@@ -152,6 +152,11 @@ impl Error {
                 where_,
                 detail: format!("{detail} (read for {})", file.display()),
             },
+            Error::Io { path, source } if path != file => Error::BadFile {
+                file: path,
+                where_: String::new(),
+                detail: format!("{source} (read for {})", file.display()),
+            },
             other => other,
         }
     }

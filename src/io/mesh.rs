@@ -47,6 +47,13 @@ fn short_message(e: impl std::fmt::Display) -> String {
 /// Reads a mesh, choosing the format by extension (`.msh`, `.vtu`, `.vtk`). The file
 /// must be a regular file of at most [`crate::limits::MAX_MESH_BYTES`].
 pub fn read_mesh(path: &Path) -> Result<Mesh, Error> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !["msh", "vtu", "vtk"].contains(&ext.to_ascii_lowercase().as_str()) {
+        return Err(bad(
+            path,
+            format!("unknown mesh extension `.{ext}` (expected .msh, .vtu or .vtk)"),
+        ));
+    }
     let bytes = crate::limits::read_input(path, "mesh", crate::limits::MAX_MESH_BYTES)?;
     parse_mesh(path, &bytes)
 }
@@ -84,6 +91,8 @@ struct RawMesh {
     sets: BTreeMap<String, Vec<usize>>,
     /// the file's id of each point (Gmsh node tag; empty: the 0-based index in the file)
     ids: Vec<u64>,
+    /// the file's id of each cell (Gmsh element number; empty: the 0-based index)
+    cell_ids: Vec<u64>,
 }
 
 impl RawMesh {
@@ -145,7 +154,10 @@ impl RawMesh {
                 c.push(used[v]);
             }
             mesh.cells.push((kind, c));
+            mesh.cell_ids
+                .push(self.cell_ids.get(id).copied().unwrap_or(id as u64));
         }
+        mesh.source = Some(path.to_path_buf());
         for (name, set) in self.sets {
             let mut s: Vec<usize> = set
                 .iter()
@@ -328,6 +340,7 @@ fn read_msh41(
                 raw.sets.entry(name).or_default().extend_from_slice(&ns);
             }
             raw.cells.push((d, kind.clone(), ns));
+            raw.cell_ids.push(e.element_tag);
         }
     }
     Ok(raw)
@@ -409,6 +422,7 @@ fn read_msh22(
             raw.sets.entry(name).or_default().extend_from_slice(&ns);
         }
         raw.cells.push((d, kind, ns));
+        raw.cell_ids.push(num);
     }
     Ok(raw)
 }

@@ -171,6 +171,11 @@ pub struct Mesh {
     /// the rest in the order the cells first use them; the frames write these ids as
     /// the `node_id` point array, to map results back to the input file.
     pub node_ids: Vec<u64>,
+    /// The file's id of each cell (Gmsh element number, VTK cell index); empty for
+    /// generated meshes. Errors about a cell name it.
+    pub cell_ids: Vec<u64>,
+    /// The file the mesh was read from (errors about its cells name it).
+    pub source: Option<std::path::PathBuf>,
 }
 
 impl Mesh {
@@ -586,7 +591,25 @@ pub fn assemble_with_contacts(
         );
         Ok(())
     })
-    .map_err(|(_, e)| e)?;
+    .map_err(|(id, e)| match (&mesh.source, e) {
+        // a cell of a mesh file: name the file and the file's own element id
+        (
+            Some(file),
+            Error::InvalidParameter {
+                field,
+                value,
+                reason,
+            },
+        ) => Error::bad_file(
+            file,
+            format!(
+                "element {}",
+                mesh.cell_ids.get(id).copied().unwrap_or(id as u64)
+            ),
+            format!("{field}: {value}: {reason}"),
+        ),
+        (_, e) => e,
+    })?;
     Ok(LinearSystem {
         mass: am.finish(),
         stiffness: ak.finish(),

@@ -442,7 +442,7 @@ impl Scene {
     /// Range checks that serde cannot express.
     pub fn validate(&self) -> Result<(), Error> {
         crate::limits::step_count(self.time.t_end, self.time.dt, "time.t_end", "time.dt")?;
-        self.scheme.validate()?;
+        self.scheme.validate().map_err(|e| prefix("scheme", e))?;
         self.output.validate().map_err(|e| prefix("output", e))?;
         if self.example.is_some() {
             if !self.bodies.is_empty() || !self.contacts.is_empty() || !self.obstacles.is_empty() {
@@ -929,7 +929,7 @@ impl Scene {
         if kept.is_empty() {
             return Err(Error::invalid(
                 "within",
-                d,
+                crate::error::num(d),
                 &format!(
                     "no node of `{}` lies that close to the obstacle (the nearest is {:.3e} m away)",
                     c.nodes,

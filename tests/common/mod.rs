@@ -2,6 +2,8 @@
 //! reader) and `.pvd` collections.
 #![allow(dead_code)]
 
+pub mod bad;
+
 use std::collections::HashMap;
 use std::path::Path;
 

@@ -1,0 +1,291 @@
+//! Runs that must stop (issue 12 §2, §4): exit code 1 with the step, the time and the
+//! contact when the state turns non-finite, the violation explodes or an iteration cap
+//! is hit (unless the scene allows caps); exit code 2 for command-line values that are
+//! wrong even when the options that use them are off, absurd sizes and memory; and a run
+//! directory that held an older run keeps nothing of it.
+
+mod common;
+
+use common::bad::{cli, expect, tmp};
+
+fn cylinder_scene(extra_scheme: &str) -> String {
+    let src = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/block_on_cylinder.toml"),
+    )
+    .unwrap();
+    src.replace("t_end = 0.3", "t_end = 0.05").replace(
+        "kind = \"combined-projection\"",
+        &format!("kind = \"combined-projection\"\n{extra_scheme}"),
+    )
+}
+
+#[test]
+fn a_newton_cap_fails_the_run_unless_the_scene_allows_caps() {
+    let dir = tmp("caps");
+    // one Newton iteration cannot follow the curved obstacle's G(q)
+    let s = cylinder_scene("newton = { tol = 1e-12, max_iterations = 1 }");
+    std::fs::write(dir.join("s.toml"), &s).unwrap();
+    let r = cli(
+        &dir,
+        &["run", "s.toml", "--quiet", "--out", "o", "--no-plots"],
+        &[],
+    );
+    expect(
+        "Newton cap",
+        r,
+        1,
+        &[
+            "run failed at step",
+            "t = ",
+            "contact ",
+            "cap",
+            "allow_caps",
+        ],
+    );
+    // the history up to the failure is kept
+    assert!(dir.join("o/history.csv.part").exists());
+    let s = cylinder_scene("newton = { tol = 1e-12, max_iterations = 1 }\nallow_caps = true");
+    std::fs::write(dir.join("s.toml"), &s).unwrap();
+    let r = cli(
+        &dir,
+        &["run", "s.toml", "--quiet", "--out", "o", "--no-plots"],
+        &[],
+    );
+    assert_eq!(r.0, 0, "{}", r.1);
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("o/summary.json")).unwrap()).unwrap();
+    assert!(
+        summary["caps_hit"].as_u64().unwrap() > 0,
+        "caps are counted"
+    );
+}
+
+#[test]
+fn a_non_finite_state_stops_the_run_with_step_and_time() {
+    let dir = tmp("nonfinite");
+    let scene = r#"[time]
+dt = 1e-3
+t_end = 1e-2
+[[bodies]]
+name = "b"
+mesh = { generator = "box", cell = "hex8", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }
+material = { young = 1e6, poisson = 0.3, density = 1e-3 }
+[[forces]]
+body = "b"
+nodes = "all"
+total = [0.0, 0.0, 1e308]
+"#;
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let r = cli(
+        &dir,
+        &["run", "s.toml", "--quiet", "--out", "o", "--no-plots"],
+        &[],
+    );
+    expect(
+        "non-finite state",
+        r,
+        1,
+        &["run failed at step 1", "t = 1e-3", "broke down"],
+    );
+}
+
+#[test]
+fn an_exploding_violation_stops_the_run() {
+    let dir = tmp("explode");
+    // Moreau–Jean penetrates |v0|(1−θ)h = 5 m per step here, past the 1 m bar
+    let r = cli(
+        &dir,
+        &[
+            "bar",
+            "--elements",
+            "10",
+            "--dt",
+            "1e-3",
+            "--t-end",
+            "3e-3",
+            "--velocity",
+            "-1e4",
+            "--scheme",
+            "moreau-jean",
+            "--quiet",
+            "--out",
+            "o",
+            "--no-plots",
+        ],
+        &[],
+    );
+    expect(
+        "exploding violation",
+        r,
+        1,
+        &[
+            "run failed at step",
+            "contact 0",
+            "penetration",
+            "model's size",
+        ],
+    );
+}
+
+#[test]
+fn an_unwritable_output_fails_the_run_with_exit_1() {
+    let dir = tmp("unwritable");
+    std::fs::write(dir.join("file"), "not a directory").unwrap();
+    let r = cli(
+        &dir,
+        &[
+            "--elements",
+            "10",
+            "--t-end",
+            "1e-5",
+            "--quiet",
+            "--out",
+            "file/out",
+        ],
+        &[],
+    );
+    expect("output under a file", r, 1, &["writing", "file/out"]);
+}
+
+#[test]
+fn flags_are_checked_even_when_unused_and_sizes_before_allocating() {
+    let dir = tmp("flags");
+    let cases: &[(&str, &[&str], &[&str])] = &[
+        (
+            "negative PGS tolerance without PGS",
+            &["--lcp-tol", "-1"],
+            &["--lcp-tol", "-1"],
+        ),
+        (
+            "gamma out of range with the free forecast",
+            &["--gamma", "5"],
+            &["--gamma", "5", "[0, 2]"],
+        ),
+        (
+            "zero PGS sweeps without PGS",
+            &["--lcp-max-sweeps", "0"],
+            &["--lcp-max-sweeps"],
+        ),
+        (
+            "zero frame stride",
+            &["--save-every", "0"],
+            &["--save-every"],
+        ),
+        (
+            "zero history stride",
+            &["--history-every", "0"],
+            &["--history-every"],
+        ),
+        (
+            "1e30 s of simulated time",
+            &["--t-end", "1e30"],
+            &["dt", "5.000e36 steps", "at most 1000000000"],
+        ),
+        (
+            "a 1e-300 s step",
+            &["--dt", "1e-300"],
+            &["dt", "1e-300", "at most"],
+        ),
+        (
+            "10^12 elements",
+            &["--elements", "1000000000000"],
+            &["elements", "1000000000000", "memory limit"],
+        ),
+    ];
+    for (class, args, needles) in cases {
+        let mut a = args.to_vec();
+        a.extend(["--quiet", "--out", "o"]);
+        expect(class, cli(&dir, &a, &[]), 2, needles);
+        assert!(!dir.join("o/summary.json").exists(), "{class} wrote output");
+    }
+    // a memory limit set lower than a modest run needs
+    let r = cli(
+        &dir,
+        &["--elements", "100000", "--quiet", "--out", "o"],
+        &[("SIGNORINI_MEMORY_LIMIT", "1M")],
+    );
+    expect(
+        "memory limit",
+        r,
+        2,
+        &["elements", "100000", "memory limit 1.0 MiB"],
+    );
+}
+
+#[test]
+fn a_new_run_leaves_nothing_of_an_older_one() {
+    let dir = tmp("older");
+    let base = [
+        "--elements",
+        "20",
+        "--dt",
+        "1e-5",
+        "--t-end",
+        "5e-4",
+        "--quiet",
+        "--out",
+        "o",
+    ];
+    assert_eq!(cli(&dir, &base, &[]).0, 0);
+    assert!(dir.join("o/fields.pvd").exists() && dir.join("o/contact_force.png").exists());
+    std::fs::write(dir.join("o/history.csv.part"), "step,time\n1,0.1").unwrap();
+    std::fs::write(dir.join("o/fields/frame_000999.vtu.part"), "x").unwrap();
+    // the same directory, now without fields or plots, and killed before its end
+    let mut a = base.to_vec();
+    a.extend([
+        "--no-fields",
+        "--no-plots",
+        "--checkpoint-every",
+        "10",
+        "--no-hdf5",
+    ]);
+    let r = cli(&dir, &a, &[("SIGNORINI_ABORT_AFTER_STEP", "20")]);
+    assert_ne!(r.0, 0);
+    for stale in [
+        "summary.json",
+        "history.csv",
+        "fields.pvd",
+        "contact_force.png",
+        "fields/frame_000000.vtu",
+        "fields/frame_000999.vtu.part",
+    ] {
+        assert!(
+            !dir.join("o").join(stale).exists(),
+            "{stale} of the older run is still there"
+        );
+    }
+    // the killed run's history ends with a complete row; a cut row would be skipped
+    let h = std::fs::read_to_string(dir.join("o/history.csv.part")).unwrap();
+    assert!(
+        h.ends_with('\n') && h.lines().count() == 21,
+        "{} rows",
+        h.lines().count()
+    );
+}
+
+#[test]
+fn plot_bounds_extreme_histories_and_skips_a_cut_row() {
+    let dir = tmp("plot");
+    let header = "step,time,kinetic_energy,potential_energy,max_violation,newton_iterations,\
+                  projection_iterations,index_set_iterations";
+    std::fs::write(
+        dir.join("history.csv"),
+        format!("{header}\n1,0,1e308,-1e308,0,0,0,0\n2,1,-1e308,1e308,1e308,0,0,0\n"),
+    )
+    .unwrap();
+    let t0 = std::time::Instant::now();
+    let r = cli(&dir, &["plot", "."], &[]);
+    assert_eq!(r.0, 0, "{}", r.1);
+    assert!(t0.elapsed().as_secs() < 60, "plot took {:?}", t0.elapsed());
+    // a killed run's .part: the last row, cut between two digits, still parses
+    std::fs::remove_file(dir.join("history.csv")).unwrap();
+    std::fs::write(
+        dir.join("history.csv.part"),
+        format!("{header}\n1,0,1,0,0,0,0,0\n2,1,2,0,0,0,0,0\n3,2,3.1"),
+    )
+    .unwrap();
+    assert_eq!(cli(&dir, &["plot", "."], &[]).0, 0);
+    let t = std::fs::read_to_string(dir.join("history.csv.part")).unwrap();
+    let lines: Vec<&str> = signorini::plot::complete_lines(&t).collect();
+    assert_eq!(lines.len(), 3, "header and two complete rows");
+}

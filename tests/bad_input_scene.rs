@@ -1,0 +1,421 @@
+//! Bad scene files (issue 12 §2–3): `signorini check` and `signorini run` refuse each with
+//! exit code 2 and a message naming the scene file, the key path (or line and column),
+//! the value and what was expected. One class of mistake per case.
+
+mod common;
+
+use common::bad::{cli, expect, tmp};
+
+const BASE: &str = r#"[time]
+dt = 1e-4
+t_end = 1e-3
+[[bodies]]
+name = "b"
+mesh = { generator = "box", cell = "hex8", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }
+material = { young = 1e6, poisson = 0.3, density = 1000.0 }
+[[obstacles]]
+name = "floor"
+type = "plane"
+point = [0.0, 0.0, -0.01]
+normal = [0.0, 0.0, 1.0]
+[[contacts]]
+body = "b"
+nodes = "z0"
+obstacle = "floor"
+"#;
+
+/// (class, edit of BASE: (from, to) replacements, needles)
+type Case = (
+    &'static str,
+    &'static [(&'static str, &'static str)],
+    &'static [&'static str],
+);
+
+const CASES: &[Case] = &[
+    (
+        "negative Young's modulus",
+        &[("young = 1e6", "young = -1e6")],
+        &["bodies[0].material.young", "-1000000", "> 0"],
+    ),
+    (
+        "Poisson ratio 0.5",
+        &[("poisson = 0.3", "poisson = 0.5")],
+        &["material.poisson", "0.5", "[0, 0.4999999]"],
+    ),
+    (
+        "NaN density",
+        &[("density = 1000.0", "density = nan")],
+        &["material.density", "NaN"],
+    ),
+    (
+        "zero cell count",
+        &[("cells = [1, 1, 1]", "cells = [0, 1, 1]")],
+        &["mesh.cells", "[0, 1, 1]", "at least 1"],
+    ),
+    (
+        "absurd generator size",
+        &[("cells = [1, 1, 1]", "cells = [100000, 100000, 100000]")],
+        &["mesh.cells", "[100000, 100000, 100000]", "memory limit"],
+    ),
+    (
+        "negative box size",
+        &[("size = [0.1, 0.1, 0.1]", "size = [0.1, -0.1, 0.1]")],
+        &["mesh.size[1]", "-0.1", "> 0"],
+    ),
+    (
+        "non-finite origin",
+        &[(
+            "size = [0.1, 0.1, 0.1]",
+            "size = [0.1, 0.1, 0.1], origin = [0.0, nan, 0.0]",
+        )],
+        &["mesh.origin[1]", "NaN"],
+    ),
+    (
+        "box asked for tri3",
+        &[("cell = \"hex8\"", "cell = \"tri3\"")],
+        &["mesh.cell", "tri3", "hex8 or tet4"],
+    ),
+    (
+        "unknown node set",
+        &[("nodes = \"z0\"", "nodes = \"top\"")],
+        &["contacts[0].nodes", "top", "\"z0\"", "`boundary`"],
+    ),
+    (
+        "unknown obstacle",
+        &[("obstacle = \"floor\"", "obstacle = \"wall\"")],
+        &["contacts[0].obstacle", "wall", "names no obstacle"],
+    ),
+    (
+        "unknown body",
+        &[("body = \"b\"", "body = \"c\"")],
+        &["contacts[0].body", "names no body"],
+    ),
+    (
+        "normal of the wrong dimension",
+        &[("normal = [0.0, 0.0, 1.0]", "normal = [0.0, 0.0]")],
+        &["obstacles[0].normal", "3 finite components"],
+    ),
+    (
+        "zero normal",
+        &[("normal = [0.0, 0.0, 1.0]", "normal = [0.0, 0.0, 0.0]")],
+        &["obstacles[0].normal", "zero vector"],
+    ),
+    (
+        "non-finite obstacle point",
+        &[("point = [0.0, 0.0, -0.01]", "point = [0.0, inf, -0.01]")],
+        &["obstacles[0].point", "inf"],
+    ),
+    (
+        "zero time step",
+        &[("dt = 1e-4", "dt = 0")],
+        &["time.dt", "0", "> 0"],
+    ),
+    (
+        "end time below one step",
+        &[("t_end = 1e-3", "t_end = 1e-9")],
+        &["time.t_end", "1e-9", "one step"],
+    ),
+    (
+        "1e30 steps",
+        &[("t_end = 1e-3", "t_end = 1e30")],
+        &["time.dt", "1.000e34", "at most 1000000000"],
+    ),
+    (
+        "unknown key",
+        &[("[time]\n", "[time]\nfoo = 1\n")],
+        &["time.foo", "unknown field"],
+    ),
+    (
+        "unknown generator",
+        &[("generator = \"box\"", "generator = \"sphere\"")],
+        &["bodies[0].mesh.generator", "sphere", "`box`"],
+    ),
+    (
+        "unknown obstacle type",
+        &[("type = \"plane\"", "type = \"cone\"")],
+        &["obstacles[0].type", "cone", "`plane`"],
+    ),
+    (
+        "restitution above 1",
+        &[(
+            "obstacle = \"floor\"\n",
+            "obstacle = \"floor\"\nrestitution = 2.0\n",
+        )],
+        &["contacts[0].restitution", "2", "[0, 1]"],
+    ),
+    (
+        "negative friction",
+        &[(
+            "obstacle = \"floor\"\n",
+            "obstacle = \"floor\"\nfriction = -0.1\n",
+        )],
+        &["contacts[0].friction", "-0.1"],
+    ),
+    (
+        "negative within",
+        &[(
+            "obstacle = \"floor\"\n",
+            "obstacle = \"floor\"\nwithin = -1.0\n",
+        )],
+        &["contacts[0].within", "-1"],
+    ),
+    (
+        "within that keeps no node",
+        &[(
+            "obstacle = \"floor\"\n",
+            "obstacle = \"floor\"\nwithin = 1e-9\n",
+        )],
+        &["contacts[0].within", "1e-9", "nearest is 1.000e-2 m"],
+    ),
+    (
+        "unknown scheme",
+        &[("[time]\n", "[scheme]\nkind = \"newmark\"\n[time]\n")],
+        &["scheme.kind", "newmark", "`moreau-jean`"],
+    ),
+    (
+        "theta out of range",
+        &[("[time]\n", "[scheme]\ntheta = 0.2\n[time]\n")],
+        &["scheme.theta", "0.2", "[0.5, 1]"],
+    ),
+    (
+        "zero Newton cap",
+        &[(
+            "[time]\n",
+            "[scheme]\nnewton = { tol = 1e-10, max_iterations = 0 }\n[time]\n",
+        )],
+        &["scheme.newton.max_iterations", "at least 1"],
+    ),
+    (
+        "zero history stride",
+        &[("[time]\n", "[output]\nhistory_stride = 0\n[time]\n")],
+        &["output.history_stride", "at least 1"],
+    ),
+    (
+        "gravity of the wrong dimension",
+        &[("[time]\n", "[loads]\ngravity = [0.0, -9.81]\n[time]\n")],
+        &["loads.gravity", "3 finite components"],
+    ),
+    (
+        "negative damping",
+        &[(
+            "material = {",
+            "damping = { alpha = -1.0, beta = 0.0 }\nmaterial = {",
+        )],
+        &["bodies[0].damping.alpha", "-1", "[0, inf)"],
+    ),
+    (
+        "initial velocity of the wrong dimension",
+        &[("material = {", "velocity = [1.0, 2.0]\nmaterial = {")],
+        &["velocity", "[1.0, 2.0]", "3 finite values"],
+    ),
+    (
+        "unknown fixed set",
+        &[("material = {", "fixed = [\"nope\"]\nmaterial = {")],
+        &["fixed", "nope", "no such node set"],
+    ),
+    (
+        "contact on fixed nodes",
+        &[("material = {", "fixed = [\"z0\"]\nmaterial = {")],
+        &["contacts[0].nodes", "is fixed"],
+    ),
+    (
+        "every node fixed",
+        &[
+            ("material = {", "fixed = [\"x0\", \"x1\"]\nmaterial = {"),
+            (
+                "[[contacts]]\nbody = \"b\"\nnodes = \"z0\"\nobstacle = \"floor\"\n",
+                "",
+            ),
+        ],
+        &["bodies", "0 free degrees of freedom"],
+    ),
+    (
+        "obstacle of the wrong dimension",
+        &[(
+            "material = {",
+            "formulation = \"plane-strain\"\nmaterial = {",
+        )],
+        &["obstacles[0].point", "2 finite components"],
+    ),
+    (
+        "missing mesh file",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"file\", path = \"missing.msh\" }",
+        )],
+        &["missing.msh", "No such file", "scene.toml"],
+    ),
+    (
+        "unknown mesh extension",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"file\", path = \"mesh.stl\" }",
+        )],
+        &["mesh.stl", "`.stl`", ".msh, .vtu or .vtk"],
+    ),
+    (
+        "rod of zero elements",
+        &[
+            (
+                "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+                "mesh = { generator = \"rod\", elements = 0, length = 1.0, area = 1e-4 }",
+            ),
+            ("point = [0.0, 0.0, -0.01]", "point = [0.0]"),
+            ("normal = [0.0, 0.0, 1.0]", "normal = [1.0]"),
+            ("nodes = \"z0\"", "nodes = \"x0\""),
+        ],
+        &["mesh.elements", "at least 1"],
+    ),
+    (
+        "empty body name",
+        &[("name = \"b\"", "name = \"\"")],
+        &["bodies[0].name", "needs a name"],
+    ),
+    (
+        "duplicate obstacle name",
+        &[(
+            "[[contacts]]",
+            "[[obstacles]]\nname = \"floor\"\ntype = \"sphere\"\ncenter = [0.0, 0.0, 5.0]\nradius = 1.0\n[[contacts]]",
+        )],
+        &["obstacles[1].name", "floor", "obstacles[0] has that name"],
+    ),
+    (
+        "duplicate body name",
+        &[(
+            "[[obstacles]]",
+            "[[bodies]]\nname = \"b\"\nmesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }\nmaterial = { young = 1e6, poisson = 0.3, density = 1000.0 }\n[[obstacles]]",
+        )],
+        &["bodies[1].name", "bodies[0] has that name"],
+    ),
+    (
+        "unused obstacle with a zero radius",
+        &[(
+            "[[contacts]]",
+            "[[obstacles]]\nname = \"ball\"\ntype = \"sphere\"\ncenter = [0.0, 0.0, 5.0]\nradius = 0.0\n[[contacts]]",
+        )],
+        &["obstacles[1].radius", "0", "> 0"],
+    ),
+    (
+        "unused cylinder with a zero axis",
+        &[(
+            "[[contacts]]",
+            "[[obstacles]]\nname = \"cyl\"\ntype = \"cylinder\"\npoint = [0.0, 0.0, 5.0]\naxis = [0.0, 0.0, 0.0]\nradius = 1.0\n[[contacts]]",
+        )],
+        &["obstacles[1].axis", "zero vector"],
+    ),
+    (
+        "TOML syntax error",
+        &[("t_end = 1e-3", "t_end = = 1e-3")],
+        &["line 3, column"],
+    ),
+    (
+        "wrong value type",
+        &[("t_end = 1e-3", "t_end = \"soon\"")],
+        &["time.t_end", "invalid type: string"],
+    ),
+    (
+        "missing required section",
+        &[("[time]\ndt = 1e-4\nt_end = 1e-3\n", "")],
+        &["missing field `time`"],
+    ),
+    (
+        "hdf5 with checkpoints",
+        &[(
+            "[time]\n",
+            "[output]\nhdf5 = true\ncheckpoint_every = 10\n[time]\n",
+        )],
+        &["output."],
+    ),
+];
+
+#[test]
+fn each_bad_scene_is_refused_with_its_key_and_value() {
+    let dir = tmp("scenes");
+    assert!(CASES.len() >= 45);
+    for (class, edits, needles) in CASES {
+        let mut text = BASE.to_string();
+        for (from, to) in *edits {
+            assert!(
+                text.contains(from),
+                "{class}: the edit {from:?} does not apply"
+            );
+            text = text.replace(from, to);
+        }
+        std::fs::write(dir.join("scene.toml"), &text).unwrap();
+        let mut want: Vec<&str> = vec!["scene.toml"];
+        want.extend_from_slice(needles);
+        // `check` and `run` agree: both refuse, with the same message
+        let c = cli(&dir, &["check", "scene.toml"], &[]);
+        expect(class, c.clone(), 2, &want);
+        let r = cli(&dir, &["run", "scene.toml", "--quiet", "--out", "out"], &[]);
+        assert_eq!(r.0, 2, "{class}: run exit {}: {}", r.0, r.1);
+        assert_eq!(
+            c.1.lines().last(),
+            r.1.lines().last(),
+            "{class}: check and run differ"
+        );
+    }
+}
+
+#[test]
+fn scene_inputs_that_are_not_files_are_refused_without_reading() {
+    let dir = tmp("notfiles");
+    // a FIFO would block a reader forever; /dev/zero would fill the memory
+    let fifo = dir.join("fifo.toml");
+    let ok = Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success());
+    if ok {
+        expect(
+            "FIFO scene",
+            cli(&dir, &["check", "fifo.toml"], &[]),
+            2,
+            &["fifo.toml", "not a regular file"],
+        );
+    }
+    expect(
+        "device scene",
+        cli(&dir, &["check", "/dev/zero"], &[]),
+        2,
+        &["/dev/zero", "not a regular file"],
+    );
+    std::fs::create_dir_all(dir.join("d.toml")).unwrap();
+    expect(
+        "directory scene",
+        cli(&dir, &["check", "d.toml"], &[]),
+        2,
+        &["d.toml", "a directory"],
+    );
+    std::fs::write(dir.join("bin.toml"), [0x5b, 0xff, 0xfe, 0x0a]).unwrap();
+    expect(
+        "non-UTF-8 scene",
+        cli(&dir, &["check", "bin.toml"], &[]),
+        2,
+        &["bin.toml", "line 1", "not UTF-8"],
+    );
+    expect(
+        "missing scene",
+        cli(&dir, &["check", "nope.toml"], &[]),
+        2,
+        &["nope.toml", "No such file"],
+    );
+    // a mesh file that is a FIFO
+    if ok {
+        let mesh_fifo = dir.join("m.msh");
+        Command::new("mkfifo").arg(&mesh_fifo).status().unwrap();
+        let scene = BASE.replace(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"file\", path = \"m.msh\" }",
+        );
+        std::fs::write(dir.join("s.toml"), scene).unwrap();
+        expect(
+            "FIFO mesh",
+            cli(&dir, &["check", "s.toml"], &[]),
+            2,
+            &["m.msh", "not a regular file", "s.toml"],
+        );
+    }
+}
+
+use std::process::Command;
