@@ -238,11 +238,54 @@ fn read_msh(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
     }
 }
 
+/// Checks the counts of a Gmsh 4.1 section header (`$Nodes`: blocks, nodes, min and max
+/// tag; `$Elements`: blocks, elements, min and max tag) against the file's size before
+/// mshio allocates from them: a node takes at least 8 bytes (its tag and coordinates),
+/// an element 4, a block 8.
+fn check_msh41_counts(path: &Path, bytes: &[u8]) -> Result<(), Error> {
+    for (section, each) in [("$Nodes", 8u64), ("$Elements", 4)] {
+        let Some(start) = find(bytes, section.as_bytes()) else {
+            continue;
+        };
+        let after = start + section.len();
+        let binary = bytes.get(after) != Some(&b'\n') || find(&bytes[..start], b"4.1 1").is_some();
+        let left = (bytes.len() - after) as u64;
+        let counts: Vec<u64> = if binary {
+            // four size_t after the newline
+            (0..2)
+                .filter_map(|k| {
+                    let p = after + 1 + 8 * k;
+                    bytes
+                        .get(p..p + 8)
+                        .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
+                })
+                .collect()
+        } else {
+            let line_end = bytes[after + 1..]
+                .iter()
+                .position(|&b| b == b'\n')
+                .map_or(bytes.len(), |e| after + 1 + e);
+            String::from_utf8_lossy(&bytes[(after + 1).min(line_end)..line_end])
+                .split_whitespace()
+                .take(2)
+                .filter_map(|t| t.parse().ok())
+                .collect()
+        };
+        let at = format!("line {}", line_of(bytes, after + 1));
+        if let [blocks, items] = counts[..] {
+            crate::limits::check_count(path, &at, &format!("{section} block"), blocks, 8, left)?;
+            crate::limits::check_count(path, &at, &format!("{section} entry"), items, each, left)?;
+        }
+    }
+    Ok(())
+}
+
 fn read_msh41(
     path: &Path,
     bytes: &[u8],
     names: &HashMap<(usize, i64), String>,
 ) -> Result<RawMesh, Error> {
+    check_msh41_counts(path, bytes)?;
     let f = guarded(|| mshio::parse_msh_bytes(bytes).map_err(short_message))
         .unwrap_or_else(|| Err("the file is malformed (mshio could not read it)".into()))
         .map_err(|e| bad(path, format!("Gmsh 4.1 parse error: {e}")))?;
@@ -956,9 +999,15 @@ fn read_legacy_vtk(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
                             if !lt.starts_with("LOOKUP_TABLE") {
                                 return Err(bad(path, "SCALARS without LOOKUP_TABLE"));
                             }
-                            let vals = r.values(n * ncomp, v.get(2).copied().unwrap_or("float"))?;
+                            let name = *v
+                                .get(1)
+                                .ok_or_else(|| r.err("SCALARS without an array name"))?;
+                            let total = n
+                                .checked_mul(ncomp)
+                                .ok_or_else(|| r.err("SCALARS size overflows"))?;
+                            let vals = r.values(total, v.get(2).copied().unwrap_or("float"))?;
                             if on_points && ncomp == 1 {
-                                add_flag_set(&mut raw, v[1], &vals);
+                                add_flag_set(&mut raw, name, &vals);
                             }
                         }
                         "FIELD" => {
@@ -972,7 +1021,10 @@ fn read_legacy_vtk(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
                                     .ok_or_else(|| r.err("FIELD array size overflows"))?;
                                 let vals = r.values(total, f.get(3).copied().unwrap_or("float"))?;
                                 if on_points && ncomp == 1 && ntup == n {
-                                    add_flag_set(&mut raw, f[0], &vals);
+                                    let name = *f
+                                        .first()
+                                        .ok_or_else(|| r.err("FIELD array without a name"))?;
+                                    add_flag_set(&mut raw, name, &vals);
                                 }
                             }
                         }
