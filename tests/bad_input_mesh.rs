@@ -56,7 +56,7 @@ fn g22_binary(block: &[i32]) -> Vec<u8> {
         (3, [0.0, 1.0, 0.0]),
         (4, [0.0, 0.0, 1.0]),
     ] {
-        b.extend((t as i32).to_le_bytes());
+        b.extend(i32::to_le_bytes(t));
         for c in x {
             b.extend(f64::to_le_bytes(c));
         }
