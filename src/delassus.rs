@@ -44,6 +44,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::contact::ContactJacobian;
+use crate::error::Error;
 use crate::linalg::{SOLVE_BLOCK, SparseMatrix, SpdFactor, spmv};
 use crate::solvers::SolveError;
 use faer::sparse::SparseColMatRef;
@@ -238,7 +239,7 @@ impl Delassus {
         with_d: bool,
         metric: Metric,
         linear: bool,
-    ) -> Self {
+    ) -> Result<Self, Error> {
         let m = jac.ncols();
         let per = if with_d { 2 } else { 1 };
         let dense = match kind {
@@ -256,13 +257,28 @@ impl Delassus {
         } else {
             m.min((COLUMN_POOL_BYTES / (8 * per * m.max(1))).max(1))
         };
-        let nm = if dense { n * m } else { 0 };
+        let nm = if dense {
+            let nm = n.checked_mul(m).unwrap_or(usize::MAX);
+            let mut mem = crate::limits::MemoryEstimate::default();
+            mem.add(
+                "dense Delassus blocks M̂⁻¹G (n × m)",
+                nm as u64,
+                if with_d { 16 } else { 8 },
+            );
+            mem.check(
+                "scheme.delassus",
+                format!("dense: {n} dofs × {m} contact rows"),
+            )?;
+            nm
+        } else {
+            0
+        };
         let nb = if dense {
             0
         } else {
             n * SOLVE_BLOCK.min(m).max(2)
         };
-        Delassus {
+        Ok(Delassus {
             factor,
             jac,
             n,
@@ -289,7 +305,7 @@ impl Delassus {
             blk: vec![0.0; nb],
             blk2: vec![0.0; if with_d { nb } else { 0 }],
             ng_ready: false,
-        }
+        })
     }
 
     /// Number of contacts `m`.

@@ -255,6 +255,23 @@ impl SpdFactor {
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::rayon(0), Default::default()),
             symbolic.solve_in_place_scratch::<f64>(SOLVE_CHUNK, Par::Seq),
         ]);
+        // the factor's size is known now: check it (and the scratch) before allocating
+        let mut mem = crate::limits::MemoryEstimate::default();
+        mem.add("Cholesky factor of M̂", symbolic.len_val() as u64, 8);
+        mem.add(
+            "factorization scratch",
+            req.unaligned_bytes_required() as u64,
+            1,
+        );
+        mem.add(
+            "assembled matrices and vectors",
+            n as u64,
+            crate::limits::bytes_per_dof(9, 1),
+        );
+        mem.check(
+            what,
+            format!("{n} dofs, {} factor entries", symbolic.len_val()),
+        )?;
         let values = vec![0.0; symbolic.len_val()];
         let mut this = SpdFactor {
             n,

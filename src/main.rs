@@ -43,6 +43,14 @@ macro_rules! err {
                   impacting bar with Algorithm 2 (same as `signorini bar`)."
 )]
 #[command(args_conflicts_with_subcommands = true)]
+#[command(
+    after_help = "Exit codes: 0 success; 1 a run that failed (an iteration cap hit that the \
+scene does not allow, a state that turned non-finite, a violation that exploded, an output \
+that could not be written; the message names the step, time and contact); 2 bad input (the \
+message names the file, the key path or line, the value and what was expected).\n\
+Environment: SIGNORINI_MEMORY_LIMIT (bytes, or with K/M/G) holds runs to less memory than \
+the machine's."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,

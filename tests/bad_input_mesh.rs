@@ -5,25 +5,7 @@
 
 mod common;
 
-use common::bad::{cli, expect, tmp};
-
-const SCENE: &str = r#"[time]
-dt = 1e-4
-t_end = 1e-3
-[[bodies]]
-name = "b"
-mesh = { generator = "file", path = "MESH" }
-material = { young = 1e6, poisson = 0.3, density = 1000.0 }
-[[obstacles]]
-name = "floor"
-type = "plane"
-point = [0.0, 0.0, -0.01]
-normal = [0.0, 0.0, 1.0]
-[[contacts]]
-body = "b"
-nodes = "boundary"
-obstacle = "floor"
-"#;
+use common::bad::{BOX_ON_FLOOR, cli, expect, tmp};
 
 const G22: &str = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n";
 const NODES: &str = "$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n";
@@ -286,7 +268,13 @@ fn each_bad_mesh_is_refused_with_its_file_and_place() {
     assert!(cases.len() >= 30);
     for (class, name, bytes, needles) in cases {
         std::fs::write(dir.join(name), &bytes).unwrap();
-        std::fs::write(dir.join("scene.toml"), SCENE.replace("MESH", name)).unwrap();
+        let scene = BOX_ON_FLOOR
+            .replace(
+                "MESH",
+                &format!("mesh = {{ generator = \"file\", path = \"{name}\" }}"),
+            )
+            .replace("nodes = \"z0\"", "nodes = \"boundary\"");
+        std::fs::write(dir.join("scene.toml"), scene).unwrap();
         let mut want = vec![name, "scene.toml"];
         want.extend(needles);
         expect(class, cli(&dir, &["check", "scene.toml"], &[]), 2, &want);

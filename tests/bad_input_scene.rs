@@ -4,25 +4,7 @@
 
 mod common;
 
-use common::bad::{cli, expect, tmp};
-
-const BASE: &str = r#"[time]
-dt = 1e-4
-t_end = 1e-3
-[[bodies]]
-name = "b"
-mesh = { generator = "box", cell = "hex8", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }
-material = { young = 1e6, poisson = 0.3, density = 1000.0 }
-[[obstacles]]
-name = "floor"
-type = "plane"
-point = [0.0, 0.0, -0.01]
-normal = [0.0, 0.0, 1.0]
-[[contacts]]
-body = "b"
-nodes = "z0"
-obstacle = "floor"
-"#;
+use common::bad::{BOX_MESH, BOX_ON_FLOOR, cli, expect, tmp};
 
 /// (class, edit of BASE: (from, to) replacements, needles)
 type Case = (
@@ -333,7 +315,7 @@ fn each_bad_scene_is_refused_with_its_key_and_value() {
     let dir = tmp("scenes");
     assert!(CASES.len() >= 45);
     for (class, edits, needles) in CASES {
-        let mut text = BASE.to_string();
+        let mut text = BOX_ON_FLOOR.replace("MESH", BOX_MESH);
         for (from, to) in *edits {
             assert!(
                 text.contains(from),
@@ -404,7 +386,7 @@ fn scene_inputs_that_are_not_files_are_refused_without_reading() {
     if ok {
         let mesh_fifo = dir.join("m.msh");
         Command::new("mkfifo").arg(&mesh_fifo).status().unwrap();
-        let scene = BASE.replace(
+        let scene = BOX_ON_FLOOR.replace("MESH", BOX_MESH).replace(
             "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
             "mesh = { generator = \"file\", path = \"m.msh\" }",
         );

@@ -440,7 +440,7 @@ impl ThetaCore {
             friction,
             friction_params: params.friction,
             normal,
-            del,
+            del: del?,
             e,
             with_projection,
             feedback: params.projection_feedback,
@@ -946,6 +946,13 @@ impl ThetaCore {
         s: &crate::checkpoint::IntegratorState,
     ) -> Result<(), Error> {
         self.state.restore(scheme, s)?;
+        self.evaluate_at_state();
+        Ok(())
+    }
+
+    /// The gaps and Jacobian at `q`, the Delassus data of a nonlinear contact set, and
+    /// `U = Gᵀ v`: what the next step reads, derived from the state.
+    fn evaluate_at_state(&mut self) {
         self.contacts
             .evaluate(&self.state.q, &mut self.state.gap, &mut self.del.jac);
         if !self.linear {
@@ -953,7 +960,6 @@ impl ThetaCore {
             self.jac_at_qk = true;
         }
         self.del.jac.transpose_mul(&self.state.v, &mut self.u_rows);
-        Ok(())
     }
 
     pub fn commit(&mut self, stats: &mut StepStats) {
@@ -969,13 +975,7 @@ impl ThetaCore {
         }
         self.state.step += 1;
         self.state.time = self.state.step as f64 * self.h;
-        self.contacts
-            .evaluate(&self.state.q, &mut self.state.gap, &mut self.del.jac);
-        if !self.linear {
-            self.del.refresh(&self.sys.stiffness);
-            self.jac_at_qk = true;
-        }
-        self.del.jac.transpose_mul(&self.state.v, &mut self.u_rows);
+        self.evaluate_at_state();
         self.scatter_local_velocity();
         stats.max_violation = self.state.gap.iter().fold(0.0_f64, |acc, &g| acc.max(-g));
     }

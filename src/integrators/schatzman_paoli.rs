@@ -108,7 +108,7 @@ impl SchatzmanPaoli {
             theta,
             n,
             m,
-            del,
+            del: del?,
             e,
             linear,
             newton: params.newton,

@@ -687,17 +687,8 @@ impl Scene {
             v0.extend((0..n).map(|i| vel[i % dim]));
             let mut fx = vec![false; n];
             for name in &b.fixed {
-                let set = mesh.node_sets.get(name).ok_or_else(|| {
-                    at(Error::invalid(
-                        "fixed",
-                        name,
-                        &format!(
-                            "no such node set; the mesh has {:?}",
-                            mesh.node_sets.keys().collect::<Vec<_>>()
-                        ),
-                    ))
-                })?;
-                for &v in set {
+                let set = node_set(&mesh, name).map_err(|e| at(prefix("fixed", e)))?;
+                for &v in &set {
                     for i in 0..dim {
                         fx[v * dim + i] = true;
                     }

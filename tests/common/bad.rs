@@ -5,6 +5,30 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+/// A valid scene: a hex8 box above a floor, contacts on its bottom face. `MESH` is the
+/// mesh line, for tests that swap in a mesh file.
+pub const BOX_ON_FLOOR: &str = r#"[time]
+dt = 1e-4
+t_end = 1e-3
+[[bodies]]
+name = "b"
+MESH
+material = { young = 1e6, poisson = 0.3, density = 1000.0 }
+[[obstacles]]
+name = "floor"
+type = "plane"
+point = [0.0, 0.0, -0.01]
+normal = [0.0, 0.0, 1.0]
+[[contacts]]
+body = "b"
+nodes = "z0"
+obstacle = "floor"
+"#;
+
+/// The generated box's mesh line.
+pub const BOX_MESH: &str =
+    "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }";
+
 /// A fresh temporary directory for one test.
 pub fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("signorini-bad-{}-{name}", std::process::id()));
