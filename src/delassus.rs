@@ -258,7 +258,7 @@ impl Delassus {
             m.min((COLUMN_POOL_BYTES / (8 * per * m.max(1))).max(1))
         };
         let nm = if dense {
-            let nm = n.checked_mul(m).unwrap_or(usize::MAX);
+            let nm = n.saturating_mul(m);
             let mut mem = crate::limits::MemoryEstimate::default();
             mem.add(
                 "dense Delassus blocks M̂⁻¹G (n × m)",
