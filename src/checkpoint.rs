@@ -11,8 +11,9 @@
 //!   scheme carries from step to step (Schatzman–Paoli's `q_{k−1}`); the gaps,
 //!   Jacobians and Delassus data are functions of `q` and are evaluated again;
 //! - the run's accumulators (iteration statistics, the contact measurement) and output
-//!   cursors (bytes of `history.csv.part` that belong to the checkpointed steps, the
-//!   frames written).
+//!   cursors (bytes and rows of the history that belong to the checkpointed steps, the
+//!   frames written); on resume the CSV is cut to those bytes and the HDF5 datasets to
+//!   those rows and frames, then appended to.
 //!
 //! Floats are stored as the hexadecimal bits of their IEEE-754 representation (arrays as
 //! base64 of their little-endian bytes), so a resumed run starts from bit-identical
@@ -177,6 +178,8 @@ pub struct RunState {
     pub energy0: Bits,
     /// Bytes of `history.csv.part` written up to the checkpoint.
     pub history_bytes: u64,
+    /// History rows written up to the checkpoint (the length of the HDF5 `/history`).
+    pub history_rows: u64,
     /// Times of the frames written (the `.pvd` entries).
     pub frames: Vec<Bits>,
     /// A contact was closed at the checkpointed step (frames are saved at switches).

@@ -739,6 +739,7 @@ impl RunObserver {
             total_force: Bits(t.total_force),
             energy0: Bits(p.energy0),
             history_bytes: self.writers.history.as_ref().map_or(0, |h| h.bytes()),
+            history_rows: self.writers.history.as_ref().map_or(0, |h| h.rows()),
             frames: self.writers.frame_times.iter().map(|&t| Bits(t)).collect(),
             closed_before: self.writers.closed_before,
         };
@@ -864,17 +865,17 @@ pub fn run_checkpointed(
         let geom_outlines = geom.outlines.clone();
         let hist_path = o.dir.join("history.csv");
         let hist = match resume {
-            Some(c) => HistoryWriter::resume(&hist_path, c.run.history_bytes)?,
+            Some(c) => HistoryWriter::resume(&hist_path, c.run.history_bytes, c.run.history_rows)?,
             None => {
                 crate::io::prepare_run_dir(o.dir)?;
                 HistoryWriter::create(&hist_path, m, integ.state().tangent_dim)?
             }
         };
         #[cfg(feature = "hdf5")]
-        let h5 = if o.options.hdf5() {
-            Some(crate::io::h5::RunFile::create(o.dir)?)
-        } else {
-            None
+        let h5 = match (o.options.hdf5(), resume) {
+            (false, _) => None,
+            (true, None) => Some(crate::io::h5::RunFile::create(o.dir)?),
+            (true, Some(_)) => Some(crate::io::h5::RunFile::open(o.dir)?),
         };
         #[cfg(feature = "hdf5")]
         let hist = match &h5 {
@@ -886,6 +887,7 @@ pub fn run_checkpointed(
                 h,
                 theta,
                 &parameters,
+                resume.map(|c| c.run.history_rows as usize),
             )?),
             None => hist,
         };
@@ -916,7 +918,7 @@ pub fn run_checkpointed(
             }
             #[cfg(feature = "hdf5")]
             let w = match &h5 {
-                Some(f) => w.with_hdf5(f)?,
+                Some(f) => w.with_hdf5(f, resume.map(|c| c.run.frames.len()))?,
                 None => w,
             };
             let s = integ.state();

@@ -301,12 +301,9 @@ const CASES: &[Case] = &[
         &["missing field `time`"],
     ),
     (
-        "hdf5 with checkpoints",
-        &[(
-            "[time]\n",
-            "[output]\nhdf5 = true\ncheckpoint_every = 10\n[time]\n",
-        )],
-        &["output."],
+        "unknown output encoding",
+        &[("[time]\n", "[output]\nencoding = \"xml\"\n[time]\n")],
+        &["output.encoding", "unknown variant `xml`"],
     ),
 ];
 

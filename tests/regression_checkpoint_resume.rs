@@ -4,7 +4,8 @@
 //! simulated deterministically with the `SIGNORINI_ABORT_AFTER_STEP` hook (the process
 //! aborts, as under SIGKILL: no destructor, no flush beyond what was written), at
 //! several points, for every scheme, with and without friction, on a curved obstacle;
-//! one test sends a real SIGKILL. Old and corrupt checkpoints get clear errors.
+//! one test sends a real SIGKILL. Old and corrupt checkpoints get clear errors. With the
+//! `hdf5` feature every dataset of `fields.vtkhdf` is compared too.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -22,13 +23,8 @@ fn tmp(name: &str) -> PathBuf {
 /// Runs the CLI with `args` (the out dir appended), optionally aborting after a step.
 fn run(args: &[&str], out: &Path, abort_after: Option<usize>) -> std::process::Output {
     let mut c = bin();
-    c.args(args).args([
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-        "--no-plots",
-        "--no-hdf5",
-    ]);
+    c.args(args)
+        .args(["--out", out.to_str().unwrap(), "--quiet", "--no-plots"]);
     if let Some(k) = abort_after {
         c.env("SIGNORINI_ABORT_AFTER_STEP", k.to_string());
     }
@@ -91,11 +87,57 @@ fn assert_same_run(a: &Path, b: &Path) {
         }
     }
     assert_eq!(sa, sb, "summary.json physics");
+    #[cfg(feature = "hdf5")]
+    assert_same_hdf5(&a.join("fields.vtkhdf"), &b.join("fields.vtkhdf"));
     assert!(
         !b.join("checkpoint.json").exists(),
         "a finished run removes its checkpoint"
     );
     assert!(!b.join("history.csv.part").exists(), "no .part left");
+}
+
+/// Every dataset of the two HDF5 files (`/VTKHDF`, `/history`) holds the same values
+/// (the files' layouts may differ: the resumed run cut its datasets and appended).
+#[cfg(feature = "hdf5")]
+fn assert_same_hdf5(a: &Path, b: &Path) {
+    fn walk(ga: &hdf5::Group, gb: &hdf5::Group, path: &str, n: &mut usize) {
+        let mut names = ga.member_names().unwrap();
+        names.sort();
+        let mut other = gb.member_names().unwrap();
+        other.sort();
+        assert_eq!(names, other, "{path}: members");
+        for name in names {
+            let p = format!("{path}/{name}");
+            if let Ok(g) = ga.group(&name) {
+                walk(&g, &gb.group(&name).unwrap(), &p, n);
+                continue;
+            }
+            let (da, db) = (ga.dataset(&name).unwrap(), gb.dataset(&name).unwrap());
+            assert_eq!(da.shape(), db.shape(), "{p}: shape");
+            let same = match (da.read_raw::<f64>(), db.read_raw::<f64>()) {
+                (Ok(x), Ok(y)) => x
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .eq(y.iter().map(|v| v.to_bits())),
+                _ => da.read_raw::<i64>().unwrap() == db.read_raw::<i64>().unwrap(),
+            };
+            assert!(same, "{p} differs");
+            *n += 1;
+        }
+    }
+    let (fa, fb) = (hdf5::File::open(a).unwrap(), hdf5::File::open(b).unwrap());
+    let mut n = 0;
+    walk(&fa, &fb, "", &mut n);
+    assert!(n > 20, "{n} datasets compared");
+    let steps = |f: &hdf5::File| -> i64 {
+        f.group("VTKHDF/Steps")
+            .unwrap()
+            .attr("NSteps")
+            .unwrap()
+            .read_scalar()
+            .unwrap()
+    };
+    assert_eq!(steps(&fa), steps(&fb), "NSteps");
 }
 
 /// Kills `args` after each of `kills` steps, resumes, and compares with one
@@ -214,13 +256,7 @@ fn a_real_sigkill_is_resumed() {
     let dir = tmp("sigkill");
     let mut child = bin()
         .args(args)
-        .args([
-            "--out",
-            dir.to_str().unwrap(),
-            "--quiet",
-            "--no-plots",
-            "--no-hdf5",
-        ])
+        .args(["--out", dir.to_str().unwrap(), "--quiet", "--no-plots"])
         .spawn()
         .unwrap();
     // kill once the first checkpoint is there (or give up after 60 s)

@@ -307,7 +307,11 @@ impl FrameWriter {
 
     /// Also appends every frame to the VTKHDF grid of the run's HDF5 file.
     #[cfg(feature = "hdf5")]
-    pub fn with_hdf5(mut self, run: &super::h5::RunFile) -> Result<Self, Error> {
+    pub fn with_hdf5(
+        mut self,
+        run: &super::h5::RunFile,
+        reopen: Option<usize>,
+    ) -> Result<Self, Error> {
         let g = &self.geom;
         let conn: Vec<i64> = g
             .cells
@@ -337,6 +341,7 @@ impl FrameWriter {
                 &FRICTION_POINT_ARRAYS[..]
             },
             &CELL_ARRAYS,
+            reopen,
         )?);
         Ok(self)
     }

@@ -52,6 +52,14 @@ impl RunFile {
         let file = hdf5::File::create(&path).map_err(|e| h5err(&path, e))?;
         Ok(RunFile { file, path })
     }
+    /// Opens the `dir/fields.vtkhdf` of a checkpointed run, to cut its datasets to the
+    /// checkpoint and append to them ([`VtkHdf::create`], [`History::create`] with
+    /// `reopen`).
+    pub fn open(dir: &Path) -> Result<Self, Error> {
+        let path = dir.join("fields.vtkhdf");
+        let file = hdf5::File::open_rw(&path).map_err(|e| h5err(&path, e))?;
+        Ok(RunFile { file, path })
+    }
     /// Path of the file.
     pub fn path(&self) -> &Path {
         &self.path
@@ -88,6 +96,34 @@ impl Growing {
         };
         Ok(Growing { ds, cols, rows: 0 })
     }
+    /// [`Growing::create`], or with `reopen = Some(rows)` the dataset of a checkpointed
+    /// run cut to its first `rows` rows (rows written after the checkpoint are dropped:
+    /// the resumed run writes them again).
+    fn make<T: hdf5::H5Type>(
+        g: &hdf5::Group,
+        name: &str,
+        cols: usize,
+        chunk_rows: usize,
+        reopen: Option<usize>,
+    ) -> hdf5::Result<Self> {
+        let Some(rows) = reopen else {
+            return Self::create::<T>(g, name, cols, chunk_rows);
+        };
+        let ds = g.dataset(name)?;
+        let have = ds.shape().first().copied().unwrap_or(0);
+        if have < rows {
+            return Err(hdf5::Error::from(format!(
+                "{name} holds {have} rows, fewer than the {rows} of the checkpoint"
+            )));
+        }
+        if cols == 0 {
+            ds.resize(rows)?;
+        } else {
+            ds.resize((rows, cols))?;
+        }
+        Ok(Growing { ds, cols, rows })
+    }
+
     /// Appends `data` (`k · cols` values, or `k` for 1-D).
     fn append<T: hdf5::H5Type>(&mut self, data: &[T]) -> hdf5::Result<()> {
         let k = data.len().checked_div(self.cols).unwrap_or(data.len());
@@ -108,6 +144,15 @@ impl Growing {
     }
 }
 
+/// The per-step geometry offsets of `/VTKHDF/Steps`.
+const GEOMETRY_OFFSETS: [&str; 5] = [
+    "PartOffsets",
+    "NumberOfParts",
+    "PointOffsets",
+    "CellOffsets",
+    "ConnectivityIdOffsets",
+];
+
 /// The `/VTKHDF` transient grid.
 pub struct VtkHdf {
     run: RunFile,
@@ -126,6 +171,8 @@ impl VtkHdf {
     /// Writes the static mesh and prepares the transient arrays: `point` and `cell`
     /// list (name, components). `node_id` is a static point array: written once, every
     /// step's offset points at it.
+    /// With `reopen = Some(frames)`, opens the grid of a checkpointed run instead, its
+    /// transient arrays cut to the first `frames` frames.
     #[allow(clippy::too_many_arguments)]
     pub fn create(
         run: &RunFile,
@@ -136,8 +183,53 @@ impl VtkHdf {
         types: &[u8],
         point: &[(&str, usize)],
         cell: &[(&str, usize)],
+        reopen: Option<usize>,
     ) -> Result<Self, Error> {
         let path = run.path.clone();
+        if let Some(frames) = reopen {
+            let (np, nc) = (points.len(), types.len());
+            let r = (|| -> hdf5::Result<VtkHdf> {
+                let root = run.file.group("VTKHDF")?;
+                let (pd, cd) = (root.group("PointData")?, root.group("CellData")?);
+                let steps = root.group("Steps")?;
+                steps.attr("NSteps")?.write_scalar(&(frames as i64))?;
+                let values = Growing::make::<f64>(&steps, "Values", 0, 256, Some(frames))?;
+                let geometry_offsets = GEOMETRY_OFFSETS
+                    .iter()
+                    .map(|n| Growing::make::<i64>(&steps, n, 0, 256, Some(frames)))
+                    .collect::<hdf5::Result<Vec<_>>>()?;
+                let (pdo, cdo) = (
+                    steps.group("PointDataOffsets")?,
+                    steps.group("CellDataOffsets")?,
+                );
+                let node_id_offsets = Growing::make::<i64>(&pdo, "node_id", 0, 256, Some(frames))?;
+                let arrays =
+                    |g: &hdf5::Group, o: &hdf5::Group, list: &[(&str, usize)], rows: usize| {
+                        list.iter()
+                            .map(|&(name, comps)| {
+                                let cols = if comps == 1 { 0 } else { comps };
+                                Ok((
+                                    Growing::make::<f64>(g, name, cols, 1, Some(frames * rows))?,
+                                    Growing::make::<i64>(o, name, 0, 256, Some(frames))?,
+                                ))
+                            })
+                            .collect::<hdf5::Result<Vec<_>>>()
+                    };
+                Ok(VtkHdf {
+                    run: run.clone(),
+                    values,
+                    geometry_offsets,
+                    point: arrays(&pd, &pdo, point, np)?,
+                    node_id_offsets,
+                    cell: arrays(&cd, &cdo, cell, nc)?,
+                    steps,
+                    np,
+                    nc,
+                    frames,
+                })
+            })();
+            return r.map_err(|e| h5err(&path, e));
+        }
         let r = (|| -> hdf5::Result<VtkHdf> {
             let root = run.file.create_group("VTKHDF")?;
             root.new_attr::<i64>()
@@ -192,13 +284,7 @@ impl VtkHdf {
                 .write_scalar(&0i64)?;
             let values = Growing::create::<f64>(&steps, "Values", 0, 256)?;
             let mut geometry_offsets = Vec::new();
-            for name in [
-                "PartOffsets",
-                "NumberOfParts",
-                "PointOffsets",
-                "CellOffsets",
-                "ConnectivityIdOffsets",
-            ] {
+            for name in GEOMETRY_OFFSETS {
                 geometry_offsets.push(Growing::create::<i64>(&steps, name, 0, 256)?);
             }
             let pdo = steps.create_group("PointDataOffsets")?;
@@ -301,6 +387,8 @@ impl History {
 
     /// Creates `/history` for `m` contacts (with `td` tangents each in a frictional
     /// scene, 0 otherwise) with the run's parameters as attributes.
+    /// With `reopen = Some(rows)`, opens the `/history` of a checkpointed run instead,
+    /// cut to its first `rows` rows.
     #[allow(clippy::too_many_arguments)]
     pub fn create(
         run: &RunFile,
@@ -310,28 +398,34 @@ impl History {
         dt: f64,
         theta: f64,
         parameters: &serde_json::Value,
+        reopen: Option<usize>,
     ) -> Result<Self, Error> {
         let r = (|| -> hdf5::Result<History> {
-            let g = run.file.create_group("history")?;
-            let text = |s: &str| s.parse::<VarLenUnicode>().expect("no NUL in JSON");
-            g.new_attr::<VarLenUnicode>()
-                .create("scheme")?
-                .write_scalar(&text(scheme))?;
-            g.new_attr::<VarLenUnicode>()
-                .create("parameters")?
-                .write_scalar(&text(&parameters.to_string()))?;
-            g.new_attr::<f64>().create("dt")?.write_scalar(&dt)?;
-            g.new_attr::<f64>().create("theta")?.write_scalar(&theta)?;
-            let mut scalars = vec![("step", Growing::create::<i64>(&g, "step", 0, 4096)?)];
+            let g = if reopen.is_some() {
+                run.file.group("history")?
+            } else {
+                let g = run.file.create_group("history")?;
+                let text = |s: &str| s.parse::<VarLenUnicode>().expect("no NUL in JSON");
+                g.new_attr::<VarLenUnicode>()
+                    .create("scheme")?
+                    .write_scalar(&text(scheme))?;
+                g.new_attr::<VarLenUnicode>()
+                    .create("parameters")?
+                    .write_scalar(&text(&parameters.to_string()))?;
+                g.new_attr::<f64>().create("dt")?.write_scalar(&dt)?;
+                g.new_attr::<f64>().create("theta")?.write_scalar(&theta)?;
+                g
+            };
+            let mut scalars = vec![("step", Growing::make::<i64>(&g, "step", 0, 4096, reopen)?)];
             for c in FLOAT_COLUMNS {
-                scalars.push((c, Growing::create::<f64>(&g, c, 0, 4096)?));
+                scalars.push((c, Growing::make::<f64>(&g, c, 0, 4096, reopen)?));
             }
             scalars.push((
                 "max_violation",
-                Growing::create::<f64>(&g, "max_violation", 0, 4096)?,
+                Growing::make::<f64>(&g, "max_violation", 0, 4096, reopen)?,
             ));
             for c in INT_COLUMNS {
-                scalars.push((c, Growing::create::<i64>(&g, c, 0, 4096)?));
+                scalars.push((c, Growing::make::<i64>(&g, c, 0, 4096, reopen)?));
             }
             let rows = (4096 / m.max(1)).max(16);
             let contact = CONTACT_COLUMNS
@@ -340,9 +434,9 @@ impl History {
                     Ok((
                         c,
                         if m == 0 {
-                            Growing::create::<f64>(&g, c, 0, 16)?
+                            Growing::make::<f64>(&g, c, 0, 16, reopen)?
                         } else {
-                            Growing::create::<f64>(&g, c, m, rows)?
+                            Growing::make::<f64>(&g, c, m, rows, reopen)?
                         },
                     ))
                 })
@@ -350,11 +444,11 @@ impl History {
             let friction = if td > 0 && m > 0 {
                 Some(FrictionHistory {
                     td,
-                    impulse: Growing::create::<f64>(&g, "tangent_impulse", m * td, rows)?,
-                    slip: Growing::create::<f64>(&g, "slip_velocity", m * td, rows)?,
-                    status: Growing::create::<i64>(&g, "status", m, rows)?,
-                    iterations: Growing::create::<i64>(&g, "friction_iterations", 0, 4096)?,
-                    residual: Growing::create::<f64>(&g, "friction_residual", 0, 4096)?,
+                    impulse: Growing::make::<f64>(&g, "tangent_impulse", m * td, rows, reopen)?,
+                    slip: Growing::make::<f64>(&g, "slip_velocity", m * td, rows, reopen)?,
+                    status: Growing::make::<i64>(&g, "status", m, rows, reopen)?,
+                    iterations: Growing::make::<i64>(&g, "friction_iterations", 0, 4096, reopen)?,
+                    residual: Growing::make::<f64>(&g, "friction_residual", 0, 4096, reopen)?,
                     rows_t: Vec::with_capacity(2 * m * td * Self::BLOCK),
                     rows_st: Vec::with_capacity(m * Self::BLOCK),
                     rows_f: Vec::with_capacity(Self::BLOCK),

@@ -107,6 +107,8 @@ pub struct HistoryWriter {
     tmp: PathBuf,
     path: PathBuf,
     rows_since_flush: usize,
+    /// Rows written so far.
+    rows: u64,
 }
 
 /// A file that counts the bytes written to it (the history's checkpoint cursor).
@@ -163,13 +165,14 @@ impl HistoryWriter {
             tmp,
             path: path.to_path_buf(),
             rows_since_flush: 0,
+            rows: 0,
         })
     }
 
     /// Reopens the `.part` of a checkpointed run, cut to the `bytes` that belong to the
     /// checkpointed steps (rows a killed run wrote after its checkpoint, and a row the
     /// kill cut, are dropped: the resumed run writes them again).
-    pub fn resume(path: &Path, bytes: u64) -> Result<Self, Error> {
+    pub fn resume(path: &Path, bytes: u64, rows: u64) -> Result<Self, Error> {
         let tmp = part_path(path);
         let f = std::fs::OpenOptions::new()
             .write(true)
@@ -198,7 +201,13 @@ impl HistoryWriter {
             tmp,
             path: path.to_path_buf(),
             rows_since_flush: 0,
+            rows,
         })
+    }
+
+    /// Rows written so far.
+    pub fn rows(&self) -> u64 {
+        self.rows
     }
 
     /// Bytes on disk; after a [`HistoryWriter::flush`], every row written so far.
@@ -270,6 +279,7 @@ impl HistoryWriter {
             h.row(state, stats, kinetic, potential)?;
         }
         self.rows_since_flush += 1;
+        self.rows += 1;
         if self.rows_since_flush >= Self::FLUSH_EVERY {
             self.out.flush().map_err(|e| Error::write(&self.tmp, e))?;
             self.rows_since_flush = 0;
@@ -335,8 +345,6 @@ pub struct OutputOptions {
     pub hdf5: Option<bool>,
     /// Write a checkpoint (`checkpoint.json`, [`crate::checkpoint`]) every this many
     /// steps (default 0: none); `signorini resume DIR` finishes a killed run from it.
-    /// Checkpoints cover `history.csv` and the `.vtu` frames: a run that also writes the
-    /// HDF5 file refuses them (set `hdf5 = false`).
     #[serde(default)]
     pub checkpoint_every: usize,
 }
@@ -389,14 +397,7 @@ impl OutputOptions {
         if self.history_stride == 0 {
             return Err(Error::invalid("history_stride", 0, "must be at least 1"));
         }
-        if self.checkpoint_every > 0 && self.hdf5() {
-            return Err(Error::invalid(
-                "checkpoint_every",
-                self.checkpoint_every,
-                "checkpoints cover history.csv and the .vtu frames, not the HDF5 file: set \
-                 output.hdf5 = false (--no-hdf5) to checkpoint this run",
-            ));
-        }
+
         Ok(())
     }
 }
