@@ -457,21 +457,23 @@ impl RunChecks {
             ("impulse", &s.impulse, true),
             ("gap", &s.gap, true),
         ] {
-            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                let (contact, at) = if per_contact {
-                    (Some(i), String::new())
-                } else {
-                    (None, format!(" of dof {i}"))
-                };
-                return Err(fail(
-                    contact,
-                    format!(
-                        "the {name}{at} is {}: the solution broke down (lower the time step, \
-                         check the material and loads)",
-                        v[i]
-                    ),
-                ));
+            if all_finite(v) {
+                continue;
             }
+            let i = v.iter().position(|x| !x.is_finite()).unwrap_or(0);
+            let (contact, at) = if per_contact {
+                (Some(i), String::new())
+            } else {
+                (None, format!(" of dof {i}"))
+            };
+            return Err(fail(
+                contact,
+                format!(
+                    "the {name}{at} is {}: the solution broke down (lower the time step, \
+                     check the material and loads)",
+                    v[i]
+                ),
+            ));
         }
         if st.max_violation > self.max_violation {
             return Err(fail(
@@ -504,6 +506,21 @@ impl RunChecks {
         }
         Ok(())
     }
+}
+
+/// Whether every value is finite, in eight independent lanes (`0 · x` is NaN exactly for
+/// an infinite or NaN `x`), so the check vectorizes: about 0.1 µs for the bar's 2 × 1001
+/// values, where a scan with an early exit costs microseconds.
+fn all_finite(x: &[f64]) -> bool {
+    let mut acc = [0.0f64; 8];
+    let mut chunks = x.chunks_exact(8);
+    for c in &mut chunks {
+        for i in 0..8 {
+            acc[i] += c[i] * 0.0;
+        }
+    }
+    let tail: f64 = chunks.remainder().iter().map(|v| v * 0.0).sum();
+    (acc.iter().sum::<f64>() + tail) == 0.0
 }
 
 /// Something that looks at the run after every step: the history and frame writers,
@@ -1121,5 +1138,24 @@ pub fn forecast_name(f: Forecast) -> String {
     match f {
         Forecast::Explicit { gamma } => format!("explicit (γ = {gamma})"),
         Forecast::Free => "free".to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::all_finite;
+
+    #[test]
+    fn finiteness_is_checked_in_every_lane_and_the_tail() {
+        let mut x = vec![1e300; 21];
+        assert!(all_finite(&x));
+        for i in [0, 7, 8, 15, 16, 20] {
+            for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                x[i] = bad;
+                assert!(!all_finite(&x), "{bad} at {i}");
+                x[i] = -1e300;
+            }
+        }
+        assert!(all_finite(&[]));
     }
 }
