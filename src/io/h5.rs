@@ -186,119 +186,66 @@ impl VtkHdf {
         reopen: Option<usize>,
     ) -> Result<Self, Error> {
         let path = run.path.clone();
-        if let Some(frames) = reopen {
-            let (np, nc) = (points.len(), types.len());
-            let r = (|| -> hdf5::Result<VtkHdf> {
-                let root = run.file.group("VTKHDF")?;
-                let (pd, cd) = (root.group("PointData")?, root.group("CellData")?);
-                let steps = root.group("Steps")?;
-                steps.attr("NSteps")?.write_scalar(&(frames as i64))?;
-                let values = Growing::make::<f64>(&steps, "Values", 0, 256, Some(frames))?;
-                let geometry_offsets = GEOMETRY_OFFSETS
-                    .iter()
-                    .map(|n| Growing::make::<i64>(&steps, n, 0, 256, Some(frames)))
-                    .collect::<hdf5::Result<Vec<_>>>()?;
-                let (pdo, cdo) = (
-                    steps.group("PointDataOffsets")?,
-                    steps.group("CellDataOffsets")?,
-                );
-                let node_id_offsets = Growing::make::<i64>(&pdo, "node_id", 0, 256, Some(frames))?;
-                let arrays =
-                    |g: &hdf5::Group, o: &hdf5::Group, list: &[(&str, usize)], rows: usize| {
-                        list.iter()
-                            .map(|&(name, comps)| {
-                                let cols = if comps == 1 { 0 } else { comps };
-                                Ok((
-                                    Growing::make::<f64>(g, name, cols, 1, Some(frames * rows))?,
-                                    Growing::make::<i64>(o, name, 0, 256, Some(frames))?,
-                                ))
-                            })
-                            .collect::<hdf5::Result<Vec<_>>>()
-                    };
-                Ok(VtkHdf {
-                    run: run.clone(),
-                    values,
-                    geometry_offsets,
-                    point: arrays(&pd, &pdo, point, np)?,
-                    node_id_offsets,
-                    cell: arrays(&cd, &cdo, cell, nc)?,
-                    steps,
-                    np,
-                    nc,
-                    frames,
-                })
-            })();
-            return r.map_err(|e| h5err(&path, e));
-        }
+        let (np, nc) = (points.len(), types.len());
         let r = (|| -> hdf5::Result<VtkHdf> {
-            let root = run.file.create_group("VTKHDF")?;
-            root.new_attr::<i64>()
-                .shape(2)
-                .create("Version")?
-                .write_raw(&[2i64, 2])?;
-            let ty = FixedAscii::<16>::from_ascii("UnstructuredGrid").expect("ASCII");
-            root.new_attr::<FixedAscii<16>>()
-                .create("Type")?
-                .write_scalar(&ty)?;
-            let (np, nc) = (points.len(), types.len());
-            let one = |name: &str, v: i64| -> hdf5::Result<()> {
-                root.new_dataset::<i64>()
-                    .shape(1)
-                    .create(name)?
-                    .write_raw(&[v])
+            // the groups: opened in a checkpointed run's file, else created with the
+            // static mesh
+            let (pd, cd, steps, pdo, cdo) = match reopen {
+                Some(frames) => {
+                    let root = run.file.group("VTKHDF")?;
+                    let steps = root.group("Steps")?;
+                    steps.attr("NSteps")?.write_scalar(&(frames as i64))?;
+                    let (pdo, cdo) = (
+                        steps.group("PointDataOffsets")?,
+                        steps.group("CellDataOffsets")?,
+                    );
+                    (
+                        root.group("PointData")?,
+                        root.group("CellData")?,
+                        steps,
+                        pdo,
+                        cdo,
+                    )
+                }
+                None => {
+                    let root = run.file.create_group("VTKHDF")?;
+                    Self::write_static(&root, node_id, points, connectivity, offsets, types)?;
+                    let steps = root.create_group("Steps")?;
+                    steps
+                        .new_attr::<i64>()
+                        .create("NSteps")?
+                        .write_scalar(&0i64)?;
+                    let (pdo, cdo) = (
+                        steps.create_group("PointDataOffsets")?,
+                        steps.create_group("CellDataOffsets")?,
+                    );
+                    steps.create_group("FieldDataOffsets")?;
+                    steps.create_group("FieldDataSizes")?;
+                    (
+                        root.group("PointData")?,
+                        root.group("CellData")?,
+                        steps,
+                        pdo,
+                        cdo,
+                    )
+                }
             };
-            one("NumberOfPoints", np as i64)?;
-            one("NumberOfCells", nc as i64)?;
-            one("NumberOfConnectivityIds", connectivity.len() as i64)?;
-            let flat: Vec<f64> = points.iter().flatten().copied().collect();
-            root.new_dataset::<f64>()
-                .shape((np, 3))
-                .create("Points")?
-                .write_raw(&flat)?;
-            root.new_dataset::<i64>()
-                .shape(connectivity.len())
-                .create("Connectivity")?
-                .write_raw(connectivity)?;
-            let mut offs = Vec::with_capacity(offsets.len() + 1);
-            offs.push(0i64);
-            offs.extend_from_slice(offsets);
-            root.new_dataset::<i64>()
-                .shape(offs.len())
-                .create("Offsets")?
-                .write_raw(&offs)?;
-            root.new_dataset::<u8>()
-                .shape(nc)
-                .create("Types")?
-                .write_raw(types)?;
-            root.create_group("FieldData")?;
-            let pd = root.create_group("PointData")?;
-            pd.new_dataset::<i64>()
-                .shape(np)
-                .create("node_id")?
-                .write_raw(node_id)?;
-            let cd = root.create_group("CellData")?;
-            let steps = root.create_group("Steps")?;
-            steps
-                .new_attr::<i64>()
-                .create("NSteps")?
-                .write_scalar(&0i64)?;
-            let values = Growing::create::<f64>(&steps, "Values", 0, 256)?;
-            let mut geometry_offsets = Vec::new();
-            for name in GEOMETRY_OFFSETS {
-                geometry_offsets.push(Growing::create::<i64>(&steps, name, 0, 256)?);
-            }
-            let pdo = steps.create_group("PointDataOffsets")?;
-            let node_id_offsets = Growing::create::<i64>(&pdo, "node_id", 0, 256)?;
-            let cdo = steps.create_group("CellDataOffsets")?;
-            steps.create_group("FieldDataOffsets")?;
-            steps.create_group("FieldDataSizes")?;
+            // the transient arrays, cut to the checkpoint's frames when reopened
+            let keep = |per_frame: usize| reopen.map(|f| f * per_frame);
+            let values = Growing::make::<f64>(&steps, "Values", 0, 256, keep(1))?;
+            let geometry_offsets = GEOMETRY_OFFSETS
+                .iter()
+                .map(|n| Growing::make::<i64>(&steps, n, 0, 256, keep(1)))
+                .collect::<hdf5::Result<Vec<_>>>()?;
+            let node_id_offsets = Growing::make::<i64>(&pdo, "node_id", 0, 256, keep(1))?;
             let arrays = |g: &hdf5::Group, o: &hdf5::Group, list: &[(&str, usize)], rows: usize| {
                 list.iter()
                     .map(|&(name, comps)| {
                         let cols = if comps == 1 { 0 } else { comps };
+                        let chunk = rows.clamp(1, 1 << 16);
                         Ok((
-                            Growing::create::<f64>(g, name, cols, rows.clamp(1, 1 << 16))?,
-                            Growing::create::<i64>(o, name, 0, 256)?,
+                            Growing::make::<f64>(g, name, cols, chunk, keep(rows))?,
+                            Growing::make::<i64>(o, name, 0, 256, keep(1))?,
                         ))
                     })
                     .collect::<hdf5::Result<Vec<_>>>()
@@ -313,10 +260,67 @@ impl VtkHdf {
                 steps,
                 np,
                 nc,
-                frames: 0,
+                frames: reopen.unwrap_or(0),
             })
         })();
         r.map_err(|e| h5err(&path, e))
+    }
+
+    /// The version, type, mesh and the static `node_id` array of a new `/VTKHDF`.
+    fn write_static(
+        root: &hdf5::Group,
+        node_id: &[i64],
+        points: &[[f64; 3]],
+        connectivity: &[i64],
+        offsets: &[i64],
+        types: &[u8],
+    ) -> hdf5::Result<()> {
+        root.new_attr::<i64>()
+            .shape(2)
+            .create("Version")?
+            .write_raw(&[2i64, 2])?;
+        let ty = FixedAscii::<16>::from_ascii("UnstructuredGrid").expect("ASCII");
+        root.new_attr::<FixedAscii<16>>()
+            .create("Type")?
+            .write_scalar(&ty)?;
+        let (np, nc) = (points.len(), types.len());
+        let one = |name: &str, v: i64| -> hdf5::Result<()> {
+            root.new_dataset::<i64>()
+                .shape(1)
+                .create(name)?
+                .write_raw(&[v])
+        };
+        one("NumberOfPoints", np as i64)?;
+        one("NumberOfCells", nc as i64)?;
+        one("NumberOfConnectivityIds", connectivity.len() as i64)?;
+        let flat: Vec<f64> = points.iter().flatten().copied().collect();
+        root.new_dataset::<f64>()
+            .shape((np, 3))
+            .create("Points")?
+            .write_raw(&flat)?;
+        root.new_dataset::<i64>()
+            .shape(connectivity.len())
+            .create("Connectivity")?
+            .write_raw(connectivity)?;
+        let mut offs = Vec::with_capacity(offsets.len() + 1);
+        offs.push(0i64);
+        offs.extend_from_slice(offsets);
+        root.new_dataset::<i64>()
+            .shape(offs.len())
+            .create("Offsets")?
+            .write_raw(&offs)?;
+        root.new_dataset::<u8>()
+            .shape(nc)
+            .create("Types")?
+            .write_raw(types)?;
+        root.create_group("FieldData")?;
+        root.create_group("PointData")?
+            .new_dataset::<i64>()
+            .shape(np)
+            .create("node_id")?
+            .write_raw(node_id)?;
+        root.create_group("CellData")?;
+        Ok(())
     }
 
     /// Appends one frame at `time`: `point[i]` and `cell[i]` hold the arrays in the order
