@@ -3,30 +3,19 @@
 //! silently kept their mass. Now it uses the contacts' own nodes: their rows of M are
 //! empty, and the body's mass is unchanged (ρ V, to round-off).
 
+mod common;
+
+use common::bad::BOX_ON_FLOOR;
 use signorini::scene::file::Scene;
 
 fn scene(nodes: &str, within: &str) -> String {
-    format!(
-        r#"[time]
-dt = 1e-4
-t_end = 1e-3
-[[bodies]]
-name = "b"
-mesh = {{ generator = "box", cell = "hex8", cells = [2, 2, 2], size = [0.1, 0.1, 0.1] }}
-material = {{ young = 1e6, poisson = 0.3, density = 1000.0 }}
-mass = "redistributed"
-[[obstacles]]
-name = "floor"
-type = "plane"
-point = [0.0, 0.0, -0.01]
-normal = [0.0, 0.0, 1.0]
-[[contacts]]
-body = "b"
-nodes = "{nodes}"
-obstacle = "floor"
-{within}
-"#
-    )
+    BOX_ON_FLOOR
+        .replace(
+            "MESH",
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [2, 2, 2], size = [0.1, 0.1, 0.1] }\n\
+             mass = \"redistributed\"",
+        )
+        .replace("nodes = \"z0\"", &format!("nodes = \"{nodes}\"\n{within}"))
 }
 
 /// (mass on the bottom face's dofs, mass elsewhere, total mass of one component)
