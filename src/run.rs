@@ -1,8 +1,11 @@
 //! Running a scene: steps the integrator, streams the history, measures the contact
 //! response against the analytic reference and assembles the [`Summary`].
 //!
-//! The loop allocates nothing per step: the integrator works in its own buffers and the
-//! force record is reserved for every step up front.
+//! Every run goes through one step loop, [`drive`]: it checks each state
+//! ([`RunChecks`]) and hands it to observers (statistics, the contact measurement,
+//! history and frames, checkpoints). The loop reserves nothing per step: the integrator
+//! works in its own buffers, the contact measurement keeps the first contact interval
+//! only (and the per-step force up to [`FORCE_TRACE_MAX_STEPS`], reserved once).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -281,12 +284,15 @@ fn run_bar_from(
     let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
     let parameters = serde_json::to_value(scene).expect("scene serializes");
     let checks = RunChecks::new(&scene.scheme, geometry.size());
-    let ckpt = Checkpointing {
-        source: RunSource::Bar {
-            scene: scene.clone(),
-        },
-        resume,
-    };
+    let ckpt =
+        (resume.is_some() || out.is_some_and(|o| o.options.checkpoint_every > 0)).then(|| {
+            Checkpointing {
+                source: RunSource::Bar {
+                    scene: scene.clone(),
+                },
+                resume,
+            }
+        });
     run_checkpointed(
         integ.as_mut(),
         scene.steps(),
@@ -297,7 +303,7 @@ fn run_bar_from(
         parameters,
         out.map(|o| (o, geometry)),
         progress,
-        Some(ckpt),
+        ckpt,
     )
     .and_then(|r| finish(r, setup, out))
 }
@@ -329,22 +335,25 @@ fn run_scene_from(
     let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
     let parameters = serde_json::to_value(scene).expect("scene serializes");
     let checks = RunChecks::new(&scene.scheme, geometry.size());
-    let source = match resume {
-        Some(c) => c.source.clone(),
-        None if out.is_some_and(|o| o.options.checkpoint_every > 0) => RunSource::Scene {
-            file: scene.file.clone().unwrap_or_default(),
-            toml: toml::to_string(scene).map_err(|e| {
-                Error::Numerical(format!(
-                    "the scene does not serialize for a checkpoint: {e}"
-                ))
-            })?,
-            base_dir: std::path::absolute(&scene.base_dir).unwrap_or(scene.base_dir.clone()),
-        },
-        None => RunSource::Scene {
-            file: PathBuf::new(),
-            toml: String::new(),
-            base_dir: PathBuf::new(),
-        },
+    // what a checkpoint rebuilds from: only formed when the run writes checkpoints
+    let ckpt = match resume {
+        Some(c) => Some(Checkpointing {
+            source: c.source.clone(),
+            resume,
+        }),
+        None if out.is_some_and(|o| o.options.checkpoint_every > 0) => Some(Checkpointing {
+            source: RunSource::Scene {
+                file: scene.file.clone().unwrap_or_default(),
+                toml: toml::to_string(scene).map_err(|e| {
+                    Error::Numerical(format!(
+                        "the scene does not serialize for a checkpoint: {e}"
+                    ))
+                })?,
+                base_dir: std::path::absolute(&scene.base_dir).unwrap_or(scene.base_dir.clone()),
+            },
+            resume: None,
+        }),
+        None => None,
     };
     run_checkpointed(
         integ.as_mut(),
@@ -356,7 +365,7 @@ fn run_scene_from(
         parameters,
         out.map(|o| (o, geometry)),
         progress,
-        Some(Checkpointing { source, resume }),
+        ckpt,
     )
     .and_then(|r| finish(r, setup, out))
 }
@@ -372,7 +381,7 @@ pub fn resume(dir: &Path, progress: &mut dyn Progress) -> Result<RunResult, Erro
         options: &c.output,
     };
     let file = dir.join(crate::checkpoint::FILE);
-    let r = match &c.source {
+    match &c.source {
         RunSource::Bar { scene } => {
             scene.validate().map_err(|e| e.in_file(&file))?;
             run_bar_from(scene, Some(out), progress, Some(&c))
@@ -388,8 +397,7 @@ pub fn resume(dir: &Path, progress: &mut dyn Progress) -> Result<RunResult, Erro
             scene.file = Some(scene_file.clone());
             run_scene_from(&scene, Some(out), progress, Some(&c))
         }
-    }?;
-    Ok(r)
+    }
 }
 
 /// What the driver checks after every step (DESIGN.md §9): a state that turned
@@ -422,16 +430,6 @@ impl RunChecks {
             },
             newton_cap: params.newton.max_iterations,
             friction_cap: params.friction.max_iterations,
-        }
-    }
-
-    /// No checks beyond non-finite states (caps allowed, no violation limit).
-    pub fn lenient() -> Self {
-        RunChecks {
-            allow_caps: true,
-            max_violation: f64::INFINITY,
-            newton_cap: 0,
-            friction_cap: 0,
         }
     }
 
@@ -1010,13 +1008,7 @@ pub fn run_checkpointed(
     let s = integ.state();
     let sys = integ.system();
     let energy1 = sys.kinetic_energy(&s.v) + sys.potential_energy(&s.q);
-    let contact = reference.map(|r| {
-        let mut c = contact_summary(&tracker.force, &tracker.min_gap, h, sys, &s.v, r);
-        let offset = tracker.first.unwrap_or(0) as f64 * h;
-        c.first_contact_time += offset;
-        c.total_impulse = tracker.total_force * h;
-        c
-    });
+    let contact = reference.map(|r| contact_summary(&tracker, h, sys, &s.v, r));
     let summary = Summary {
         scheme: integ.name().to_string(),
         elements,
@@ -1078,24 +1070,25 @@ pub fn write_summary(summary: &Summary, dir: &Path) -> Result<(), Error> {
 /// few steps by dispersion, and the half-height width is the time its centre takes,
 /// independent of how far the tails reach. `closed_duration` counts the whole run.
 fn contact_summary(
-    force: &[f64],
-    min_gap: &[f64],
+    tracker: &ContactTracker,
     h: f64,
     sys: &crate::model::LinearSystem,
     v: &[f64],
     r: ImpactingBar,
 ) -> ContactSummary {
+    let (force, min_gap) = (&tracker.force, &tracker.min_gap);
     let mut c = ContactSummary {
         analytic_force: r.contact_force(),
         analytic_duration: r.contact_duration(),
         first_contact_time: f64::NAN,
         release_velocity: sys.momentum(v) / sys.total_mass(),
         analytic_release_velocity: r.release_velocity(),
-        total_impulse: force.iter().sum::<f64>() * h,
+        total_impulse: tracker.total_force * h,
         analytic_total_impulse: r.total_impulse(),
         ..ContactSummary::default()
     };
-    let Some(i0) = force.iter().position(|&f| f > 0.0) else {
+    // the tracker's window starts at the first positive impulse, step `first`
+    let (Some(first), Some(i0)) = (tracker.first, force.iter().position(|&f| f > 0.0)) else {
         return c;
     };
     let mut last = i0;
@@ -1115,7 +1108,7 @@ fn contact_summary(
     c.plateau_std =
         (win.iter().map(|f| (f - plateau).powi(2)).sum::<f64>() / win.len() as f64).sqrt();
     c.closed_duration = len as f64 * h;
-    c.first_contact_time = i0 as f64 * h;
+    c.first_contact_time = (first + i0) as f64 * h;
     let half = 0.5 * plateau;
     let at = |j: usize| if j < force.len() { force[j] } else { 0.0 };
     // rising crossing: first sample ≥ half, interpolated from the previous one

@@ -891,7 +891,7 @@ fn bytemuck_f64(v: &[f64]) -> &[u8] {
 /// otherwise leave frames its `.pvd` does not list, and renaming a new frame onto an
 /// old one makes ext4 write the file out first (`auto_da_alloc`), which measured 10×
 /// slower than writing a new name (0.6 vs 0.06 ms for the bar's 77 kB frame).
-fn remove_stale_frames(dir: &Path) -> Result<(), Error> {
+pub(crate) fn remove_stale_frames(dir: &Path) -> Result<(), Error> {
     let entries = std::fs::read_dir(dir).map_err(|e| Error::write(dir, e))?;
     for e in entries {
         let path = e.map_err(|e| Error::write(dir, e))?.path();

@@ -66,11 +66,10 @@ pub fn parse_mesh(path: &Path, bytes: &[u8]) -> Result<Mesh, Error> {
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
-    let bytes = bytes.to_vec();
     let raw = match ext.as_str() {
-        "msh" => read_msh(path, &bytes)?,
-        "vtu" => read_vtu(path, &bytes)?,
-        "vtk" => read_legacy_vtk(path, &bytes)?,
+        "msh" => read_msh(path, bytes)?,
+        "vtu" => read_vtu(path, bytes)?,
+        "vtk" => read_legacy_vtk(path, bytes)?,
         _ => {
             return Err(bad(
                 path,

@@ -52,28 +52,17 @@ pub const RUN_FILES: [&str; 12] = [
 /// never mixes two runs.
 pub fn prepare_run_dir(dir: &Path) -> Result<(), Error> {
     std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))?;
-    for sub in [dir.to_path_buf(), dir.join("fields")] {
-        let entries = match std::fs::read_dir(&sub) {
-            Ok(e) => e,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
-            Err(e) => return Err(Error::write(&sub, e)),
-        };
-        for e in entries {
-            let path = e.map_err(|e| Error::write(&sub, e))?.path();
-            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
-            let ours = if sub == dir {
-                RUN_FILES.contains(&name)
-                    || name.ends_with(".part")
-                    || name
-                        .strip_suffix(".part")
-                        .is_some_and(|n| RUN_FILES.contains(&n))
-            } else {
-                name.starts_with("frame_") && (name.ends_with(".vtu") || name.ends_with(".part"))
-            };
-            if ours && path.is_file() {
-                std::fs::remove_file(&path).map_err(|e| Error::write(&path, e))?;
-            }
+    let entries = std::fs::read_dir(dir).map_err(|e| Error::write(dir, e))?;
+    for e in entries {
+        let path = e.map_err(|e| Error::write(dir, e))?.path();
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        if (RUN_FILES.contains(&name) || name.ends_with(".part")) && path.is_file() {
+            std::fs::remove_file(&path).map_err(|e| Error::write(&path, e))?;
         }
+    }
+    let frames = dir.join("fields");
+    if frames.is_dir() {
+        frames::remove_stale_frames(&frames)?;
     }
     Ok(())
 }
@@ -174,7 +163,7 @@ impl HistoryWriter {
     /// kill cut, are dropped: the resumed run writes them again).
     pub fn resume(path: &Path, bytes: u64, rows: u64) -> Result<Self, Error> {
         let tmp = part_path(path);
-        let f = std::fs::OpenOptions::new()
+        let mut f = std::fs::OpenOptions::new()
             .write(true)
             .open(&tmp)
             .map_err(|e| Error::io(&tmp, e))?;
@@ -190,7 +179,6 @@ impl HistoryWriter {
             ));
         }
         f.set_len(bytes).map_err(|e| Error::write(&tmp, e))?;
-        let mut f = f;
         use std::io::Seek as _;
         f.seek(std::io::SeekFrom::End(0))
             .map_err(|e| Error::write(&tmp, e))?;

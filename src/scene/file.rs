@@ -615,6 +615,9 @@ impl Scene {
             dim,
             ..Geometry::default()
         };
+        // each contact's nodes, found once with its body's mesh: they take no mass under
+        // the redistributed mass, then become the contact set below
+        let mut nodes_of: Vec<Vec<usize>> = vec![Vec::new(); self.contacts.len()];
         for (bi, b) in self.bodies.iter().enumerate() {
             let at = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
             if b.dim() != dim {
@@ -638,10 +641,10 @@ impl Scene {
                 .enumerate()
                 .filter(|(_, c)| c.body == b.name)
             {
-                let nodes = self
+                nodes_of[ci] = self
                     .contact_nodes(&mesh, c, dim)
                     .map_err(|e| prefix(&format!("contacts[{ci}]"), e))?;
-                contact_nodes.extend(nodes);
+                contact_nodes.extend_from_slice(&nodes_of[ci]);
             }
             contact_nodes.sort_unstable();
             contact_nodes.dedup();
@@ -821,7 +824,7 @@ impl Scene {
                 .iter()
                 .find(|o| o.name() == c.obstacle)
                 .expect("validated");
-            let nodes = self.contact_nodes(mesh, c, dim).map_err(at)?;
+            let nodes = std::mem::take(&mut nodes_of[ci]);
             let mut dofs = Vec::new();
             let mut refs = Vec::new();
             for &v in &nodes {
