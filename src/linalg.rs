@@ -707,6 +707,84 @@ pub(crate) fn max_residual(a: SparseColMatRef<'_, usize, f64>, x: &[f64], b: &[f
         .fold(0.0, f64::max)
 }
 
+/// Partial-pivoting LU of a dense column-major square matrix of up to `capacity`
+/// rows, with the permutations and faer's scratch owned and sized at construction, so
+/// factoring and solving do not allocate (the coupled position problem of the step
+/// loop, [`crate::integrators::core`]). [`dense_lu_solve`] is the allocating
+/// one-shot form for one-step problems.
+pub struct DenseLu {
+    capacity: usize,
+    perm: Vec<usize>,
+    perm_inv: Vec<usize>,
+    mem: MemBuffer,
+}
+
+impl std::fmt::Debug for DenseLu {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "DenseLu {{ capacity: {} }}", self.capacity)
+    }
+}
+
+impl DenseLu {
+    /// Scratch for matrices of up to `capacity` rows.
+    pub fn with_capacity(capacity: usize) -> Self {
+        use faer::linalg::lu::partial_pivoting::{factor, solve};
+        let c = capacity.max(1);
+        let req = factor::lu_in_place_scratch::<usize, f64>(c, c, Par::Seq, Default::default())
+            .or(solve::solve_in_place_scratch::<usize, f64>(c, 1, Par::Seq));
+        DenseLu {
+            capacity,
+            perm: vec![0; c],
+            perm_inv: vec![0; c],
+            mem: MemBuffer::new(req),
+        }
+    }
+
+    /// Rows this workspace takes.
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// Solves `a x = b` in place (`a`: the leading `k × k` column-major block,
+    /// overwritten by its factors; `b`: `k` values, overwritten by `x`). Returns `false`
+    /// (and leaves `b` unspecified) when a pivot is zero or a value is not finite, or
+    /// when `k` exceeds the capacity.
+    pub fn solve(&mut self, a: &mut [f64], k: usize, b: &mut [f64]) -> bool {
+        use faer::linalg::lu::partial_pivoting::{factor, solve};
+        if k > self.capacity {
+            return false;
+        }
+        if k == 0 {
+            return true;
+        }
+        let mut lu = MatMut::from_column_major_slice_mut(&mut a[..k * k], k, k);
+        let (_, p) = factor::lu_in_place(
+            lu.as_mut(),
+            &mut self.perm[..k],
+            &mut self.perm_inv[..k],
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+            Default::default(),
+        );
+        let scale = (0..k).fold(0.0_f64, |s, j| s.max(lu[(j, j)].abs()));
+        if !(scale.is_finite() && scale > 0.0)
+            || (0..k).any(|j| lu[(j, j)].abs() <= 1e-14 * scale || lu[(j, j)].is_nan())
+        {
+            return false;
+        }
+        let rhs = MatMut::from_column_major_slice_mut(&mut b[..k], k, 1);
+        solve::solve_in_place(
+            lu.as_ref(),
+            lu.as_ref(),
+            p,
+            rhs,
+            Par::Seq,
+            MemStack::new(&mut self.mem),
+        );
+        b[..k].iter().all(|x| x.is_finite())
+    }
+}
+
 /// Solves `a x = b` in place for a dense column-major `k × k` `a` (overwritten by its LU
 /// factors) by faer's partial-pivoting LU, sequential below 512 rows (the global rayon
 /// setting of faer's high-level `partial_piv_lu` cost 0.1–0.3 ms per call on the

@@ -162,3 +162,57 @@ fn frictional_steps_do_not_allocate() {
         );
     }
 }
+
+/// The coupled position solve of Algorithms 1 and 2 (issue 16 §1) on the undamped block
+/// of `tests/regression_alg2_friction_undamped.rs` at h = 1e-4, on both Delassus paths:
+/// the counted steps must run coupled solves (asserted) without allocating.
+#[test]
+fn coupled_position_solves_do_not_allocate() {
+    use signorini::scene::file::Scene;
+    let text = r#"
+[time]
+dt = 1e-4
+t_end = 0.3
+[[bodies]]
+name = "block"
+mesh = { generator = "box", cell = "hex8", cells = [4, 4, 2], size = [0.1, 0.1, 0.05] }
+material = { young = 1e8, poisson = 0.0, density = 1000.0 }
+velocity = [1.0, 0.0, 0.0]
+[loads]
+gravity = [0.0, 0.0, -9.81]
+[[obstacles]]
+name = "floor"
+type = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+[[contacts]]
+body = "block"
+nodes = "z0"
+obstacle = "floor"
+friction = 0.3
+"#;
+    for kind in [SchemeKind::DirectProjection, SchemeKind::CombinedProjection] {
+        for delassus in [DelassusKind::Dense, DelassusKind::Columns] {
+            let mut scene = Scene::from_toml(text).unwrap();
+            scene.scheme.kind = kind;
+            scene.scheme.delassus = delassus;
+            let (model, _) = scene.build().unwrap();
+            let mut integ = model.into_integrator(&scene.scheme, 1e-4).unwrap();
+            for _ in 0..100 {
+                integ.step().unwrap();
+            }
+            let mut coupled = 0;
+            let before = ALLOCS.with(|c| c.get());
+            for _ in 0..2400 {
+                coupled += integ.step().unwrap().coupled_solves;
+            }
+            let n = ALLOCS.with(|c| c.get()) - before;
+            assert!(
+                coupled > 0,
+                "{} {delassus:?}: no coupled solve",
+                kind.name()
+            );
+            assert_eq!(n, 0, "{} {delassus:?} allocated {n} times", kind.name());
+        }
+    }
+}

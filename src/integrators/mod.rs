@@ -132,6 +132,17 @@ pub struct StepStats {
     pub friction_residual: f64,
     /// Friction solves of the step that hit the sweep cap (also in `caps_hit`).
     pub friction_caps: usize,
+    /// Coupled position solves (eq. 53–55 on the current contact states) that replaced
+    /// a slowly contracting decoupled iterate ([`core`] module doc).
+    pub coupled_solves: usize,
+    /// Newton loops that ended by stagnation (no 10 % gain in 5 iterations) at a
+    /// residual within √tol: converged as far as the contact problem's accuracy allows;
+    /// `newton_residual` holds the level reached.
+    pub newton_stalls: usize,
+    /// Algorithm 2: contacts whose final `P` is 0 but which stay projected with `τ < 0`
+    /// (eq. 65 had no solution with them as complementarity rows; see
+    /// [`core`]'s position problem), in the last index-set round of the step.
+    pub held_rows: usize,
 }
 
 /// A time integrator for a linear structure with contacts.

@@ -220,6 +220,46 @@ pub fn residual(blocks: &[Block], q: &[f64], r: &[f64], u: &[f64]) -> f64 {
     }
 }
 
+/// The velocity accuracy of a solution, in m/s: the largest over the blocks of
+/// `‖r − P_C(r − ρ û)‖ / ρ` with `ρ = 1/W_NN` of the block (the natural map with each
+/// block's own scale, so that an impulse error counts by the velocity it makes). Unlike
+/// [`residual`], which adds impulses and velocities, it means the same for a 10 kg body
+/// and a 1 mg node; the step loop derives its Newton stopping floor from it
+/// ([`crate::integrators::core`]). Blocks with `W_NN ≤ 0` count as infinitely wrong.
+pub fn velocity_error<W: DelassusOperator + ?Sized>(
+    w: &W,
+    blocks: &[Block],
+    r: &[f64],
+    u: &[f64],
+) -> f64 {
+    let mut worst: f64 = 0.0;
+    for b in blocks {
+        let o = b.offset;
+        let wnn = w.entry(o, o);
+        if wnn.is_nan() || wnn <= 0.0 {
+            return f64::INFINITY;
+        }
+        let rho = 1.0 / wnn;
+        let mut x = [0.0; 3];
+        let mut y = [0.0; 3];
+        let d = b.dim;
+        let ut = norm(&u[o + 1..o + d]);
+        for i in 0..d {
+            x[i] = r[o + i];
+            y[i] = rho * u[o + i];
+        }
+        y[0] += rho * b.mu * ut;
+        let mut p = [0.0; 3];
+        for i in 0..d {
+            p[i] = x[i] - y[i];
+        }
+        project_on_cone(&mut p[..d], b.mu);
+        let e = (0..d).map(|i| (x[i] - p[i]).powi(2)).sum::<f64>().sqrt() / rho;
+        worst = worst.max(e);
+    }
+    worst
+}
+
 /// A friction problem `u = W r + q` over `blocks` (rows `0..k` of `w` and `q`).
 pub struct FrictionProblem<'a, W: DelassusOperator + ?Sized> {
     /// The operator (its rows `0..k` in the order of `blocks`).
