@@ -875,8 +875,11 @@ pub fn run_checkpointed(
             integ.system().kinetic_energy(&s.v) + integ.system().potential_energy(&s.q)
         }
     };
+    // held until the run returns: a second run into the same directory is refused
+    let mut _lock = None;
     if let Some((o, geom)) = out {
         o.options.validate()?;
+        _lock = Some(crate::io::RunLock::acquire(o.dir)?);
         let geom_outlines = geom.outlines.clone();
         let hist_path = o.dir.join("history.csv");
         let hist = match resume {

@@ -46,6 +46,59 @@ pub const RUN_FILES: [&str; 12] = [
     "violation.svg",
 ];
 
+/// The lock file a run holds in its output directory.
+pub const LOCK_FILE: &str = ".signorini.lock";
+
+/// One run's hold on its output directory: the operating system's advisory exclusive
+/// lock (`flock` on Unix, `LockFileEx` on Windows, through `std::fs::File::try_lock`) on
+/// [`LOCK_FILE`], held for the run or its resume and released when dropped, or by the
+/// kernel when the process dies (a killed run leaves no stale lock). The holder's
+/// process id is written into the file so that a refused run can name it.
+#[derive(Debug)]
+pub struct RunLock {
+    _file: File,
+}
+
+impl RunLock {
+    /// Creates `dir` if needed and takes its lock; a directory held by another run is
+    /// refused (exit code 2) with the holder's process id.
+    pub fn acquire(dir: &Path) -> Result<RunLock, Error> {
+        std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))?;
+        let path = dir.join(LOCK_FILE);
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&path)
+            .map_err(|e| Error::write(&path, e))?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                let holder = std::fs::read_to_string(&path).unwrap_or_default();
+                let holder = holder.trim();
+                return Err(Error::invalid(
+                    "--out",
+                    dir.display(),
+                    &format!(
+                        "another signorini run{} is writing into this directory; wait for                          it to finish or choose another output directory",
+                        if holder.is_empty() {
+                            String::new()
+                        } else {
+                            format!(" (process {holder})")
+                        }
+                    ),
+                ));
+            }
+            Err(std::fs::TryLockError::Error(e)) => return Err(Error::write(&path, e)),
+        }
+        file.set_len(0).map_err(|e| Error::write(&path, e))?;
+        writeln!(file, "{}", std::process::id()).map_err(|e| Error::write(&path, e))?;
+        file.flush().map_err(|e| Error::write(&path, e))?;
+        Ok(RunLock { _file: file })
+    }
+}
+
 /// Makes `dir` ready for a new run: creates it, and removes what an earlier run left
 /// there that this run would write or that would contradict it (its summary, history,
 /// frames, plots, checkpoint, and every leftover `.part` file), so a finished directory
