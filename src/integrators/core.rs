@@ -881,7 +881,24 @@ impl ThetaCore {
                 r
             };
             stats.newton_residual = r;
-            if r <= self.newton.tol {
+            // the friction solve resolves velocities to `velocity_accuracy` only: the
+            // loop cannot tell iterates apart below a relative 16 × that (two iterates of
+            // error ≤ acc each, through the position problem, which moved rows of the
+            // undamped block by up to 8 × the change of its right-hand side)
+            let tol = if self.velocity_accuracy > 0.0 {
+                let s_v = self
+                    .u_free
+                    .iter()
+                    .chain(&self.u_k)
+                    .chain(&self.u_new)
+                    .fold(0.0_f64, |a, x| a.max(x.abs()));
+                self.newton
+                    .tol
+                    .max(16.0 * self.velocity_accuracy / s_v.max(f64::MIN_POSITIVE))
+            } else {
+                self.newton.tol
+            };
+            if r <= tol {
                 converged = true;
                 break;
             }
@@ -894,7 +911,7 @@ impl ThetaCore {
                 best = r;
                 best_it = it;
             } else if it >= best_it + STALL {
-                converged = best <= self.newton.tol.sqrt();
+                converged = best <= tol.sqrt();
                 stats.newton_stalls += 1;
                 break;
             }

@@ -87,6 +87,9 @@ impl FrictionSolverKind {
     }
 }
 
+/// Largest friction tolerance the schemes accept ([`FrictionParams::validate`]).
+pub const MAX_STEP_TOL: f64 = 1e-4;
+
 /// Controls of the friction solvers, with the defaults the schemes use.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -116,6 +119,19 @@ impl Default for FrictionParams {
 impl FrictionParams {
     /// Checks the ranges; errors name the field under `prefix`.
     pub fn validate(&self, prefix: &str) -> Result<(), crate::Error> {
+        // In the step loop the tolerance also sets the Newton loop's floor and the
+        // position dead band (`integrators::core`): above 1e-4 the impulses are too rough
+        // for either (tol = 0.5 let a block sink 0.6 mm and gain energy ×2, exit 0).
+        if self.tol.is_nan() || self.tol <= 0.0 || self.tol > MAX_STEP_TOL {
+            return Err(crate::Error::invalid(
+                &format!("{prefix}tol"),
+                crate::error::num(self.tol),
+                &format!(
+                    "must be in (0, {MAX_STEP_TOL:e}] for the schemes: it is the friction \
+                     solve's relative accuracy, and the step's gaps and Newton loop follow it"
+                ),
+            ));
+        }
         self.validate_ranges(prefix)?;
         if self.solver == FrictionSolverKind::Newton {
             return Err(crate::Error::invalid(
