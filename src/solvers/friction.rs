@@ -682,6 +682,17 @@ fn solve_local_3d(w: &[f64; 9], q: &[f64; 3], mu: f64, max_it: usize, r: &mut [f
         *r = [0.0; 3];
         return;
     }
+    // stick, exactly: W r = −q with r inside the cone (u = 0, so û = 0). Tried first:
+    // with a large μ every block sticks, and there the Alart–Curnier Newton, whose
+    // residual weighs u_T by μ, stalled (μ = 1e3 and 1e6 failed the sliding block at
+    // step 1 before this test).
+    if let Some(s) = solve3(w, &[-q[0], -q[1], -q[2]])
+        && s[0] > 0.0
+        && (s[1] * s[1] + s[2] * s[2]).sqrt() <= mu * s[0]
+    {
+        *r = s;
+        return;
+    }
     let rho = (
         1.0 / w[0].max(f64::MIN_POSITIVE),
         2.0 / (w[4] + w[8]).max(f64::MIN_POSITIVE),
