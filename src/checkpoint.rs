@@ -15,6 +15,12 @@
 //!   frames written); on resume the CSV is cut to those bytes and the HDF5 datasets to
 //!   those rows and frames, then appended to.
 //!
+//! What a checkpoint guards (version 2): the build that wrote it, the output directory it
+//! belongs to, and the size and SHA-256 of every input file (the scene file and its mesh
+//! files); `resume` refuses a checkpoint whose build, directory or inputs differ, whose
+//! `every` is 0, whose history cursor falls inside a row or whose arrays disagree, each
+//! with exit code 2 and a message naming what differs ([`Checkpoint::verify`]).
+//!
 //! Floats are stored as the hexadecimal bits of their IEEE-754 representation (arrays as
 //! base64 of their little-endian bytes), so a resumed run starts from bit-identical
 //! values; JSON keeps the rest readable. Why our own format: the state is a few named
@@ -31,7 +37,7 @@ use crate::error::Error;
 /// The format name in every checkpoint.
 pub const FORMAT: &str = "signorini-checkpoint";
 /// The format version this build writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// The checkpoint's file name in a run directory.
 pub const FILE: &str = "checkpoint.json";
 
@@ -186,6 +192,84 @@ pub struct RunState {
     pub closed_before: bool,
 }
 
+/// One input file of a run as the checkpoint saw it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InputFile {
+    /// Its path (absolute when the run was started).
+    pub path: PathBuf,
+    /// Its size (bytes).
+    pub bytes: u64,
+    /// SHA-256 of its contents, hexadecimal.
+    pub sha256: String,
+}
+
+impl InputFile {
+    /// Reads and hashes `path` (streamed: mesh files may be large).
+    pub fn of(path: &Path) -> Result<InputFile, Error> {
+        use sha2::Digest;
+        use std::io::Read;
+        let path = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+        let io = |e: std::io::Error| Error::io(&path, e);
+        let mut f = std::fs::File::open(&path).map_err(io)?;
+        let mut hasher = sha2::Sha256::new();
+        let mut buf = vec![0u8; 1 << 16];
+        let mut bytes = 0u64;
+        loop {
+            let n = f.read(&mut buf).map_err(io)?;
+            if n == 0 {
+                break;
+            }
+            hasher.update(&buf[..n]);
+            bytes += n as u64;
+        }
+        let sha256 = hasher
+            .finalize()
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect();
+        Ok(InputFile {
+            path,
+            bytes,
+            sha256,
+        })
+    }
+}
+
+/// The build that writes checkpoints: package version and, when it was built from a
+/// git checkout, the commit (`build.rs`).
+pub fn build_id() -> String {
+    format!(
+        "signorini {} ({})",
+        env!("CARGO_PKG_VERSION"),
+        option_env!("SIGNORINI_COMMIT").unwrap_or("commit unknown")
+    )
+}
+
+impl RunSource {
+    /// The files the run reads: the scene file and its mesh files (none for the bar).
+    pub fn input_files(&self) -> Result<Vec<InputFile>, Error> {
+        match self {
+            RunSource::Bar { .. } => Ok(Vec::new()),
+            RunSource::Scene {
+                file,
+                toml,
+                base_dir,
+            } => {
+                let scene = crate::scene::file::Scene::from_toml(toml)?;
+                let mut files = Vec::new();
+                if !file.as_os_str().is_empty() {
+                    files.push(InputFile::of(file)?);
+                }
+                for path in scene.mesh_files() {
+                    files.push(InputFile::of(&base_dir.join(path))?);
+                }
+                Ok(files)
+            }
+        }
+    }
+}
+
 /// A whole checkpoint.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -206,6 +290,12 @@ pub struct Checkpoint {
     pub integrator: IntegratorState,
     /// The run's accumulators and output cursors.
     pub run: RunState,
+    /// The build that wrote it ([`build_id`]).
+    pub build: String,
+    /// The output directory it belongs to (absolute, canonical).
+    pub out_dir: PathBuf,
+    /// The run's input files as they were at its start.
+    pub inputs: Vec<InputFile>,
 }
 
 impl Checkpoint {
@@ -264,6 +354,111 @@ impl Checkpoint {
                 format!("corrupt checkpoint: {}", e.inner()),
             )
         })
+    }
+}
+
+impl Checkpoint {
+    /// Refuses to resume from this checkpoint (read from `dir`) when it belongs to another
+    /// build or directory, when an input file changed, or when its own fields disagree;
+    /// every error names the checkpoint file, the field and what differs (exit code 2).
+    pub fn verify(&self, dir: &Path) -> Result<(), Error> {
+        let file = dir.join(FILE);
+        let bad = |where_: &str, detail: String| Err(Error::bad_file(&file, where_, detail));
+        if self.build != build_id() {
+            return bad(
+                "`build`",
+                format!(
+                    "written by {}, this is {}: finish the run with the build that started it",
+                    self.build,
+                    build_id()
+                ),
+            );
+        }
+        let here = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+        if self.out_dir != here {
+            return bad(
+                "`out_dir`",
+                format!(
+                    "the checkpoint belongs to the run in {}, not to {}: resume that \
+                     directory (a checkpoint copied elsewhere would splice two runs)",
+                    self.out_dir.display(),
+                    here.display()
+                ),
+            );
+        }
+        if self.every == 0 {
+            return bad(
+                "`every`",
+                "0: a checkpoint is written every K ≥ 1 steps".into(),
+            );
+        }
+        if self.integrator.step > self.steps {
+            return bad(
+                "`integrator.step`",
+                format!(
+                    "{} is past the run's {} steps",
+                    self.integrator.step, self.steps
+                ),
+            );
+        }
+        let r = &self.run;
+        if r.contact_force.0.len() != r.contact_min_gap.0.len() {
+            return bad(
+                "`run.contact_min_gap`",
+                format!(
+                    "{} values beside {} contact forces: the two arrays go together",
+                    r.contact_min_gap.0.len(),
+                    r.contact_force.0.len()
+                ),
+            );
+        }
+        if let Some(t) = &r.trace
+            && t.0.len() != self.integrator.step
+        {
+            return bad(
+                "`run.trace`",
+                format!(
+                    "{} values for {} steps taken",
+                    t.0.len(),
+                    self.integrator.step
+                ),
+            );
+        }
+        if r.history_rows > self.integrator.step as u64 + 1 {
+            return bad(
+                "`run.history_rows`",
+                format!(
+                    "{} rows for {} steps taken",
+                    r.history_rows, self.integrator.step
+                ),
+            );
+        }
+        for f in &self.inputs {
+            let now = match InputFile::of(&f.path) {
+                Ok(now) => now,
+                Err(_) => {
+                    return bad(
+                        "`inputs`",
+                        format!("{} is gone; the run read it", f.path.display()),
+                    );
+                }
+            };
+            if now.bytes != f.bytes || now.sha256 != f.sha256 {
+                return bad(
+                    "`inputs`",
+                    format!(
+                        "{} changed since the run started ({} bytes, SHA-256 {} then; {} \
+                         bytes, {} now): restore it or start a new run",
+                        f.path.display(),
+                        f.bytes,
+                        &f.sha256[..16.min(f.sha256.len())],
+                        now.bytes,
+                        &now.sha256[..16.min(now.sha256.len())]
+                    ),
+                );
+            }
+        }
+        Ok(())
     }
 }
 

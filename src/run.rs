@@ -376,6 +376,7 @@ fn run_scene_from(
 /// files an uninterrupted run writes.
 pub fn resume(dir: &Path, progress: &mut dyn Progress) -> Result<RunResult, Error> {
     let c = Checkpoint::read(dir)?;
+    c.verify(dir)?;
     let out = Output {
         dir,
         options: &c.output,
@@ -679,6 +680,10 @@ struct CheckpointPlan {
     output: OutputOptions,
     steps: usize,
     energy0: f64,
+    /// The run's input files at its start, and its directory (canonical), for
+    /// [`Checkpoint::verify`].
+    inputs: Vec<crate::checkpoint::InputFile>,
+    out_dir: PathBuf,
     /// Test hook (`SIGNORINI_ABORT_AFTER_STEP`): abort the process right after this
     /// step's checkpoint and output, as a SIGKILL would, to test `resume`.
     abort_after: Option<usize>,
@@ -767,6 +772,9 @@ impl RunObserver {
             steps: p.steps,
             integrator: integ.save(),
             run,
+            build: crate::checkpoint::build_id(),
+            out_dir: p.out_dir.clone(),
+            inputs: p.inputs.clone(),
         }
         .write(&p.dir)
     }
@@ -953,6 +961,13 @@ pub fn run_checkpointed(
         writers.history_stride = o.options.history_stride;
         let every = resume.map_or(o.options.checkpoint_every, |c| c.every);
         if let Some(c) = ckpt.as_ref().filter(|_| every > 0) {
+            let (inputs, out_dir) = match resume {
+                Some(r) => (r.inputs.clone(), r.out_dir.clone()),
+                None => (
+                    c.source.input_files()?,
+                    std::fs::canonicalize(o.dir).map_err(|e| Error::io(o.dir, e))?,
+                ),
+            };
             plan = Some(CheckpointPlan {
                 every,
                 dir: o.dir.to_path_buf(),
@@ -960,6 +975,8 @@ pub fn run_checkpointed(
                 output: o.options.clone(),
                 steps,
                 energy0,
+                inputs,
+                out_dir,
                 abort_after: std::env::var("SIGNORINI_ABORT_AFTER_STEP")
                     .ok()
                     .and_then(|v| v.parse().ok()),

@@ -231,8 +231,41 @@ impl HistoryWriter {
                 ),
             ));
         }
+        use std::io::{Read as _, Seek as _};
+        // the cursor must end a row: the byte before it is a newline (the header's or a
+        // row's), and there are as many newlines before it as rows plus the header
+        let mut r = std::fs::File::open(&tmp).map_err(|e| Error::io(&tmp, e))?;
+        let mut newlines = 0u64;
+        let mut last = 0u8;
+        let mut buf = vec![0u8; 1 << 16];
+        let mut left = bytes;
+        while left > 0 {
+            let n = r
+                .read(&mut buf[..left.min(1 << 16) as usize])
+                .map_err(|e| Error::io(&tmp, e))?;
+            if n == 0 {
+                break;
+            }
+            newlines += buf[..n].iter().filter(|&&b| b == b'\n').count() as u64;
+            last = buf[n - 1];
+            left -= n as u64;
+        }
+        if bytes == 0 || last != b'\n' || newlines != rows + 1 {
+            return Err(Error::bad_file(
+                &tmp,
+                format!("byte {bytes}"),
+                format!(
+                    "the checkpoint's history cursor does not end row {rows} ({newlines} line \
+                     ends before it{}): the checkpoint does not belong to this history",
+                    if last != b'\n' {
+                        ", and it falls inside a line"
+                    } else {
+                        ""
+                    }
+                ),
+            ));
+        }
         f.set_len(bytes).map_err(|e| Error::write(&tmp, e))?;
-        use std::io::Seek as _;
         f.seek(std::io::SeekFrom::End(0))
             .map_err(|e| Error::write(&tmp, e))?;
         Ok(HistoryWriter {

@@ -588,6 +588,20 @@ impl Scene {
             .unwrap_or(0)
     }
 
+    /// The mesh files the scene reads, as written (relative to [`Scene::base_dir`]
+    /// unless absolute), once each.
+    pub fn mesh_files(&self) -> Vec<PathBuf> {
+        let mut files: Vec<PathBuf> = Vec::new();
+        for b in &self.bodies {
+            if let MeshSpec::File { path } = &b.mesh
+                && !files.contains(path)
+            {
+                files.push(path.clone());
+            }
+        }
+        files
+    }
+
     /// Meshes and assembles every body, eliminates fixed dofs, and builds the contacts.
     pub fn build(&self) -> Result<(Model, ModelReport), Error> {
         if let Some(x) = &self.example {

@@ -1,0 +1,187 @@
+//! Issue 16 §4: a checkpoint cannot splice two runs. `signorini resume` refuses, with
+//! exit code 2 and a message naming the file and what differs: an edited scene, a moved
+//! mesh node, a checkpoint copied into another directory, one written by another build,
+//! `every = 0`, arrays that disagree, a history cursor inside a row. Each case starts
+//! from a real checkpoint of a killed run and changes one thing; the untouched copy
+//! resumes (exit 0), so each refusal is due to the change alone.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_signorini"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("signorini-ckint-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// A ball-drop run (scene and mesh copied into `work`) killed after step 30 of its
+/// checkpointed run into `work/out`; returns the scene and mesh paths.
+fn killed_scene_run(work: &Path) -> (PathBuf, PathBuf) {
+    std::fs::create_dir_all(work).unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes");
+    let scene = work.join("ball_drop.toml");
+    let mesh = work.join("ball.msh");
+    let text = std::fs::read_to_string(root.join("ball_drop.toml")).unwrap();
+    std::fs::write(&scene, text).unwrap();
+    std::fs::copy(root.join("ball.msh"), &mesh).unwrap();
+    let o = bin()
+        .args([
+            "run",
+            scene.to_str().unwrap(),
+            "--quiet",
+            "--no-plots",
+            "--no-fields",
+        ])
+        .args([
+            "--checkpoint-every",
+            "10",
+            "--out",
+            work.join("out").to_str().unwrap(),
+        ])
+        .env("SIGNORINI_ABORT_AFTER_STEP", "30")
+        .output()
+        .unwrap();
+    assert!(!o.status.success(), "the run was not killed");
+    assert!(work.join("out/checkpoint.json").exists());
+    (scene, mesh)
+}
+
+fn resume(dir: &Path) -> std::process::Output {
+    bin()
+        .args(["resume", dir.to_str().unwrap(), "--quiet"])
+        .output()
+        .unwrap()
+}
+
+fn refused(dir: &Path, words: &[&str]) {
+    let o = resume(dir);
+    let e = String::from_utf8_lossy(&o.stderr).to_string();
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    for w in words {
+        assert!(e.contains(w), "`{w}` not in: {e}");
+    }
+}
+
+fn copy_dir(a: &Path, b: &Path) {
+    std::fs::create_dir_all(b).unwrap();
+    for e in std::fs::read_dir(a).unwrap() {
+        let e = e.unwrap();
+        if e.file_type().unwrap().is_file() {
+            std::fs::copy(e.path(), b.join(e.file_name())).unwrap();
+        }
+    }
+}
+
+fn edit_checkpoint(dir: &Path, f: impl FnOnce(&mut serde_json::Value)) {
+    let p = dir.join("checkpoint.json");
+    let mut c: serde_json::Value = serde_json::from_slice(&std::fs::read(&p).unwrap()).unwrap();
+    f(&mut c);
+    std::fs::write(&p, serde_json::to_vec(&c).unwrap()).unwrap();
+}
+
+#[test]
+fn edited_inputs_are_refused_and_restored_inputs_resume() {
+    let work = tmp("inputs");
+    let (scene, mesh) = killed_scene_run(&work);
+    let out = work.join("out");
+    let keep = std::fs::read(out.join("checkpoint.json")).unwrap();
+    // an edited scene file (one more comment line)
+    let text = std::fs::read_to_string(&scene).unwrap();
+    std::fs::write(&scene, format!("# edited\n{text}")).unwrap();
+    refused(
+        &out,
+        &["checkpoint.json", "`inputs`", "ball_drop.toml changed"],
+    );
+    std::fs::write(&scene, &text).unwrap();
+    // a moved node: one digit of the mesh file changed
+    let m = std::fs::read(&mesh).unwrap();
+    let at = m.windows(2).position(|w| w == b"0.").expect("a coordinate") + 2;
+    let mut moved = m.clone();
+    moved[at] = if moved[at] == b'1' { b'2' } else { b'1' };
+    std::fs::write(&mesh, &moved).unwrap();
+    refused(&out, &["ball.msh changed", "SHA-256"]);
+    std::fs::write(&mesh, &m).unwrap();
+    // a removed mesh file
+    std::fs::remove_file(&mesh).unwrap();
+    refused(&out, &["ball.msh is gone"]);
+    std::fs::write(&mesh, &m).unwrap();
+    // restored: the refusals changed nothing, and the run finishes
+    assert_eq!(std::fs::read(out.join("checkpoint.json")).unwrap(), keep);
+    let o = resume(&out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+/// One change to a checkpoint's JSON.
+type Edit = Box<dyn Fn(&mut serde_json::Value)>;
+
+#[test]
+fn foreign_and_inconsistent_checkpoints_are_refused() {
+    let work = tmp("foreign");
+    killed_scene_run(&work);
+    let out = work.join("out");
+    // copied into another directory, with its history
+    let other = work.join("other");
+    copy_dir(&out, &other);
+    refused(&other, &["`out_dir`", "belongs to the run in"]);
+    // each change on a fresh copy of the original directory
+    let cases: Vec<(&str, Edit, Vec<&str>)> = vec![
+        (
+            "build",
+            Box::new(|c| c["build"] = "signorini 0.0.0 (elsewhere)".into()),
+            vec!["`build`", "signorini 0.0.0 (elsewhere)"],
+        ),
+        (
+            "every",
+            Box::new(|c| c["every"] = 0.into()),
+            vec!["`every`", "0"],
+        ),
+        (
+            "arrays",
+            Box::new(|c| {
+                c["run"]["contact_min_gap"] = "AAAAAAAAAAA=".into();
+                c["run"]["contact_force"] = "".into();
+            }),
+            vec!["`run.contact_min_gap`", "go together"],
+        ),
+        (
+            "cursor",
+            Box::new(|c| {
+                let b = c["run"]["history_bytes"].as_u64().unwrap();
+                c["run"]["history_bytes"] = (b - 3).into();
+            }),
+            vec!["history.csv.part", "inside a line"],
+        ),
+        (
+            "rows",
+            Box::new(|c| {
+                let r = c["run"]["history_rows"].as_u64().unwrap();
+                c["run"]["history_rows"] = (r - 1).into();
+            }),
+            vec!["history.csv.part", "does not end row"],
+        ),
+    ];
+    for (name, edit, words) in cases {
+        let dir = work.join(format!("case-{name}"));
+        // the checkpoint names its own directory: rewrite it for the copy
+        copy_dir(&out, &dir);
+        let canon = std::fs::canonicalize(&dir).unwrap();
+        edit_checkpoint(&dir, |c| {
+            c["out_dir"] = canon.to_str().unwrap().into();
+            edit(c);
+        });
+        refused(&dir, &words);
+    }
+    // the unchanged copy (directory rewritten only) resumes
+    let dir = work.join("case-none");
+    copy_dir(&out, &dir);
+    let canon = std::fs::canonicalize(&dir).unwrap();
+    edit_checkpoint(&dir, |c| c["out_dir"] = canon.to_str().unwrap().into());
+    let o = resume(&dir);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let _ = std::fs::remove_dir_all(&work);
+}
