@@ -261,6 +261,7 @@ fn elastic_hex8_block_sliding_on_a_plane_stops_at_v0_over_mu_g() {
             assert!(integ.state().time < 2.0 * t_ref, "{kind:?}: no stop");
         };
         assert_eq!(caps, 0, "{kind:?}");
+        eprintln!("{kind:?}: stop {stop:.4} s, distance {x:.5} m, violation {viol:.1e} m");
         assert!(
             (stop / t_ref - 1.0).abs() < 0.01 && (x / d_ref - 1.0).abs() < 0.01,
             "{kind:?}: stop {stop} s (analytic {t_ref}), distance {x} m (analytic {d_ref})"
