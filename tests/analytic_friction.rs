@@ -10,6 +10,9 @@
 //! - Incline of angle α (gravity tilted, plane fixed): sticks when `tan α < μ` (drift
 //!   ≤ 1e-9 m over 1 s), slides with `a = g (sin α − μ cos α)` within 1 % otherwise.
 
+mod common;
+
+use common::blocks::momentum_x;
 use signorini::contact::block::BlockCorners;
 use signorini::contact::plane::NodesOnPlane;
 use signorini::contact::{ContactSet, ContactStatus};
@@ -217,22 +220,6 @@ fn schatzman_paoli_and_the_trapezoid_refuse_friction() {
             "{msg}"
         );
     }
-}
-
-/// x-momentum `1ₓᵀ M v` and x-mass of an integrator's state.
-fn momentum_x(integ: &dyn Integrator) -> (f64, f64) {
-    let sys = integ.system();
-    let mut mv = vec![0.0; sys.ndof()];
-    let ones: Vec<f64> = sys
-        .component
-        .iter()
-        .map(|&c| if c == 0 { 1.0 } else { 0.0 })
-        .collect();
-    signorini::linalg::spmv(sys.mass.as_ref(), &integ.state().v, &mut mv);
-    let p: f64 = mv.iter().zip(&ones).map(|(a, b)| a * b).sum();
-    signorini::linalg::spmv(sys.mass.as_ref(), &ones, &mut mv);
-    let m: f64 = mv.iter().zip(&ones).map(|(a, b)| a * b).sum();
-    (p, m)
 }
 
 /// The elastic hex8 block of `meshes/sliding_block.toml`: its centre of mass stops

@@ -3,6 +3,8 @@
 //! contacts, on both Delassus paths (dense, and per-active-column whose columns are
 //! computed inside the step when a contact first activates).
 
+mod common;
+
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -169,31 +171,10 @@ fn frictional_steps_do_not_allocate() {
 #[test]
 fn coupled_position_solves_do_not_allocate() {
     use signorini::scene::file::Scene;
-    let text = r#"
-[time]
-dt = 1e-4
-t_end = 0.3
-[[bodies]]
-name = "block"
-mesh = { generator = "box", cell = "hex8", cells = [4, 4, 2], size = [0.1, 0.1, 0.05] }
-material = { young = 1e8, poisson = 0.0, density = 1000.0 }
-velocity = [1.0, 0.0, 0.0]
-[loads]
-gravity = [0.0, 0.0, -9.81]
-[[obstacles]]
-name = "floor"
-type = "plane"
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-[[contacts]]
-body = "block"
-nodes = "z0"
-obstacle = "floor"
-friction = 0.3
-"#;
+    let text = common::blocks::undamped_block(1e-4, 0.3, "combined-projection", 0.5, 0.3);
     for kind in [SchemeKind::DirectProjection, SchemeKind::CombinedProjection] {
         for delassus in [DelassusKind::Dense, DelassusKind::Columns] {
-            let mut scene = Scene::from_toml(text).unwrap();
+            let mut scene = Scene::from_toml(&text).unwrap();
             scene.scheme.kind = kind;
             scene.scheme.delassus = delassus;
             let (model, _) = scene.build().unwrap();

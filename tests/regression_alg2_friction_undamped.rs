@@ -12,6 +12,9 @@
 //! reconsidered equality rows and a friction-aware tolerance (module doc of
 //! `integrators::core`) remove both.
 
+mod common;
+
+use common::blocks::{momentum_x, undamped_block};
 use signorini::integrators::{Integrator, SchemeKind};
 use signorini::scene::file::Scene;
 
@@ -19,53 +22,9 @@ const G: f64 = 9.81;
 const MU: f64 = 0.3;
 
 fn block(kind: SchemeKind, h: f64, theta: f64) -> Box<dyn Integrator> {
-    let text = format!(
-        r#"
-[time]
-dt = {h:e}
-t_end = 0.45
-[scheme]
-kind = "{}"
-theta = {theta}
-[[bodies]]
-name = "block"
-mesh = {{ generator = "box", cell = "hex8", cells = [4, 4, 2], size = [0.1, 0.1, 0.05] }}
-material = {{ young = 1e8, poisson = 0.0, density = 1000.0 }}
-velocity = [1.0, 0.0, 0.0]
-[loads]
-gravity = [0.0, 0.0, -9.81]
-[[obstacles]]
-name = "floor"
-type = "plane"
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-[[contacts]]
-body = "block"
-nodes = "z0"
-obstacle = "floor"
-friction = {MU}
-"#,
-        kind.name()
-    );
-    let scene = Scene::from_toml(&text).unwrap();
+    let scene = Scene::from_toml(&undamped_block(h, 0.45, kind.name(), theta, MU)).unwrap();
     let (model, _) = scene.build().unwrap();
     model.into_integrator(&scene.scheme, scene.time.dt).unwrap()
-}
-
-/// x-momentum and x-mass.
-fn momentum_x(integ: &dyn Integrator) -> (f64, f64) {
-    let sys = integ.system();
-    let mut mv = vec![0.0; sys.ndof()];
-    let ones: Vec<f64> = sys
-        .component
-        .iter()
-        .map(|&c| if c == 0 { 1.0 } else { 0.0 })
-        .collect();
-    signorini::linalg::spmv(sys.mass.as_ref(), &integ.state().v, &mut mv);
-    let p: f64 = mv.iter().zip(&ones).map(|(a, b)| a * b).sum();
-    signorini::linalg::spmv(sys.mass.as_ref(), &ones, &mut mv);
-    let m: f64 = mv.iter().zip(&ones).map(|(a, b)| a * b).sum();
-    (p, m)
 }
 
 /// What a slide to t = 0.45 s measured.

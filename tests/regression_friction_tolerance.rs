@@ -6,6 +6,9 @@
 //! exit 0. Now the Newton floor and the position dead band follow the friction solve's
 //! velocity accuracy, and tolerances above 1e-4 are refused.
 
+mod common;
+
+use common::blocks::momentum_x;
 use signorini::integrators::{Integrator, SchemeKind};
 use signorini::scene::file::Scene;
 
@@ -81,21 +84,12 @@ fn large_friction_coefficients_run_and_stop_at_v0_squared_over_2_mu_g() {
         let s = Scene::from_toml(&text).unwrap();
         let (model, _) = s.build().unwrap();
         let mut integ = model.into_integrator(&s.scheme, s.time.dt).unwrap();
-        let sys = integ.system();
-        let ones: Vec<f64> = sys
-            .component
-            .iter()
-            .map(|&c| if c == 0 { 1.0 } else { 0.0 })
-            .collect();
-        let mut mv = vec![0.0; sys.ndof()];
-        signorini::linalg::spmv(sys.mass.as_ref(), &ones, &mut mv);
-        let mass: f64 = mv.iter().zip(&ones).map(|(a, b)| a * b).sum();
         let h = s.time.dt;
         let (mut x, mut v, mut caps) = (0.0, 1.0, 0);
+        let mass = momentum_x(integ.as_ref()).1;
         for _ in 0..s.steps() {
             caps += integ.step().unwrap().caps_hit;
-            signorini::linalg::spmv(integ.system().mass.as_ref(), &integ.state().v, &mut mv);
-            let vn = mv.iter().zip(&ones).map(|(a, b)| a * b).sum::<f64>() / mass;
+            let vn = momentum_x(integ.as_ref()).0 / mass;
             x += 0.5 * (v + vn) * h;
             v = vn;
         }

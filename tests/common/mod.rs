@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod bad;
+pub mod blocks;
 
 use std::collections::HashMap;
 use std::path::Path;
