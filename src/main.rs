@@ -556,6 +556,9 @@ fn fclib(a: &FclibArgs) -> Result<bool, signorini::Error> {
         ..FrictionParams::default()
     };
     params.validate_ranges("--")?;
+    if let Some(p) = &a.solution {
+        signorini::io::check_output_file("--solution", p, &[&a.file])?;
+    }
     let prob = signorini::io::fclib::read(&a.file)?;
     if a.repeat == 0 || a.repeat > 1_000_000 {
         return Err(signorini::Error::invalid(

@@ -46,6 +46,80 @@ pub const RUN_FILES: [&str; 12] = [
     "violation.svg",
 ];
 
+/// What a path is, for the messages of [`check_output_file`] and [`check_output_dir`].
+fn kind_of(md: &std::fs::Metadata) -> &'static str {
+    let ft = md.file_type();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt as _;
+        if ft.is_block_device() || ft.is_char_device() {
+            return "a device";
+        }
+        if ft.is_fifo() {
+            return "a FIFO";
+        }
+        if ft.is_socket() {
+            return "a socket";
+        }
+    }
+    if ft.is_symlink() {
+        "a symbolic link"
+    } else if ft.is_dir() {
+        "a directory"
+    } else if ft.is_file() {
+        "a regular file"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// Refuses (exit code 2) an output file `path` that exists as anything but a regular
+/// file — a device, a FIFO, a socket, a directory, a symbolic link — or that is one of
+/// the run's `inputs`: the atomic write renames over its target, which would replace a
+/// device node (as root, `--solution /dev/full` did) or an input.
+pub fn check_output_file(flag: &str, path: &Path, inputs: &[&Path]) -> Result<(), Error> {
+    if let Ok(md) = std::fs::symlink_metadata(path) {
+        if !md.file_type().is_file() {
+            return Err(Error::invalid(
+                flag,
+                path.display(),
+                &format!(
+                    "is {}: an output is written as a regular file, never through a link \
+                     or onto a device",
+                    kind_of(&md)
+                ),
+            ));
+        }
+        let same = |a: &Path| matches!((std::fs::canonicalize(a), std::fs::canonicalize(path)), (Ok(x), Ok(y)) if x == y);
+        if let Some(input) = inputs.iter().find(|i| same(i)) {
+            return Err(Error::invalid(
+                flag,
+                path.display(),
+                &format!(
+                    "is the input {}: the output would replace it",
+                    input.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses (exit code 2) an output directory that exists as anything but a directory.
+pub fn check_output_dir(flag: &str, dir: &Path) -> Result<(), Error> {
+    match std::fs::metadata(dir) {
+        Ok(md) if !md.is_dir() => Err(Error::invalid(
+            flag,
+            dir.display(),
+            &format!(
+                "is {}, not a directory: choose a directory for the run",
+                kind_of(&md)
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// The lock file a run holds in its output directory.
 pub const LOCK_FILE: &str = ".signorini.lock";
 
@@ -63,6 +137,7 @@ impl RunLock {
     /// Creates `dir` if needed and takes its lock; a directory held by another run is
     /// refused (exit code 2) with the holder's process id.
     pub fn acquire(dir: &Path) -> Result<RunLock, Error> {
+        check_output_dir("--out", dir)?;
         std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))?;
         let path = dir.join(LOCK_FILE);
         let mut file = std::fs::OpenOptions::new()
@@ -101,15 +176,20 @@ impl RunLock {
 
 /// Makes `dir` ready for a new run: creates it, and removes what an earlier run left
 /// there that this run would write or that would contradict it (its summary, history,
-/// frames, plots, checkpoint, and every leftover `.part` file), so a finished directory
-/// never mixes two runs.
+/// frames, plots, checkpoint, and their leftover `.part` files: the names of
+/// [`RUN_FILES`] and the frames, nothing else — a user's own files, `.part` or not, stay),
+/// so a finished directory never mixes two runs.
 pub fn prepare_run_dir(dir: &Path) -> Result<(), Error> {
     std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))?;
     let entries = std::fs::read_dir(dir).map_err(|e| Error::write(dir, e))?;
     for e in entries {
         let path = e.map_err(|e| Error::write(dir, e))?.path();
         let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
-        if (RUN_FILES.contains(&name) || name.ends_with(".part")) && path.is_file() {
+        let ours = RUN_FILES.contains(&name)
+            || name
+                .strip_suffix(".part")
+                .is_some_and(|stem| RUN_FILES.contains(&stem));
+        if ours && path.is_file() {
             std::fs::remove_file(&path).map_err(|e| Error::write(&path, e))?;
         }
     }
