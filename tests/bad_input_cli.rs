@@ -76,3 +76,25 @@ fn unknown_study_and_missing_run_dir_are_named() {
         "{err}"
     );
 }
+
+/// Issue 16 §6: `signorini example NAME` spliced NAME into TOML, so
+/// `bouncing-ball"⏎restitution = 0.9⏎#` ran the ball with e = 0.9, exit 0. The name is
+/// now a value: that name is unknown (exit 2), and the real names still run.
+#[test]
+fn example_names_are_values_not_toml() {
+    let out = std::env::temp_dir().join(format!("signorini-exname-{}", std::process::id()));
+    let run = |name: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_signorini"))
+            .args(["example", name, "--quiet", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    let o = run("bouncing-ball\"\nrestitution = 0.9\n#");
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("unknown example"), "{e}");
+    let o = run("bouncing-ball");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -398,3 +398,30 @@ fn scene_inputs_that_are_not_files_are_refused_without_reading() {
 }
 
 use std::process::Command;
+
+/// Issue 16 §6: friction on a 1-D rod was silently dropped (`check` said "friction
+/// none"); now `check` and `run` refuse it, naming the contact's key.
+#[test]
+fn friction_on_a_rod_is_refused() {
+    let dir = tmp("rodfriction");
+    let bar = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/bar.toml"),
+    )
+    .unwrap()
+    .replace("restitution = 0.0", "restitution = 0.0\nfriction = 0.3")
+    .replace("elements = 1000", "elements = 10");
+    std::fs::write(dir.join("rod.toml"), bar).unwrap();
+    for cmd in ["check", "run"] {
+        expect(
+            "friction on a rod",
+            cli(&dir, &[cmd, "rod.toml", "--quiet"], &[]),
+            2,
+            &[
+                "rod.toml",
+                "contacts[0].friction",
+                "0.3",
+                "no tangential direction",
+            ],
+        );
+    }
+}

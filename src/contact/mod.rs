@@ -118,6 +118,16 @@ impl UniformLaws {
     /// Friction `mu` for every contact: blocks of `space_dim` rows when `mu > 0`.
     pub fn set_friction(&mut self, mu: f64, space_dim: usize) -> Result<(), crate::error::Error> {
         check_friction("friction", mu)?;
+        if mu > 0.0 && space_dim < 2 {
+            // a 1-D contact (a rod's end on a wall) has no tangent: friction would be
+            // silently dropped
+            return Err(crate::error::Error::invalid(
+                "friction",
+                crate::error::num(mu),
+                "a 1-D contact has no tangential direction, so Coulomb friction does not \
+                 apply: set friction = 0, or model the body in 2-D or 3-D",
+            ));
+        }
         self.laws.iter_mut().for_each(|l| l.friction = mu);
         self.dim = if mu > 0.0 { space_dim } else { 1 };
         Ok(())

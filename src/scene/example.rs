@@ -118,8 +118,11 @@ impl ExampleSpec {
     /// The built-in example of that name with the paper's parameters:
     /// `bouncing-ball`, `oscillator` or `rocking-block`.
     pub fn named(name: &str) -> Result<Self, Error> {
-        let toml = format!("kind = \"{name}\"");
-        toml::from_str(&toml).map_err(|_| {
+        // the name is a value, never TOML text: a name holding quotes or newlines must
+        // not add keys to the spec
+        let mut table = toml::Table::new();
+        table.insert("kind".into(), toml::Value::String(name.to_string()));
+        toml::Value::Table(table).try_into().map_err(|_| {
             Error::invalid(
                 "example",
                 name,
@@ -215,7 +218,9 @@ pub fn builtin_scene(name: &str) -> Result<crate::scene::file::Scene, Error> {
         ExampleSpec::Oscillator { .. } => (1e-3, 3.0),
         ExampleSpec::RockingBlock { .. } => (1e-2, 2.0),
     };
+    // `name` is one of the three kinds here (checked by `named`)
     crate::scene::file::Scene::from_toml(&format!(
-        "[example]\nkind = \"{name}\"\n[time]\ndt = {dt:e}\nt_end = {t_end:e}\n"
+        "[example]\nkind = {}\n[time]\ndt = {dt:e}\nt_end = {t_end:e}\n",
+        toml::Value::String(name.to_string())
     ))
 }
