@@ -9,9 +9,10 @@
 //! * [`FrictionSolverKind::Nsgs`]: nonsmooth Gauss–Seidel over the contacts (Jean–Moreau
 //!   NLGS), each block solved exactly with the others frozen: `r_N = max(0, −q_N/W_NN)`
 //!   for a frictionless block; the closed form of the 2-D law (open, stick, slip left,
-//!   slip right: the one consistent case of the four); in 3-D a semismooth Newton on
-//!   the Alart–Curnier function with an Armijo line search, and the projected
-//!   fixed point `r ← P_C(r − ρ û)` as fallback. Warm started by the caller's `r`.
+//!   slip right: the one consistent case of the four); in 3-D the exact stick solution
+//!   `W r = −q` when it lies in the cone (every block sticks at large μ), else a
+//!   semismooth Newton on the Alart–Curnier function with an Armijo line search, and
+//!   the projected fixed point `r ← P_C(r − ρ û)` as fallback. Warm started by the caller's `r`.
 //!   The method of choice for the few contacts per step of the schemes, and for full-rank
 //!   finite-element problems.
 //! * [`FrictionSolverKind::Prox`]: the proximal-point method: NSGS on the regularized
@@ -25,6 +26,9 @@
 //!   Armijo line search on `½‖Φ‖²`), as Siconos' PROX with its inner Newton: quadratic
 //!   convergence where NSGS crawls. It forms an `n × n` matrix per iteration, so it is
 //!   for one-step problems (`signorini fclib`), not for the step loop.
+//!
+//! The step loop also reads [`velocity_error`], the same natural map scaled block by
+//! block into m/s, to derive its own tolerances (`integrators::core`).
 //!
 //! The residual is the one Siconos reports (`fc3d_compute_error`):
 //! `‖r − P_C(r − û)‖ / max(‖q‖, ‖r‖, ‖u‖)`, with `u` recomputed from scratch as `W r + q`.
