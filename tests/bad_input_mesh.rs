@@ -51,6 +51,91 @@ fn g22_binary(block: &[i32]) -> Vec<u8> {
     b
 }
 
+/// A Gmsh 4.1 tet with node tags `tags` (ASCII or binary).
+fn g41_tet(tags: [u64; 4], binary: bool) -> Vec<u8> {
+    let xyz = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ];
+    if !binary {
+        let mut t =
+            String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n3 1 0 4\n");
+        for g in tags {
+            t += &format!("{g}\n");
+        }
+        for x in xyz {
+            t += &format!("{} {} {}\n", x[0], x[1], x[2]);
+        }
+        t += "$EndNodes\n$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n$EndElements\n";
+        return t.into_bytes();
+    }
+    let mut b = b"$MeshFormat\n4.1 1 8\n".to_vec();
+    b.extend(1i32.to_le_bytes());
+    b.extend(b"\n$EndMeshFormat\n$Nodes\n");
+    for v in [1u64, 4, 1, 4] {
+        b.extend(v.to_le_bytes());
+    }
+    for v in [3i32, 1, 0] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend(4u64.to_le_bytes());
+    for g in tags {
+        b.extend(g.to_le_bytes());
+    }
+    for x in xyz.iter().flatten() {
+        b.extend(f64::to_le_bytes(*x));
+    }
+    b.extend(b"\n$EndNodes\n$Elements\n");
+    for v in [1u64, 1, 1, 1] {
+        b.extend(v.to_le_bytes());
+    }
+    for v in [3i32, 1, 4] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend(1u64.to_le_bytes());
+    for v in [1u64, 1, 2, 3, 4] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend(b"\n$EndElements\n");
+    b
+}
+
+/// Issue 16 §6: Gmsh 4.1 files with a node tag defined twice were read (mshio keeps a
+/// block's tags in a map, and drops them when their range looks dense); now refused in
+/// ASCII and binary, while the same files with distinct tags read.
+#[test]
+fn duplicate_gmsh_41_node_tags_are_refused() {
+    let dir = tmp("g41dup");
+    for binary in [false, true] {
+        std::fs::write(dir.join("ok.msh"), g41_tet([1, 2, 3, 4], binary)).unwrap();
+        std::fs::write(dir.join("dup.msh"), g41_tet([1, 1, 3, 4], binary)).unwrap();
+        for (mesh, bad) in [("ok.msh", false), ("dup.msh", true)] {
+            let scene = BOX_ON_FLOOR.replace(
+                "MESH",
+                &format!("mesh = {{ generator = \"file\", path = \"{mesh}\" }}"),
+            );
+            std::fs::write(
+                dir.join("s.toml"),
+                scene.replace("nodes = \"z0\"", "nodes = \"all\""),
+            )
+            .unwrap();
+            let r = cli(&dir, &["check", "s.toml"], &[]);
+            if bad {
+                expect(
+                    &format!("duplicate 4.1 tag, binary {binary}"),
+                    r,
+                    2,
+                    &["dup.msh", "node tag 1 is defined twice"],
+                );
+            } else {
+                assert_eq!(r.0, 0, "binary {binary}: {}", r.1);
+            }
+        }
+    }
+}
+
 #[test]
 fn each_bad_mesh_is_refused_with_its_file_and_place() {
     let dir = tmp("meshes");

@@ -279,6 +279,81 @@ fn check_msh41_counts(path: &Path, bytes: &[u8]) -> Result<(), Error> {
     Ok(())
 }
 
+/// Refuses a Gmsh 4.1 `$Nodes` section that defines a node tag twice. mshio keeps the
+/// tags of a block in a map (a repeated tag silently replaces the first) and discards
+/// them when the block's tag range looks dense, so the check reads the tags itself; it
+/// runs after mshio parsed the file, so the section's layout is known to be sound
+/// (ASCII: whitespace-separated numbers; binary: `int` entity fields, `size_t` counts
+/// and tags, three `f64` per node).
+fn check_msh41_node_tags(path: &Path, bytes: &[u8]) -> Result<(), Error> {
+    let Some(start) = find(bytes, b"$Nodes") else {
+        return Ok(());
+    };
+    let after = start + b"$Nodes".len() + 1;
+    let binary = find(&bytes[..start], b"4.1 1").is_some();
+    let mut seen = std::collections::HashSet::new();
+    let mut dup = |tag: u64| -> Result<(), Error> {
+        if seen.insert(tag) {
+            Ok(())
+        } else {
+            Err(bad(
+                path,
+                format!("$Nodes: node tag {tag} is defined twice"),
+            ))
+        }
+    };
+    if binary {
+        let rd = |p: usize, n: usize| bytes.get(p..p + n);
+        let u64_at = |p: usize| rd(p, 8).map(|b| u64::from_le_bytes(b.try_into().expect("8")));
+        let Some(blocks) = u64_at(after) else {
+            return Ok(());
+        };
+        let mut p = after + 32;
+        for _ in 0..blocks {
+            let Some(n) = u64_at(p + 12) else {
+                return Ok(());
+            };
+            p += 20;
+            for _ in 0..n {
+                let Some(tag) = u64_at(p) else {
+                    return Ok(());
+                };
+                dup(tag)?;
+                p += 8;
+            }
+            p = p.saturating_add((n as usize).saturating_mul(24));
+        }
+    } else {
+        let end = find(&bytes[after..], b"$EndNodes").map_or(bytes.len(), |e| after + e);
+        let text = String::from_utf8_lossy(&bytes[after..end]);
+        let mut it = text.split_ascii_whitespace().map(|t| t.parse::<u64>().ok());
+        let Some(Some(blocks)) = it.next() else {
+            return Ok(());
+        };
+        for _ in 0..3 {
+            it.next();
+        }
+        for _ in 0..blocks {
+            // dim, tag, parametric, count; then the tags; then x y z per node
+            let head: Vec<Option<u64>> = it.by_ref().take(4).collect();
+            let Some(&Some(n)) = head.get(3) else {
+                return Ok(());
+            };
+            for _ in 0..n {
+                match it.next() {
+                    Some(Some(tag)) => dup(tag)?,
+                    _ => return Ok(()),
+                }
+            }
+            // coordinates are not integers: skip them by count
+            for _ in 0..n.saturating_mul(3) {
+                it.next();
+            }
+        }
+    }
+    Ok(())
+}
+
 fn read_msh41(
     path: &Path,
     bytes: &[u8],
@@ -288,6 +363,7 @@ fn read_msh41(
     let f = guarded(|| mshio::parse_msh_bytes(bytes).map_err(short_message))
         .unwrap_or_else(|| Err("the file is malformed (mshio could not read it)".into()))
         .map_err(|e| bad(path, format!("Gmsh 4.1 parse error: {e}")))?;
+    check_msh41_node_tags(path, bytes)?;
     let nodes = f.data.nodes.ok_or_else(|| bad(path, "no $Nodes section"))?;
     let elements = f
         .data
