@@ -168,6 +168,8 @@ pub struct RunState {
     pub friction_counts: [usize; 5],
     /// Friction residual sum and maximum.
     pub friction_residual: [Bits; 2],
+    /// Coupled position solves, stagnated Newton loops, steps with held rows.
+    pub newton_loops: [usize; 3],
     /// The per-step force trace (empty beyond `FORCE_TRACE_MAX_STEPS`).
     pub trace: Option<Floats>,
     /// First step with a positive impulse.

@@ -704,6 +704,15 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
         s.iterations.lcp.max,
         s.caps_hit
     );
+    let l = &s.newton_loops;
+    if l.coupled_solves + l.stalls + l.steps_with_held_rows > 0 {
+        out!(
+            "newton loops        {} coupled position solves, {} stalls within √tol, {} steps with held rows",
+            l.coupled_solves,
+            l.stalls,
+            l.steps_with_held_rows
+        );
+    }
     if let Some(f) = &s.friction {
         out!(
             "friction            {} solves, {:.2} sweeps each (max {} in a step), residual mean {:.2e} max {:.2e}; caps hit {}",

@@ -118,6 +118,18 @@ pub struct ContactSummary {
     pub analytic_total_impulse: f64,
 }
 
+/// How the Newton loops of a run ended, beyond convergence at the tolerance
+/// (`StepStats::coupled_solves`, `newton_stalls`, `held_rows`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct NewtonLoops {
+    /// Coupled position solves (eq. 52–55) taken where the decoupled loop crawled.
+    pub coupled_solves: usize,
+    /// Loops ended by stagnation within √tol (counted as converged).
+    pub stalls: usize,
+    /// Steps that ended with a row held at g = 0 with P = 0 and τ < 0.
+    pub steps_with_held_rows: usize,
+}
+
 /// Everything a run reports (`summary.json`).
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
@@ -159,6 +171,9 @@ pub struct Summary {
     pub iterations: Iterations,
     /// Total iteration caps hit.
     pub caps_hit: usize,
+    /// How the Newton loops of the projection schemes ended
+    /// ([`crate::integrators::core`]).
+    pub newton_loops: NewtonLoops,
     /// Friction solver statistics (absent in a frictionless scene).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<FrictionSummary>,
@@ -198,6 +213,8 @@ struct Acc {
     fr_res_max: f64,
     fr_steps: usize,
     fr_caps: usize,
+    /// Coupled position solves, stagnated Newton loops, steps with held rows.
+    loops: [usize; 3],
 }
 
 impl Acc {
@@ -213,6 +230,9 @@ impl Acc {
             self.max[i] = self.max[i].max(v[i]);
         }
         self.caps += s.caps_hit;
+        self.loops[0] += s.coupled_solves;
+        self.loops[1] += s.newton_stalls;
+        self.loops[2] += usize::from(s.held_rows > 0);
         if s.friction_solves > 0 {
             self.fr_solves += s.friction_solves;
             self.fr_sweeps += s.friction_iterations;
@@ -751,6 +771,7 @@ impl RunObserver {
                 a.fr_caps,
             ],
             friction_residual: [Bits(a.fr_res_sum), Bits(a.fr_res_max)],
+            newton_loops: a.loops,
             trace: t.trace.clone().map(Floats),
             first_contact: t.first,
             contact_force: Floats(t.force.clone()),
@@ -792,6 +813,7 @@ impl RunObserver {
             a.fr_caps,
         ] = r.friction_counts;
         (a.fr_res_sum, a.fr_res_max) = (r.friction_residual[0].0, r.friction_residual[1].0);
+        a.loops = r.newton_loops;
         let t = &mut self.tracker;
         t.trace = r.trace.as_ref().map(|f| f.0.clone());
         t.first = r.first_contact;
@@ -1047,6 +1069,11 @@ pub fn run_checkpointed(
         contact,
         iterations: acc.iterations(steps),
         caps_hit: acc.caps,
+        newton_loops: NewtonLoops {
+            coupled_solves: acc.loops[0],
+            stalls: acc.loops[1],
+            steps_with_held_rows: acc.loops[2],
+        },
         friction: acc.friction(s.tangent_dim > 0),
         max_lcp_residual: acc.lcp_res,
         energy: [energy0, energy1],
