@@ -51,7 +51,7 @@
 //!   (before, such rows stayed off: 7e-8 m violations at h = 1e-5).
 //! - *Tolerances that follow the friction solve.* The velocity accuracy of the friction
 //!   solve (`solvers::friction::velocity_error`, m/s) sets a floor under the Newton
-//!   measure and a dead band `2hθ·accuracy` for the rows resting at g ≈ 0, which
+//!   tolerance (16 × accuracy / |U|) and a dead band `2hθ·accuracy` for the rows resting at g ≈ 0, which
 //!   otherwise flip in and out of the position problem on the solver's last digits.
 //! - *Stagnation.* A loop that gains less than 10 % in 5 iterations ends; it converged
 //!   if it got within `√tol` (`StepStats::newton_stalls`), else it is a cap.
@@ -125,10 +125,7 @@ impl Workspace {
     /// Buffers for `rows` contact rows and `contacts` contacts, dense blocks capped at
     /// `params.max_active_rows` rows (module doc); `friction` adds the friction solver.
     pub fn new(rows: usize, contacts: usize, params: &SchemeParams, friction: bool) -> Self {
-        let cap = match params.max_active_rows {
-            0 => rows.min(DEFAULT_MAX_ACTIVE_ROWS),
-            c => rows.min(c),
-        };
+        let cap = Self::cap(rows, params);
         Workspace {
             cap,
             idx: Vec::with_capacity(rows),
@@ -143,6 +140,14 @@ impl Workspace {
             mlcp: Mlcp::with_capacity(cap),
             blocks: Vec::with_capacity(if friction { contacts } else { 0 }),
             friction: FrictionSolver::with_capacity(if friction { cap } else { 0 }),
+        }
+    }
+
+    /// Rows of the dense blocks: `rows`, capped by `params.max_active_rows`.
+    fn cap(rows: usize, params: &SchemeParams) -> usize {
+        match params.max_active_rows {
+            0 => rows.min(DEFAULT_MAX_ACTIVE_ROWS),
+            c => rows.min(c),
         }
     }
 
@@ -524,19 +529,16 @@ impl ThetaCore {
         );
         // the dense one-step workspaces (module doc of `Workspace`): the gathered block
         // and the MLCP's three, plus the coupled position problem's matrix
+        // the coupled problem has at most the velocity rows plus one τ per contact,
+        // capped like the dense workspaces (beyond, the decoupled loop runs alone)
+        let ws_cap = Workspace::cap(rows, params);
+        let coupled_cap =
+            (with_projection && params.projection_feedback).then(|| (rows + m).min(ws_cap));
         {
-            let cap = match params.max_active_rows {
-                0 => rows.min(DEFAULT_MAX_ACTIVE_ROWS),
-                c => rows.min(c),
-            } as u64;
-            let coupled = if with_projection && params.projection_feedback {
-                ((rows + m) as u64).min(cap)
-            } else {
-                0
-            };
+            let (cap, cc) = (ws_cap as u64, coupled_cap.unwrap_or(0) as u64);
             let mut mem = crate::limits::MemoryEstimate::default();
             mem.add("dense one-step workspaces (4 × rows²)", cap * cap, 32);
-            mem.add("coupled position problem (unknowns²)", coupled * coupled, 8);
+            mem.add("coupled position problem (unknowns²)", cc * cc, 8);
             mem.check("scheme.max_active_rows", format!("{cap} rows"))?;
         }
         let mut core = ThetaCore {
@@ -589,14 +591,9 @@ impl ThetaCore {
             pos_mask: vec![false; m],
             eq_rows: vec![false; rows],
             ws: Workspace::new(rows, m, params, friction),
-            coupled: None,
+            coupled: coupled_cap.map(|c| Coupled::new(c, m)),
             velocity_accuracy: 0.0,
         };
-        if with_projection && params.projection_feedback {
-            // the coupled problem has at most the velocity rows plus one τ per contact,
-            // capped like the dense workspaces (beyond, the decoupled loop runs alone)
-            core.coupled = Some(Coupled::new((rows + m).min(core.ws.cap), m));
-        }
         core.contacts
             .evaluate(&core.state.q, &mut core.state.gap, &mut core.del.jac);
         core.del.refresh(&core.sys.stiffness);
@@ -1140,13 +1137,10 @@ impl ThetaCore {
         for c in 0..self.m {
             dg = dg.max(self.wt[self.off[c]].abs());
         }
-        // Floor: 8 ulps of the quantities the iterate is built from, plus what the
-        // friction solve resolves: two iterates whose velocities are each known to
-        // `velocity_accuracy` cannot be told apart below twice that (and their gaps
-        // below hθ times it). Without friction the second term is 0.
-        let acc = 2.0 * self.velocity_accuracy;
-        let fv = 8.0 * f64::EPSILON * s_v + acc;
-        let fg = 8.0 * f64::EPSILON * (s_g + h * s_v) + h * th * acc;
+        // Rounding floor: 8 ulps of the quantities the iterate is built from (what the
+        // friction solve resolves enters through the tolerance, in `newton`).
+        let fv = 8.0 * f64::EPSILON * s_v;
+        let fg = 8.0 * f64::EPSILON * (s_g + h * s_v);
         let rv = if dv <= fv {
             0.0
         } else {

@@ -210,12 +210,18 @@ fn norm(x: &[f64]) -> f64 {
 
 /// Squared natural-map error of one block: `‖r − P_C(r − û)‖²`.
 fn block_error2(r: &[f64], u: &[f64], mu: f64) -> f64 {
+    natural_map2(r, u, mu, 1.0)
+}
+
+/// `‖r − P_C(r − ρ û)‖²` of one block (`û = u + μ‖u_T‖ e_N`): [`residual`] takes
+/// `ρ = 1`, [`velocity_error`] the block's `1/W_NN`.
+fn natural_map2(r: &[f64], u: &[f64], mu: f64, rho: f64) -> f64 {
     let d = r.len();
     let mut x = [0.0; 3];
     let ut = norm(&u[1..d]);
-    x[0] = r[0] - (u[0] + mu * ut);
+    x[0] = r[0] - rho * (u[0] + mu * ut);
     for i in 1..d {
-        x[i] = r[i] - u[i];
+        x[i] = r[i] - rho * u[i];
     }
     project_on_cone(&mut x[..d], mu);
     (0..d).map(|i| (r[i] - x[i]).powi(2)).sum()
@@ -254,28 +260,13 @@ pub fn velocity_error<W: DelassusOperator + ?Sized>(
 ) -> f64 {
     let mut worst: f64 = 0.0;
     for b in blocks {
-        let o = b.offset;
-        let wnn = w.entry(o, o);
+        let s = b.offset..b.offset + b.dim;
+        let wnn = w.entry(b.offset, b.offset);
         if wnn.is_nan() || wnn <= 0.0 {
             return f64::INFINITY;
         }
         let rho = 1.0 / wnn;
-        let mut x = [0.0; 3];
-        let mut y = [0.0; 3];
-        let d = b.dim;
-        let ut = norm(&u[o + 1..o + d]);
-        for i in 0..d {
-            x[i] = r[o + i];
-            y[i] = rho * u[o + i];
-        }
-        y[0] += rho * b.mu * ut;
-        let mut p = [0.0; 3];
-        for i in 0..d {
-            p[i] = x[i] - y[i];
-        }
-        project_on_cone(&mut p[..d], b.mu);
-        let e = (0..d).map(|i| (x[i] - p[i]).powi(2)).sum::<f64>().sqrt() / rho;
-        worst = worst.max(e);
+        worst = worst.max(natural_map2(&r[s.clone()], &u[s], b.mu, rho).sqrt() / rho);
     }
     worst
 }
