@@ -4,7 +4,7 @@ one run on one machine (Debian's python3-siconos and python3-h5py, /usr/bin/pyth
 
 For every .hdf5 / .dat file of DIR (default tests/data/fclib): Siconos' fc3d NSGS, PROX,
 NSN_AC and ADMM (fc2d NSGS, CPG and ENUM for 2-D problems), and `signorini fclib` with
-nsgs, prox and newton, all from r = 0 with tolerance 1e-8 and 20 000 iterations. Each
+auto, nsgs, prox, nsn and newton, all from r = 0 with tolerance 1e-8 and 20 000 iterations. Each
 solve runs 5 times in one process (once when it takes over a second); the table shows the median solve time (Siconos: the driver call;
 signorini: the `seconds` of its --solution JSON with --repeat 5, the solve without
 reading the file),
@@ -50,11 +50,32 @@ def sparse(g):
 def load(path):
     if path.endswith(".dat"):
         t = open(path).read().split()
-        d, nc = int(t[0]), int(t[1])
+        d, nc, storage = int(t[0]), int(t[1]), int(t[2])
         n = d * nc
-        w = np.array(list(map(float, t[7 : 7 + n * n]))).reshape(n, n).T
-        q = np.array(list(map(float, t[7 + n * n : 7 + n * n + n])))
-        mu = np.array(list(map(float, t[7 + n * n + n : 7 + n * n + n + nc])))
+        if storage == 0:  # dense: sizes twice, values column by column
+            k = 7
+            w = np.array(list(map(float, t[k : k + n * n]))).reshape(n, n).T
+            k += n * n
+        else:  # sparse-block (SBM_write_in_file)
+            k = 5
+            nblocks = int(t[k]); k += 1
+            w = np.zeros((n, n))
+            if nblocks:
+                nbr, nbc = int(t[k]), int(t[k + 1]); k += 2
+                rs = [0] + [int(x) for x in t[k : k + nbr]]; k += nbr
+                cs = [0] + [int(x) for x in t[k : k + nbc]]; k += nbc
+                f1, f2 = int(t[k]), int(t[k + 1]); k += 2
+                rowptr = [int(x) for x in t[k : k + f1]]; k += f1
+                colidx = [int(x) for x in t[k : k + f2]]; k += f2
+                for br in range(nbr):
+                    for b in range(rowptr[br], rowptr[br + 1]):
+                        k += 1  # the block number
+                        bc = colidx[b]
+                        nr, ncol = rs[br + 1] - rs[br], cs[bc + 1] - cs[bc]
+                        vals = np.array(list(map(float, t[k : k + nr * ncol]))); k += nr * ncol
+                        w[rs[br]:rs[br + 1], cs[bc]:cs[bc + 1]] = vals.reshape(ncol, nr).T
+        q = np.array(list(map(float, t[k : k + n])))
+        mu = np.array(list(map(float, t[k + n : k + n + nc])))
         return d, w, q, mu
     import h5py
 
@@ -114,7 +135,7 @@ def signorini(binary, path, solver):
 
 def main():
     binary = sys.argv[1] if len(sys.argv) > 1 else "target/release/signorini"
-    folder = sys.argv[2] if len(sys.argv) > 2 else "../shared/fclib"
+    folder = sys.argv[2] if len(sys.argv) > 2 else "tests/data/fclib"
     files = sorted(f for f in os.listdir(folder) if f.endswith((".hdf5", ".dat")))
     print(f"tol {TOL:g}, cap {MAX_IT}, median of {REPEAT} solves from r = 0; Siconos numerics "
           f"{getattr(sn, '__version__', '4.4')}")
@@ -135,7 +156,7 @@ def main():
             except Exception as e:  # a solver missing or refusing the problem
                 rows.append(("Siconos", label, False, 0, float("nan"), float("nan")))
                 print(f"  ({name}: Siconos {label} failed: {e})", file=sys.stderr)
-        for s in ["nsgs", "prox", "newton"]:
+        for s in ["auto", "nsgs", "prox", "nsn", "newton"]:
             rows.append(("signorini", s) + signorini(binary, path, s))
         for code, label, ok, it, res, sec in rows:
             print(f"| {name} | {len(q)} | {code} | {label} | {'yes' if ok else 'NO'} | {it} | "

@@ -115,7 +115,7 @@ struct FclibArgs {
     /// The problem file (.hdf5, .h5 or .dat).
     file: PathBuf,
     /// The friction solver.
-    #[arg(long, value_enum, default_value = "nsgs")]
+    #[arg(long, value_enum, default_value = "auto")]
     solver: signorini::solvers::friction::FrictionSolverKind,
     /// Residual to reach (Siconos' natural-map error, relative).
     #[arg(long, default_value_t = 1e-8)]
@@ -590,11 +590,17 @@ fn fclib(a: &FclibArgs) -> Result<bool, signorini::Error> {
         }
     );
     out!(
-        "result              {} after {} sweeps{}: residual {:.3e}, {:.3e} s{}",
+        "result              {} by {}{} after {} iterations{}: residual {:.3e}, {:.3e} s{}",
         if sol.converged {
             "converged"
         } else {
             "NOT converged (cap hit)"
+        },
+        sol.solved_by,
+        if sol.sparse_jacobian {
+            " (sparse Jacobian)"
+        } else {
+            ""
         },
         sol.iterations,
         if sol.prox_iterations > 0 {

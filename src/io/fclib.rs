@@ -9,8 +9,12 @@
 //! - Global problems (`/fclib_global`): `M v = H r + f`, `u = Hᵀ v + w`, condensed here to
 //!   `W = Hᵀ M⁻¹ H`, `q = Hᵀ M⁻¹ f + w` with a dense LU of `M` (faer), because LMGC90's
 //!   `M` is not always symmetric (the Cholesky of the time-stepping path would not do).
-//! - `.dat`: `d`, the contact count, a dense NumericsMatrix (storage 0, sizes, sizes
-//!   again, values column by column), `q`, `μ` — whitespace-separated tokens.
+//! - `.dat`: `d`, the contact count, a NumericsMatrix — dense (storage 0: sizes, sizes
+//!   again, values column by column) or sparse-block (storage 1, Siconos'
+//!   `SBM_write_in_file`: blocks of at most 3×3 with compressed block rows) —, `q`, `μ`, and at most one trailing flag (0 or 1,
+//!   written by older Siconos versions) — whitespace-separated tokens; anything more is
+//!   refused, as are problems with no contacts, `μ` above [`MAX_MU`], entries above
+//!   [`MAX_ENTRY`] and a contact with `W_NN ≤ 0`.
 //!
 //! The contact frame is (N, T1, T2), as ours. `/guesses/1/{r, u}` is kept as a warm start
 //! when present; `/solution` groups are placeholders in the files we know and are
@@ -23,6 +27,10 @@ use crate::error::Error;
 
 /// Largest problem (rows of `W`) read into dense storage: 16384² values = 2 GiB.
 pub const MAX_ROWS: usize = 16384;
+/// Largest friction coefficient read (as in scenes: `contact::check_friction`).
+pub const MAX_MU: f64 = 1e6;
+/// Largest magnitude of an entry of `W` or `q`.
+pub const MAX_ENTRY: f64 = 1e150;
 /// Largest `.dat` file read (bytes).
 const MAX_DAT_BYTES: u64 = 1 << 30;
 
@@ -74,6 +82,12 @@ impl FrictionContactProblem {
                 ),
             ));
         }
+        if self.mu.is_empty() {
+            return Err(at(
+                "contacts",
+                "there are none: expected at least one contact to solve for".into(),
+            ));
+        }
         if let Some(i) = self.w.iter().position(|x| !x.is_finite()) {
             return Err(at(
                 "W",
@@ -91,6 +105,42 @@ impl FrictionContactProblem {
                 "mu",
                 format!("entry {i} is {} (must be ≥ 0)", self.mu[i]),
             ));
+        }
+        if let Some(i) = self.mu.iter().position(|x| *x > MAX_MU) {
+            return Err(at(
+                "mu",
+                format!(
+                    "entry {i} is {:e}: expected at most {MAX_MU:e}, the range the friction \
+                     solvers are checked on (scenes take the same)",
+                    self.mu[i]
+                ),
+            ));
+        }
+        // the residual squares the data: beyond 1e150 its norms overflow
+        for (name, v) in [("W", &self.w), ("q", &self.q)] {
+            if let Some(i) = v.iter().position(|x| x.abs() > MAX_ENTRY) {
+                return Err(at(
+                    name,
+                    format!(
+                        "entry {i} is {:e}: expected magnitudes up to {MAX_ENTRY:e} (the \
+                         residual squares them); rescale the problem",
+                        v[i]
+                    ),
+                ));
+            }
+        }
+        for a in 0..self.mu.len() {
+            let o = a * self.dim;
+            let wnn = self.w[o + o * n];
+            if wnn <= 0.0 {
+                return Err(at(
+                    "W",
+                    format!(
+                        "contact {a}: W_NN = W[{o},{o}] is {wnn:e}, expected > 0 (a contact's \
+                         own compliance Hᵀ M⁻¹ H is positive; zero means it moves no mass)"
+                    ),
+                ));
+            }
         }
         let wmax = self.w.iter().fold(0.0_f64, |s, x| s.max(x.abs()));
         let mut asym: f64 = 0.0;
@@ -166,39 +216,155 @@ pub fn parse_dat(path: &Path, text: &str) -> Result<FrictionContactProblem, Erro
     }
     let nc = int(next("the contact count")?, "contact count")?;
     let storage = int(next("the matrix storage type")?, "storage type")?;
-    if storage != 0 {
+    if storage > 1 {
         return Err(Error::invalid(
             &format!("{}: storage type", path.display()),
             storage,
-            "only dense matrices (0) are read",
+            "only dense (0) and sparse-block (1) matrices are read (2, CSparse's print, \
+             rounds the values to 6 digits)",
         ));
     }
     let s0 = int(next("the matrix rows")?, "matrix rows")?;
     let s1 = int(next("the matrix columns")?, "matrix columns")?;
-    let r0 = int(next("the matrix rows (repeated)")?, "matrix rows")?;
-    let r1 = int(next("the matrix columns (repeated)")?, "matrix columns")?;
     let n = nc.saturating_mul(dim);
-    if s0 != n || s1 != n || r0 != n || r1 != n {
-        return Err(Error::invalid(
+    let size_err = |got: String| {
+        Error::invalid(
             &format!("{}: matrix size", path.display()),
-            format!("{s0}×{s1} ({r0}×{r1})"),
+            got,
             &format!("expected {n}×{n} for {nc} contacts in dimension {dim}"),
-        ));
+        )
+    };
+    if s0 != n || s1 != n {
+        return Err(size_err(format!("{s0}×{s1}")));
     }
-    // every value needs at least two bytes (digit and separator)
-    let needed = n.saturating_mul(n).saturating_add(n).saturating_add(nc);
-    if n > MAX_ROWS || needed.saturating_mul(2) as u64 > text.len() as u64 {
+    // dense: every value needs at least two bytes (digit and separator); sparse-block:
+    // q and μ must be in the file, and the dense copy of W may not exceed 100 bytes
+    // of W per byte of file (64 MiB at least)
+    let dense_needed = if storage == 0 { n.saturating_mul(n) } else { 0 };
+    let needed = dense_needed.saturating_add(n).saturating_add(nc);
+    let dense_bytes = (n as u64).saturating_mul(n as u64).saturating_mul(8);
+    if n > MAX_ROWS
+        || needed.saturating_mul(2) as u64 > text.len() as u64
+        || (storage == 1 && dense_bytes > (100 * text.len() as u64).max(64 << 20))
+    {
         return Err(Error::invalid(
             &format!("{}: contact count", path.display()),
             nc,
             &format!(
-                "needs {needed} values, more than the file holds (or than {MAX_ROWS} dense rows)"
+                "needs {needed} values and a {n}×{n} dense W, more than the file holds (or \
+                 than {MAX_ROWS} dense rows)"
             ),
         ));
     }
     let mut w = vec![0.0; n * n];
-    for (k, x) in w.iter_mut().enumerate() {
-        *x = real(next("W values")?, &format!("W value {k}"))?;
+    if storage == 0 {
+        let r0 = int(next("the matrix rows (repeated)")?, "matrix rows")?;
+        let r1 = int(next("the matrix columns (repeated)")?, "matrix columns")?;
+        if r0 != n || r1 != n {
+            return Err(size_err(format!("{s0}×{s1} ({r0}×{r1})")));
+        }
+        for (k, x) in w.iter_mut().enumerate() {
+            *x = real(next("W values")?, &format!("W value {k}"))?;
+        }
+    } else {
+        // Siconos' SparseBlockStructuredMatrix as SBM_write_in_file prints it: block
+        // count, block rows and columns, cumulative block sizes of each, the compressed
+        // block-row pointers and block-column indices, then each block's number and its
+        // values column by column
+        let at = |what: &str| format!("{}: sparse-block {what}", path.display());
+        let bad = |what: &str, got: String, want: String| Error::invalid(&at(what), got, &want);
+        let nblocks = int(next("the block count")?, "block count")?;
+        if nblocks > 0 {
+            let nbr = int(next("the block-row count")?, "block-row count")?;
+            let nbc = int(next("the block-column count")?, "block-column count")?;
+            if nbr == 0 || nbr > n || nbc == 0 || nbc > n {
+                return Err(bad(
+                    "block rows and columns",
+                    format!("{nbr}, {nbc}"),
+                    format!("expected 1..={n} each"),
+                ));
+            }
+            let mut sizes = [Vec::new(), Vec::new()];
+            for (side, count) in [(0, nbr), (1, nbc)] {
+                let mut prev = 0;
+                for b in 0..count {
+                    let end = int(next("block sizes")?, "block size")?;
+                    if end <= prev || end > n || end - prev > 3 {
+                        return Err(bad(
+                            "block sizes",
+                            format!("{end} after {prev}"),
+                            format!("cumulative ends rising by 1 to 3 up to {n}"),
+                        ));
+                    }
+                    sizes[side].push(end);
+                    prev = end;
+                    if b + 1 == count && end != n {
+                        return Err(bad("block sizes", end.to_string(), format!("last = {n}")));
+                    }
+                }
+            }
+            let filled1 = int(next("filled1")?, "filled1")?;
+            let filled2 = int(next("filled2")?, "filled2")?;
+            if filled1 != nbr + 1 || filled2 != nblocks || nblocks > nbr.saturating_mul(nbc) {
+                return Err(bad(
+                    "counts",
+                    format!("filled1 {filled1}, filled2 {filled2}, {nblocks} blocks"),
+                    format!("filled1 = {} and filled2 = the block count", nbr + 1),
+                ));
+            }
+            let mut rowptr = Vec::with_capacity(filled1);
+            for _ in 0..filled1 {
+                let p = int(next("block-row pointers")?, "block-row pointer")?;
+                if p > nblocks || rowptr.last().is_some_and(|&l| p < l) {
+                    return Err(bad(
+                        "block-row pointers",
+                        p.to_string(),
+                        format!("non-decreasing up to {nblocks}"),
+                    ));
+                }
+                rowptr.push(p);
+            }
+            if rowptr[0] != 0 || rowptr[nbr] != nblocks {
+                return Err(bad(
+                    "block-row pointers",
+                    format!("{}..{}", rowptr[0], rowptr[nbr]),
+                    format!("0..{nblocks}"),
+                ));
+            }
+            let mut colidx = Vec::with_capacity(filled2);
+            for _ in 0..filled2 {
+                let c = int(next("block-column indices")?, "block-column index")?;
+                if c >= nbc {
+                    return Err(bad(
+                        "block-column indices",
+                        c.to_string(),
+                        format!("< {nbc}"),
+                    ));
+                }
+                colidx.push(c);
+            }
+            for br in 0..nbr {
+                let (r0, r1) = (if br == 0 { 0 } else { sizes[0][br - 1] }, sizes[0][br]);
+                for blk in rowptr[br]..rowptr[br + 1] {
+                    let num = int(next("a block number")?, "block number")?;
+                    if num != blk {
+                        return Err(bad(
+                            "block number",
+                            num.to_string(),
+                            format!("{blk} (blocks in order)"),
+                        ));
+                    }
+                    let bc = colidx[blk];
+                    let (c0, c1) = (if bc == 0 { 0 } else { sizes[1][bc - 1] }, sizes[1][bc]);
+                    for c in c0..c1 {
+                        for row in r0..r1 {
+                            w[row + c * n] =
+                                real(next("block values")?, &format!("block {blk} value"))?;
+                        }
+                    }
+                }
+            }
+        }
     }
     let mut q = vec![0.0; n];
     for (k, x) in q.iter_mut().enumerate() {
@@ -207,6 +373,20 @@ pub fn parse_dat(path: &Path, text: &str) -> Result<FrictionContactProblem, Erro
     let mut mu = vec![0.0; nc];
     for (k, x) in mu.iter_mut().enumerate() {
         *x = real(next("μ values")?, &format!("mu value {k}"))?;
+    }
+    // older Siconos writers end the file with one flag, 0 or 1
+    // (FrictionContactProblem00394.dat, Rover4609.dat, FC3D_Example1.dat): allowed once
+    let mut rest = tok.peekable();
+    if rest.peek().is_some_and(|(_, t)| *t == "0" || *t == "1") {
+        rest.next();
+    }
+    if let Some((i, t)) = rest.next() {
+        return Err(Error::invalid(
+            &format!("{}: token {}", path.display(), i + 1),
+            t,
+            "is past the end of the problem (after the μ values and an optional 0/1 flag): \
+             expected end of file",
+        ));
     }
     FrictionContactProblem {
         dim,
@@ -436,8 +616,12 @@ pub struct Solution {
     pub converged: bool,
     /// Wall time of the solve (s).
     pub seconds: f64,
-    /// The solver.
+    /// The solver asked for.
     pub solver: String,
+    /// The solver that produced `r` (for `auto`, the stage that finished).
+    pub solved_by: String,
+    /// The Newton methods factored a sparse Jacobian.
+    pub sparse_jacobian: bool,
 }
 
 /// Solves `prob` from `r = 0` (or the file's guess when `warm`) with `params`.
@@ -493,7 +677,7 @@ fn solve_once(
         _ => vec![0.0; n],
     };
     let mut u = vec![0.0; n];
-    let mut solver = FrictionSolver::with_capacity(n);
+    let mut solver = FrictionSolver::for_one_step(n);
     let op = DenseOperator::new(n, &prob.w);
     let t0 = std::time::Instant::now();
     let info = solver
@@ -518,5 +702,7 @@ fn solve_once(
         converged: info.converged,
         seconds,
         solver: params.solver.name().to_string(),
+        solved_by: info.solver.name().to_string(),
+        sparse_jacobian: info.sparse_jacobian,
     })
 }

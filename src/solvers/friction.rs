@@ -44,6 +44,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::SolveError;
+use super::newton::NewtonMode;
 use crate::delassus::DelassusOperator;
 
 /// One contact block of a friction problem.
@@ -61,13 +62,20 @@ pub struct Block {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum FrictionSolverKind {
-    /// Nonsmooth Gauss–Seidel with exact local solves (default).
+    /// NSGS first, then the robust methods on what it leaves (default): in the step loop
+    /// PROX, in one-step problems the plain Newton method and then proximal Newton.
+    /// [`FrictionInfo::solver`] says which one finished.
     #[default]
+    Auto,
+    /// Nonsmooth Gauss–Seidel with exact local solves.
     Nsgs,
     /// Proximal point with NSGS inside (rank-deficient `W`).
     Prox,
-    /// Proximal point with a global semismooth Newton on Alart–Curnier inside (dense
-    /// Jacobian and LU: hard one-step problems; allocates, so not in the step loop).
+    /// Global semismooth Newton on Alart–Curnier, no regularization (Siconos' NSN_AC;
+    /// [`super::newton`]; allocates, so not in the step loop).
+    Nsn,
+    /// Proximal point with the global Newton inside (Siconos' PROX with its Newton inner
+    /// solver; [`super::newton`]; allocates, so not in the step loop).
     Newton,
 }
 
@@ -75,8 +83,10 @@ impl FrictionSolverKind {
     /// The command-line name.
     pub fn name(self) -> &'static str {
         match self {
+            FrictionSolverKind::Auto => "auto",
             FrictionSolverKind::Nsgs => "nsgs",
             FrictionSolverKind::Prox => "prox",
+            FrictionSolverKind::Nsn => "nsn",
             FrictionSolverKind::Newton => "newton",
         }
     }
@@ -84,12 +94,28 @@ impl FrictionSolverKind {
     /// One phrase for `signorini check`.
     pub fn describe(self) -> &'static str {
         match self {
+            FrictionSolverKind::Auto => "NSGS, falling back to proximal point over NSGS",
             FrictionSolverKind::Nsgs => "NSGS with exact local solves",
             FrictionSolverKind::Prox => "proximal point over NSGS",
+            FrictionSolverKind::Nsn => "global Alart–Curnier Newton",
             FrictionSolverKind::Newton => "proximal point over a global Alart–Curnier Newton",
         }
     }
+
+    /// True for the solvers that allocate per iteration (one-step problems only).
+    pub fn allocates(self) -> bool {
+        matches!(self, FrictionSolverKind::Nsn | FrictionSolverKind::Newton)
+    }
 }
+
+/// NSGS sweeps `auto` gives NSGS before it falls back, in one-step problems (measured
+/// on the FCLIB files: NSGS converges within 40 sweeps where it is the fastest solver).
+pub const AUTO_NSGS_ONE_STEP: usize = 100;
+/// NSGS sweeps `auto` gives NSGS in the step loop before PROX takes over (warm-started
+/// NSGS needs a few sweeps per step on every shipped scene).
+pub const AUTO_NSGS_STEP: usize = 1000;
+/// Iterations `auto` gives the plain Newton method in one-step problems.
+pub const AUTO_NSN: usize = 200;
 
 /// Largest friction tolerance the schemes accept ([`FrictionParams::validate`]).
 pub const MAX_STEP_TOL: f64 = 1e-4;
@@ -98,7 +124,7 @@ pub const MAX_STEP_TOL: f64 = 1e-4;
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FrictionParams {
-    /// Which solver (default NSGS).
+    /// Which solver (default `auto`).
     pub solver: FrictionSolverKind,
     /// Stop when the residual (module doc) is at most this (default 1e-12: the schemes
     /// need the impulses to near round-off for gaps of 1e-12 m and stick of 1e-9 m).
@@ -112,7 +138,7 @@ pub struct FrictionParams {
 impl Default for FrictionParams {
     fn default() -> Self {
         FrictionParams {
-            solver: FrictionSolverKind::Nsgs,
+            solver: FrictionSolverKind::Auto,
             tol: 1e-12,
             max_iterations: 10_000,
             local_max_iterations: 50,
@@ -137,12 +163,12 @@ impl FrictionParams {
             ));
         }
         self.validate_ranges(prefix)?;
-        if self.solver == FrictionSolverKind::Newton {
+        if self.solver.allocates() {
             return Err(crate::Error::invalid(
                 &format!("{prefix}solver"),
-                "newton",
-                "is for one-step problems (signorini fclib): it forms a dense Jacobian per \
-                 iteration, and the step loop does not allocate; use nsgs or prox",
+                self.solver.name(),
+                "is for one-step problems (signorini fclib): it forms and factors a Jacobian \
+                 per iteration, and the step loop does not allocate; use auto, nsgs or prox",
             ));
         }
         Ok(())
@@ -178,8 +204,13 @@ pub struct FrictionInfo {
     pub residual: f64,
     /// Proximal iterations (0 for NSGS).
     pub prox_iterations: usize,
-    /// The residual reached the tolerance (false: the cap was hit; `r` is the last iterate).
+    /// The residual reached the tolerance (false: the cap was hit; `r` is the last
+    /// iterate, or the best one for the Newton methods).
     pub converged: bool,
+    /// The solver that produced `r` (for `auto`: the stage that finished).
+    pub solver: FrictionSolverKind,
+    /// The Newton methods factored a sparse Jacobian (the block pattern of `W`).
+    pub sparse_jacobian: bool,
 }
 
 /// Projection of `x = (x_N, x_T)` on the cone `‖x_T‖ ≤ μ x_N` (in place).
@@ -246,6 +277,34 @@ pub fn residual(blocks: &[Block], q: &[f64], r: &[f64], u: &[f64]) -> f64 {
     }
 }
 
+/// Where [`residual`] is at most `tol`, raises it to the take-off error
+/// `max |u_N| / max(‖q‖, ‖r‖, ‖u‖)` over the blocks with `r_N ≤ 0` and `u_N < 0`.
+/// De Saxcé's complementarity accepts `r = 0` with `u_N < 0` when `μ‖u_T‖` is large
+/// (`û ∈ C*` as soon as `u_N ≥ ‖u_T‖ (1/μ − μ)`): Siconos' residual then reads 0 at
+/// `r = 0` (μ = 1e300 reported "converged, residual 0" with `u_N = −1`), while
+/// Coulomb's law with Signorini's condition requires `u_N ≥ 0` on an open contact.
+pub fn checked_residual(blocks: &[Block], q: &[f64], r: &[f64], u: &[f64], tol: f64) -> f64 {
+    let res = residual(blocks, q, r, u);
+    if res.is_nan() || res > tol {
+        return res;
+    }
+    let k = blocks.last().map_or(0, |b| b.offset + b.dim);
+    let worst = blocks
+        .iter()
+        .filter(|b| r[b.offset] <= 0.0 && u[b.offset] < 0.0)
+        .map(|b| -u[b.offset])
+        .fold(0.0, f64::max);
+    if worst == 0.0 {
+        return res;
+    }
+    let scale = norm(&q[..k]).max(norm(&r[..k])).max(norm(&u[..k]));
+    res.max(if scale <= f64::EPSILON {
+        worst
+    } else {
+        worst / scale
+    })
+}
+
 /// The velocity accuracy of a solution, in m/s: the largest over the blocks of
 /// `‖r − P_C(r − ρ û)‖ / ρ` with `ρ = 1/W_NN` of the block (the natural map with each
 /// block's own scale, so that an impulse error counts by the velocity it makes). Unlike
@@ -295,8 +354,9 @@ pub struct FrictionSolver {
     /// Diagonal blocks `W_αα` (3×3 each, row-major, padded).
     diag: Vec<[f64; 9]>,
     col: Vec<f64>,
-    qreg: Vec<f64>,
+    pub(super) qreg: Vec<f64>,
     rprev: Vec<f64>,
+    one_step: bool,
 }
 
 impl FrictionSolver {
@@ -308,6 +368,16 @@ impl FrictionSolver {
             col: vec![0.0; capacity],
             qreg: vec![0.0; capacity],
             rprev: vec![0.0; capacity],
+            one_step: false,
+        }
+    }
+
+    /// Buffers for one-step problems of `rows` rows (`signorini fclib`): `auto` may then
+    /// fall back on the Newton methods, which allocate.
+    pub fn for_one_step(rows: usize) -> Self {
+        FrictionSolver {
+            one_step: true,
+            ..Self::with_capacity(rows)
         }
     }
 
@@ -342,22 +412,89 @@ impl FrictionSolver {
                     d[3 * i + j] = prob.w.entry(b.offset + i, b.offset + j);
                 }
             }
+            // a contact's own compliance W_NN = G_Nᵀ M̂⁻¹ G_N is positive; zero or
+            // negative means a bad operator, which no local solve can fix
+            if !(d[0] > 0.0 && d[0].is_finite()) {
+                return Err(SolveError::NonPositiveDiagonal {
+                    row: b.offset,
+                    value: d[0],
+                });
+            }
             self.diag[b.offset] = d;
         }
-        match params.solver {
-            FrictionSolverKind::Nsgs => {
-                let (it, res) =
-                    self.nsgs(prob, 0.0, (params.tol, params.max_iterations), params, r, u);
-                Ok(FrictionInfo {
-                    iterations: it,
-                    residual: res,
-                    prox_iterations: 0,
-                    converged: res <= params.tol,
-                })
+        let nsgs = |s: &mut Self, cap: usize, r: &mut [f64], u: &mut [f64]| {
+            let (it, res) = s.nsgs(prob, 0.0, (params.tol, cap), params, r, u);
+            FrictionInfo {
+                iterations: it,
+                residual: res,
+                converged: res <= params.tol,
+                solver: FrictionSolverKind::Nsgs,
+                ..FrictionInfo::default()
             }
+        };
+        let newton = |s: &mut Self, mode, p: &FrictionParams, r: &mut [f64], u: &mut [f64]| {
+            let (mut info, sparse) = s.global_newton(prob, p, mode, k, r, u);
+            info.solver = match mode {
+                NewtonMode::Plain => FrictionSolverKind::Nsn,
+                NewtonMode::Proximal => FrictionSolverKind::Newton,
+            };
+            info.sparse_jacobian = sparse;
+            info
+        };
+        let info = match params.solver {
+            FrictionSolverKind::Nsgs => nsgs(self, params.max_iterations, r, u),
             FrictionSolverKind::Prox => self.prox(prob, params, k, r, u),
-            FrictionSolverKind::Newton => Ok(self.prox_newton(prob, params, k, r, u)),
-        }
+            FrictionSolverKind::Nsn => newton(self, NewtonMode::Plain, params, r, u),
+            FrictionSolverKind::Newton => newton(self, NewtonMode::Proximal, params, r, u),
+            FrictionSolverKind::Auto => {
+                let first = if self.one_step {
+                    AUTO_NSGS_ONE_STEP
+                } else {
+                    AUTO_NSGS_STEP
+                };
+                // the proximal Newton restarts from the caller's start: from NSGS's
+                // iterate it spent 2 180 iterations on Capsules-i125-1213 against 13
+                self.rprev[..k].copy_from_slice(&r[..k]);
+                let mut info = nsgs(self, first.min(params.max_iterations), r, u);
+                let mut spent = info.iterations;
+                // the stages share the cap: none starts once it is spent
+                let left = |spent: usize| FrictionParams {
+                    max_iterations: params.max_iterations.saturating_sub(spent),
+                    ..*params
+                };
+                if info.converged || spent >= params.max_iterations {
+                } else if self.one_step {
+                    let p = FrictionParams {
+                        max_iterations: left(spent).max_iterations.min(AUTO_NSN),
+                        ..*params
+                    };
+                    let mut next = newton(self, NewtonMode::Plain, &p, r, u);
+                    spent += next.iterations;
+                    next.iterations = spent;
+                    info = next;
+                    if !info.converged && spent < params.max_iterations {
+                        let (r0, res0) = (r[..k].to_vec(), info.residual);
+                        r[..k].copy_from_slice(&self.rprev[..k]);
+                        let mut next = newton(self, NewtonMode::Proximal, &left(spent), r, u);
+                        if next.residual.is_nan() || next.residual > res0 {
+                            // keep the better of the two stages
+                            r[..k].copy_from_slice(&r0);
+                            u[..k].copy_from_slice(&prob.q[..k]);
+                            prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
+                            next.residual = res0;
+                        }
+                        next.iterations += spent;
+                        info = next;
+                    }
+                } else {
+                    let mut next = self.prox(prob, &left(spent), k, r, u);
+                    next.iterations += spent;
+                    info = next;
+                }
+                info
+            }
+        };
+        Ok(info)
     }
 
     /// Proximal point: NSGS on `(W + σI, q − σ r_j)`, σ shrinking while the outer
@@ -369,7 +506,7 @@ impl FrictionSolver {
         k: usize,
         r: &mut [f64],
         u: &mut [f64],
-    ) -> Result<FrictionInfo, SolveError> {
+    ) -> FrictionInfo {
         let wmax = prob
             .blocks
             .iter()
@@ -380,7 +517,7 @@ impl FrictionSolver {
         let mut sigma = wmax;
         let mut total = 0;
         let mut outer = 0;
-        let mut res = self.full_residual(prob, r, u);
+        let mut res = self.full_residual(prob, r, u, params.tol);
         while res > params.tol && total < params.max_iterations {
             outer += 1;
             self.rprev[..k].copy_from_slice(&r[..k]);
@@ -392,7 +529,7 @@ impl FrictionSolver {
             let budget = params.max_iterations - total;
             let (it, _) = self.nsgs_reg(prob, sigma, (inner_tol, budget), params, r, u);
             total += it;
-            res = self.full_residual(prob, r, u);
+            res = self.full_residual(prob, r, u, params.tol);
             let step: f64 = (0..k)
                 .map(|i| (r[i] - self.rprev[i]).powi(2))
                 .sum::<f64>()
@@ -402,32 +539,35 @@ impl FrictionSolver {
                 sigma = (sigma * 0.5).max(1e-8 * wmax);
             }
         }
-        Ok(FrictionInfo {
+        FrictionInfo {
             iterations: total,
             residual: res,
             prox_iterations: outer,
             converged: res <= params.tol,
-        })
+            solver: FrictionSolverKind::Prox,
+            ..FrictionInfo::default()
+        }
     }
 
-    /// `u = W r + q` from scratch and the residual.
+    /// `u = W r + q` from scratch and the residual ([`checked_residual`] at `tol`).
     fn full_residual<W: DelassusOperator + ?Sized>(
         &self,
         prob: FrictionProblem<'_, W>,
         r: &[f64],
         u: &mut [f64],
+        tol: f64,
     ) -> f64 {
         let k = prob.blocks.last().map_or(0, |b| b.offset + b.dim);
         u[..k].copy_from_slice(&prob.q[..k]);
         prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
-        residual(prob.blocks, prob.q, r, u)
+        checked_residual(prob.blocks, prob.q, r, u, tol)
     }
 
     /// NSGS on `(W + σI, qreg)` where `qreg` is already in `self.qreg`, to `tol` within
     /// `cap` sweeps (local solves as `params` says); returns the sweeps and the residual of
     /// the regularized problem.
     #[allow(clippy::too_many_arguments)]
-    fn nsgs_reg<W: DelassusOperator + ?Sized>(
+    pub(super) fn nsgs_reg<W: DelassusOperator + ?Sized>(
         &mut self,
         prob: FrictionProblem<'_, W>,
         sigma: f64,
@@ -466,7 +606,7 @@ impl FrictionSolver {
         for i in 0..k {
             u[i] += sigma * r[i];
         }
-        let mut res = residual(prob.blocks, prob.q, r, u);
+        let mut res = checked_residual(prob.blocks, prob.q, r, u, tol);
         if res <= tol {
             return (0, res);
         }
@@ -516,7 +656,7 @@ impl FrictionSolver {
                 for i in 0..k {
                     u[i] += sigma * r[i];
                 }
-                res = residual(prob.blocks, prob.q, r, u);
+                res = checked_residual(prob.blocks, prob.q, r, u, tol);
                 if res <= tol {
                     break;
                 }
@@ -785,264 +925,6 @@ fn solve3(a: &[f64; 9], b: &[f64; 3]) -> Option<[f64; 3]> {
         x[i] = s / m[i][i];
     }
     Some(x)
-}
-
-/// `A_α` and `B_α` (row-major `d × d`) of the Alart–Curnier Jacobian of one block,
-/// `dΦ_α = A_α dr_α + B_α du_α`, and `Φ_α`, at `(r_α, u_α)`.
-fn ac_block(
-    r: &[f64],
-    u: &[f64],
-    mu: f64,
-    rho: (f64, f64),
-    a: &mut [f64; 9],
-    b: &mut [f64; 9],
-    phi: &mut [f64],
-) {
-    let d = r.len();
-    *a = [0.0; 9];
-    *b = [0.0; 9];
-    let (rn, rt) = rho;
-    let xn = r[0] - rn * u[0];
-    let pn = xn.max(0.0);
-    phi[0] = r[0] - pn;
-    if xn > 0.0 {
-        b[0] = rn;
-    } else {
-        a[0] = 1.0;
-    }
-    if d == 1 {
-        return;
-    }
-    let mut xt = [0.0; 2];
-    for t in 0..d - 1 {
-        xt[t] = r[1 + t] - rt * u[1 + t];
-    }
-    let nx = xt[..d - 1].iter().map(|x| x * x).sum::<f64>().sqrt();
-    let rad = mu * pn;
-    if nx <= rad {
-        for t in 0..d - 1 {
-            phi[1 + t] = rt * u[1 + t];
-            b[(1 + t) * d + 1 + t] = rt;
-        }
-        return;
-    }
-    let f = rad / nx;
-    let mut xh = [0.0; 2];
-    for t in 0..d - 1 {
-        xh[t] = xt[t] / nx;
-        phi[1 + t] = r[1 + t] - rad * xh[t];
-    }
-    for t in 0..d - 1 {
-        let row = 1 + t;
-        // −x̂ dR with dR = μ [x_N > 0] (dr_N − ρ_N du_N)
-        if xn > 0.0 {
-            a[row * d] -= xh[t] * mu;
-            b[row * d] += xh[t] * mu * rn;
-        }
-        // dr_T − f (I − x̂x̂ᵀ)(dr_T − ρ_T du_T)
-        a[row * d + row] += 1.0;
-        for s in 0..d - 1 {
-            let pts = if s == t { 1.0 } else { 0.0 } - xh[t] * xh[s];
-            a[row * d + 1 + s] -= f * pts;
-            b[row * d + 1 + s] += f * pts * rt;
-        }
-    }
-}
-
-/// `Φ` of all blocks at `r` for `(W + σI, q̃)`; returns `½‖Φ‖²`; `u` gets `(W + σI) r + q̃`.
-#[allow(clippy::too_many_arguments)]
-fn ac_all<W: DelassusOperator + ?Sized>(
-    prob: &FrictionProblem<'_, W>,
-    q: &[f64],
-    sigma: f64,
-    rho: &[(f64, f64)],
-    r: &[f64],
-    u: &mut [f64],
-    phi: &mut [f64],
-    jac: Option<(&mut [f64], &[f64])>,
-) -> f64 {
-    let k = q.len();
-    u.copy_from_slice(q);
-    prob.w.mul_add(1.0, r, u);
-    for i in 0..k {
-        u[i] += sigma * r[i];
-    }
-    let (mut a, mut b) = ([0.0; 9], [0.0; 9]);
-    let mut jac = jac;
-    for (bi, blk) in prob.blocks.iter().enumerate() {
-        let (o, d) = (blk.offset, blk.dim);
-        ac_block(
-            &r[o..o + d],
-            &u[o..o + d],
-            blk.mu,
-            rho[bi],
-            &mut a,
-            &mut b,
-            &mut phi[o..o + d],
-        );
-        if let Some((j, wd)) = jac.as_mut() {
-            // rows o..o+d of J = A + B (W + σI), column-major k × k
-            for c in 0..k {
-                for i in 0..d {
-                    let mut v = 0.0;
-                    for l in 0..d {
-                        v += b[i * d + l]
-                            * (wd[o + l + c * k] + if o + l == c { sigma } else { 0.0 });
-                    }
-                    if c >= o && c < o + d {
-                        v += a[i * d + (c - o)];
-                    }
-                    j[o + i + c * k] = v;
-                }
-            }
-        }
-    }
-    0.5 * phi.iter().map(|x| x * x).sum::<f64>()
-}
-
-impl FrictionSolver {
-    /// Proximal point around a global semismooth Newton on Alart–Curnier (module doc).
-    fn prox_newton<W: DelassusOperator + ?Sized>(
-        &mut self,
-        prob: FrictionProblem<'_, W>,
-        params: &FrictionParams,
-        k: usize,
-        r: &mut [f64],
-        u: &mut [f64],
-    ) -> FrictionInfo {
-        let mut wd = vec![0.0; k * k];
-        let mut dir = vec![0.0; k];
-        for c in 0..k {
-            for i in 0..k {
-                wd[i + c * k] = prob.w.entry(i, c);
-            }
-        }
-        let rho: Vec<(f64, f64)> = prob
-            .blocks
-            .iter()
-            .map(|b| {
-                let o = b.offset;
-                let wnn = wd[o + o * k].abs().max(f64::MIN_POSITIVE);
-                let wtt = if b.dim > 1 {
-                    (1..b.dim).map(|t| wd[o + t + (o + t) * k]).sum::<f64>() / (b.dim - 1) as f64
-                } else {
-                    wnn
-                };
-                (1.0 / wnn, 1.0 / wtt.abs().max(f64::MIN_POSITIVE))
-            })
-            .collect();
-        let wmax = (0..k)
-            .map(|i| wd[i + i * k].abs())
-            .fold(0.0, f64::max)
-            .max(f64::MIN_POSITIVE);
-        let (mut phi, mut jac, mut qt, mut trial, mut ut, mut center) = (
-            vec![0.0; k],
-            vec![0.0; k * k],
-            vec![0.0; k],
-            vec![0.0; k],
-            vec![0.0; k],
-            vec![0.0; k],
-        );
-        let full = |r: &[f64], u: &mut [f64]| {
-            u.copy_from_slice(&prob.q[..k]);
-            prob.w.mul_add(1.0, r, u);
-            residual(prob.blocks, prob.q, r, u)
-        };
-        let mut res = full(&r[..k], &mut u[..k]);
-        // σ: small first (measured on the shared FCLIB files: 1e-4 of the largest diagonal
-        // took 3–5 proximal iterations where 1e-2 took 5–9); ×0.1 after a short proximal
-        // step, ×10 after an inner solve that made no progress (the line search failed)
-        let mut sigma = 1e-4 * wmax;
-        let (mut newton_its, mut outer) = (0, 0);
-        while res > params.tol && newton_its < params.max_iterations {
-            outer += 1;
-            center.copy_from_slice(&r[..k]);
-            for i in 0..k {
-                qt[i] = prob.q[i] - sigma * center[i];
-            }
-            // inner Newton on (W + σI, q − σ r_j)
-            let mut progress = false;
-            let mut solved = false;
-            let inner_tol = (1e-2 * res).max(0.1 * params.tol);
-            for _ in 0..50 {
-                newton_its += 1;
-                let f = ac_all(
-                    &prob,
-                    &qt,
-                    sigma,
-                    &rho,
-                    &r[..k],
-                    &mut ut,
-                    &mut phi,
-                    Some((&mut jac, &wd)),
-                );
-                // inexact inner solves: the regularized problem's own relative residual
-                // (u = ut here) two orders below the outer residual
-                if f == 0.0 || residual(prob.blocks, &qt, &r[..k], &ut) <= inner_tol {
-                    solved = true;
-                    break;
-                }
-                for i in 0..k {
-                    dir[i] = -phi[i];
-                }
-                crate::linalg::dense_lu_solve(&mut jac, k, &mut dir);
-                let mut t = 1.0;
-                let mut accepted = false;
-                for _ in 0..40 {
-                    for i in 0..k {
-                        trial[i] = r[i] + t * dir[i];
-                    }
-                    let ft = ac_all(&prob, &qt, sigma, &rho, &trial, &mut ut, &mut phi, None);
-                    if ft.is_finite() && ft <= (1.0 - 1e-4 * t) * f {
-                        r[..k].copy_from_slice(&trial);
-                        accepted = true;
-                        progress = true;
-                        break;
-                    }
-                    t *= 0.5;
-                }
-                if !accepted || newton_its >= params.max_iterations {
-                    break;
-                }
-            }
-            if !solved {
-                // Newton stalled at a point where ½‖Φ‖² does not decrease (a local minimum
-                // of the merit function; seen with μ > 1 in 2-D): finish this proximal step
-                // with NSGS on the same regularized problem, whose blocks are SPD
-                self.qreg[..k].copy_from_slice(&qt);
-                let budget = params.max_iterations.saturating_sub(newton_its).max(1);
-                let (it, _) = self.nsgs_reg(
-                    prob,
-                    sigma,
-                    (inner_tol, budget.min(1000)),
-                    params,
-                    r,
-                    &mut ut,
-                );
-                newton_its += it;
-                progress = true;
-            }
-            res = full(&r[..k], &mut u[..k]);
-            let step = (0..k)
-                .map(|i| (r[i] - center[i]).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            if !progress {
-                sigma = (sigma * 10.0).min(1e2 * wmax);
-            } else if step <= 0.5 * norm(&r[..k]).max(f64::MIN_POSITIVE) {
-                sigma = (sigma * 0.1).max(1e-12 * wmax);
-            }
-            if outer > 10_000 {
-                break;
-            }
-        }
-        FrictionInfo {
-            iterations: newton_its,
-            residual: res,
-            prox_iterations: outer,
-            converged: res <= params.tol,
-        }
-    }
 }
 
 #[cfg(test)]

@@ -18,6 +18,7 @@
 pub mod friction;
 pub mod lcp;
 pub mod mlcp;
+pub mod newton;
 
 /// What a one-step solve reports.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -66,6 +67,17 @@ pub enum SolveError {
         active: usize,
         /// Rows the workspace holds.
         cap: usize,
+    },
+    /// A contact's own normal compliance `W_NN` is not positive.
+    #[error(
+        "contact row {row} has W_NN = {value:e}: a contact's own compliance must be positive \
+         (W = Gᵀ M̂⁻¹ G; zero means the contact moves no mass)"
+    )]
+    NonPositiveDiagonal {
+        /// The block's first row.
+        row: usize,
+        /// `W_NN`.
+        value: f64,
     },
     /// The problem data are not finite.
     #[error("the one-step problem has non-finite data")]

@@ -1,0 +1,612 @@
+//! Global semismooth Newton methods for one-step friction problems (eq. 11–15 in the
+//! local form `u = W r + q`), on the Alart–Curnier function of every block at once:
+//!
+//! `Φ_N = r_N − max(0, r_N − ρ_N u_N)`,
+//! `Φ_T = r_T − P_{B(μ p_N)}(r_T − ρ_T u_T)` with `p_N = max(0, r_N − ρ_N u_N)`,
+//!
+//! whose zeros are the solutions (Alart and Curnier 1991; Coulomb's law, not De Saxcé's
+//! modified velocity, but the same solution set). An element of the generalized Jacobian
+//! is `J = A + B (W + σI)` with `A`, `B` block diagonal ([`ac_block`]), so `J` has the
+//! block pattern of `W`. Two methods share the loop:
+//!
+//! * [`NewtonMode::Plain`] (`nsn`): Newton on `Φ(r) = 0` with `ρ = 1/‖W_αα‖₂` per block,
+//!   an Armijo line search on `½‖Φ‖²`, and the full step where the line search fails:
+//!   the recipe of Siconos' NSN_AC, quadratic where `W` has full rank near the solution,
+//!   and the fastest solver on FCLIB's finite-element and sphere problems (Acary,
+//!   Brémond, Huber 2018). It can diverge on rank-deficient `W`: it stops at the first
+//!   non-finite iterate and returns the best one it met.
+//! * [`NewtonMode::Proximal`] (`newton`): the proximal-point method, Newton on the
+//!   regularized problems `(W + σI, q − σ r_j)`, σ shrinking while the inner solves
+//!   succeed and growing when they do not, with NSGS finishing a proximal step where
+//!   Newton stalls (Siconos' PROX with its Newton inner solver). Robust on rigid stacks.
+//!
+//! `J` is stored dense (LU from faer, partial pivoting) when `W` is dense, and sparse
+//! (faer's sparse LU, the symbolic analysis done once per solve) when at most a quarter
+//! of `W`'s blocks are non-zero, as in every multibody problem where a contact couples
+//! only with the contacts of its two bodies: on Siconos' 256-contact spheres-in-a-box
+//! problem the sparse factorization is what makes an iteration cheap.
+//!
+//! These solvers form `J` and factor it per iteration, so they allocate: they are for
+//! one-step problems (`signorini fclib`, and the `auto` fallback there), not for the
+//! step loop, which refuses them.
+
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+
+use super::friction::{Block, FrictionInfo, FrictionParams, FrictionProblem, FrictionSolver};
+use crate::delassus::DelassusOperator;
+
+/// Which Newton method runs (module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NewtonMode {
+    /// Newton on `Φ(r) = 0` directly (Siconos' NSN_AC).
+    Plain,
+    /// Proximal point with Newton inside (Siconos' PROX).
+    Proximal,
+}
+
+/// Blocks of `W` that are non-zero, at most this fraction, make `J` sparse.
+const SPARSE_FRACTION: f64 = 0.25;
+/// The plain method stops after this many iterations without a new best residual, or
+/// when this many iterations did not divide the best residual by 10.
+const STALL: usize = 60;
+/// Below this many rows the dense LU is always used.
+const SPARSE_MIN_ROWS: usize = 64;
+
+/// `A_α` and `B_α` (row-major `d × d`) of the Alart–Curnier Jacobian of one block,
+/// `dΦ_α = A_α dr_α + B_α du_α`, and `Φ_α`, at `(r_α, u_α)`.
+pub(super) fn ac_block(
+    r: &[f64],
+    u: &[f64],
+    mu: f64,
+    rho: (f64, f64),
+    a: &mut [f64; 9],
+    b: &mut [f64; 9],
+    phi: &mut [f64],
+) {
+    let d = r.len();
+    *a = [0.0; 9];
+    *b = [0.0; 9];
+    let (rn, rt) = rho;
+    let xn = r[0] - rn * u[0];
+    let pn = xn.max(0.0);
+    phi[0] = r[0] - pn;
+    if xn > 0.0 {
+        b[0] = rn;
+    } else {
+        a[0] = 1.0;
+    }
+    if d == 1 {
+        return;
+    }
+    let mut xt = [0.0; 2];
+    for t in 0..d - 1 {
+        xt[t] = r[1 + t] - rt * u[1 + t];
+    }
+    let nx = xt[..d - 1].iter().map(|x| x * x).sum::<f64>().sqrt();
+    let rad = mu * pn;
+    if nx <= rad {
+        for t in 0..d - 1 {
+            phi[1 + t] = rt * u[1 + t];
+            b[(1 + t) * d + 1 + t] = rt;
+        }
+        return;
+    }
+    let f = rad / nx;
+    let mut xh = [0.0; 2];
+    for t in 0..d - 1 {
+        xh[t] = xt[t] / nx;
+        phi[1 + t] = r[1 + t] - rad * xh[t];
+    }
+    for t in 0..d - 1 {
+        let row = 1 + t;
+        // −x̂ dR with dR = μ [x_N > 0] (dr_N − ρ_N du_N)
+        if xn > 0.0 {
+            a[row * d] -= xh[t] * mu;
+            b[row * d] += xh[t] * mu * rn;
+        }
+        // dr_T − f (I − x̂x̂ᵀ)(dr_T − ρ_T du_T)
+        a[row * d + row] += 1.0;
+        for s in 0..d - 1 {
+            let pts = if s == t { 1.0 } else { 0.0 } - xh[t] * xh[s];
+            a[row * d + 1 + s] -= f * pts;
+            b[row * d + 1 + s] += f * pts * rt;
+        }
+    }
+}
+
+/// The sparse storage of `J`: the block pattern of `W` (plus the diagonal blocks) in
+/// compressed columns, and faer's symbolic LU of it.
+struct SparseJacobian {
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    values: Vec<f64>,
+    /// Per block column β: the block rows α of its non-zero blocks, ascending.
+    block_rows: Vec<Vec<usize>>,
+    symbolic: SymbolicLu<usize>,
+}
+
+/// `J` dense (column-major `k × k`) or sparse.
+enum Jacobian {
+    Dense(Vec<f64>),
+    Sparse(SparseJacobian),
+}
+
+/// The data of one Newton solve: dense copy of `W`, per-block ρ, `A_α`, `B_α`, `J`.
+struct Newton<'p, 'a, W: DelassusOperator + ?Sized> {
+    prob: &'p FrictionProblem<'a, W>,
+    k: usize,
+    wd: Vec<f64>,
+    rho: Vec<(f64, f64)>,
+    a: Vec<[f64; 9]>,
+    b: Vec<[f64; 9]>,
+    jac: Jacobian,
+    block_of_row: Vec<usize>,
+}
+
+impl<'p, 'a, W: DelassusOperator + ?Sized> Newton<'p, 'a, W> {
+    fn new(prob: &'p FrictionProblem<'a, W>, k: usize, mode: NewtonMode) -> Self {
+        let mut wd = vec![0.0; k * k];
+        for c in 0..k {
+            for i in 0..k {
+                wd[i + c * k] = prob.w.entry(i, c);
+            }
+        }
+        let blocks = prob.blocks;
+        let rho = blocks.iter().map(|b| block_rho(&wd, k, b, mode)).collect();
+        let mut block_of_row = vec![0; k];
+        for (bi, b) in blocks.iter().enumerate() {
+            block_of_row[b.offset..b.offset + b.dim].fill(bi);
+        }
+        // block pattern of W
+        let nb = blocks.len();
+        let mut block_rows: Vec<Vec<usize>> = vec![Vec::new(); nb];
+        let mut nnz_blocks = 0usize;
+        for (be, bb) in blocks.iter().enumerate() {
+            for (al, ba) in blocks.iter().enumerate() {
+                let nz = al == be
+                    || (0..bb.dim).any(|j| {
+                        (0..ba.dim).any(|i| wd[ba.offset + i + (bb.offset + j) * k] != 0.0)
+                    });
+                if nz {
+                    block_rows[be].push(al);
+                    nnz_blocks += 1;
+                }
+            }
+        }
+        let sparse = k >= SPARSE_MIN_ROWS
+            && (nnz_blocks as f64) <= SPARSE_FRACTION * (nb as f64) * (nb as f64);
+        let jac = if sparse {
+            let mut col_ptr = Vec::with_capacity(k + 1);
+            let mut row_idx = Vec::new();
+            col_ptr.push(0);
+            for (be, bb) in blocks.iter().enumerate() {
+                for _ in 0..bb.dim {
+                    for &al in &block_rows[be] {
+                        let ba = &blocks[al];
+                        row_idx.extend(ba.offset..ba.offset + ba.dim);
+                    }
+                    col_ptr.push(row_idx.len());
+                }
+            }
+            let sym = SymbolicSparseColMatRef::new_checked(k, k, &col_ptr, None, &row_idx);
+            match SymbolicLu::try_new(sym) {
+                Ok(symbolic) => Jacobian::Sparse(SparseJacobian {
+                    values: vec![0.0; row_idx.len()],
+                    col_ptr,
+                    row_idx,
+                    block_rows,
+                    symbolic,
+                }),
+                Err(_) => Jacobian::Dense(vec![0.0; k * k]),
+            }
+        } else {
+            Jacobian::Dense(vec![0.0; k * k])
+        };
+        Newton {
+            prob,
+            k,
+            wd,
+            rho,
+            a: vec![[0.0; 9]; nb],
+            b: vec![[0.0; 9]; nb],
+            jac,
+            block_of_row,
+        }
+    }
+
+    /// `Φ` at `r` for `(W + σI, q)`, `u = (W + σI) r + q`, the blocks `A_α`, `B_α`;
+    /// returns `½‖Φ‖²`.
+    fn eval(&mut self, q: &[f64], sigma: f64, r: &[f64], u: &mut [f64], phi: &mut [f64]) -> f64 {
+        let k = self.k;
+        u[..k].copy_from_slice(&q[..k]);
+        self.prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
+        for i in 0..k {
+            u[i] += sigma * r[i];
+        }
+        for (bi, blk) in self.prob.blocks.iter().enumerate() {
+            let (o, d) = (blk.offset, blk.dim);
+            ac_block(
+                &r[o..o + d],
+                &u[o..o + d],
+                blk.mu,
+                self.rho[bi],
+                &mut self.a[bi],
+                &mut self.b[bi],
+                &mut phi[o..o + d],
+            );
+        }
+        0.5 * phi[..k].iter().map(|x| x * x).sum::<f64>()
+    }
+
+    /// `J[row, c]` for row `o_α + i` of block α: `Σ_l B_α[i,l] (W + σI)[o_α+l, c] +
+    /// A_α[i, c − o_α]`.
+    fn entry(&self, al: usize, i: usize, c: usize, sigma: f64) -> f64 {
+        let blk = &self.prob.blocks[al];
+        let (o, d) = (blk.offset, blk.dim);
+        let (a, b) = (&self.a[al], &self.b[al]);
+        let mut v = 0.0;
+        for l in 0..d {
+            let wv = self.wd[o + l + c * self.k] + if o + l == c { sigma } else { 0.0 };
+            v += b[i * d + l] * wv;
+        }
+        if c >= o && c < o + d {
+            v += a[i * d + (c - o)];
+        }
+        v
+    }
+
+    /// Solves `J dir = rhs` in place (the `A_α`, `B_α` of the last [`Newton::eval`]);
+    /// false when `J` is singular.
+    fn solve(&mut self, sigma: f64, dir: &mut [f64]) -> bool {
+        let k = self.k;
+        match &self.jac {
+            Jacobian::Dense(_) => {
+                let Jacobian::Dense(mut j) =
+                    std::mem::replace(&mut self.jac, Jacobian::Dense(Vec::new()))
+                else {
+                    unreachable!()
+                };
+                for c in 0..k {
+                    for row in 0..k {
+                        let al = self.block_of_row[row];
+                        let i = row - self.prob.blocks[al].offset;
+                        j[row + c * k] = self.entry(al, i, c, sigma);
+                    }
+                }
+                crate::linalg::dense_lu_solve(&mut j, k, dir);
+                self.jac = Jacobian::Dense(j);
+                dir.iter().all(|x| x.is_finite())
+            }
+            Jacobian::Sparse(_) => {
+                let Jacobian::Sparse(mut sp) =
+                    std::mem::replace(&mut self.jac, Jacobian::Dense(Vec::new()))
+                else {
+                    unreachable!()
+                };
+                let mut pos = 0;
+                for (be, bb) in self.prob.blocks.iter().enumerate() {
+                    for j in 0..bb.dim {
+                        let c = bb.offset + j;
+                        for &al in &sp.block_rows[be] {
+                            for i in 0..self.prob.blocks[al].dim {
+                                sp.values[pos] = self.entry(al, i, c, sigma);
+                                pos += 1;
+                            }
+                        }
+                    }
+                }
+                let sym =
+                    SymbolicSparseColMatRef::new_checked(k, k, &sp.col_ptr, None, &sp.row_idx);
+                let mat = SparseColMatRef::new(sym, &sp.values);
+                let ok = match Lu::try_new_with_symbolic(sp.symbolic.clone(), mat) {
+                    Ok(lu) => {
+                        use faer::linalg::solvers::SolveCore;
+                        let rhs = faer::MatMut::from_column_major_slice_mut(&mut dir[..k], k, 1);
+                        lu.solve_in_place_with_conj(faer::Conj::No, rhs);
+                        dir.iter().all(|x| x.is_finite())
+                    }
+                    Err(_) => false,
+                };
+                self.jac = Jacobian::Sparse(sp);
+                ok
+            }
+        }
+    }
+
+    fn is_sparse(&self) -> bool {
+        matches!(self.jac, Jacobian::Sparse(_))
+    }
+}
+
+/// ρ of one block: `(1/W_NN, 1/mean W_TT)` for the proximal method, `1/‖W_αα‖₂` on
+/// every row for the plain one (Siconos' spectral-norm rule; measured: on
+/// spheres-in-a-box it took 70 iterations where the diagonal rule stalled).
+fn block_rho(wd: &[f64], k: usize, b: &Block, mode: NewtonMode) -> (f64, f64) {
+    let o = b.offset;
+    let at = |i: usize, j: usize| wd[o + i + (o + j) * k];
+    match mode {
+        NewtonMode::Proximal => {
+            let wnn = at(0, 0).abs().max(f64::MIN_POSITIVE);
+            let wtt = if b.dim > 1 {
+                (1..b.dim).map(|t| at(t, t)).sum::<f64>() / (b.dim - 1) as f64
+            } else {
+                wnn
+            };
+            (1.0 / wnn, 1.0 / wtt.abs().max(f64::MIN_POSITIVE))
+        }
+        NewtonMode::Plain => {
+            let m = nalgebra::Matrix3::from_fn(|i, j| {
+                if i < b.dim && j < b.dim {
+                    0.5 * (at(i, j) + at(j, i))
+                } else {
+                    0.0
+                }
+            });
+            let norm = m.symmetric_eigenvalues().amax().max(f64::MIN_POSITIVE);
+            (1.0 / norm, 1.0 / norm)
+        }
+    }
+}
+
+fn norm(x: &[f64]) -> f64 {
+    x.iter().map(|v| v * v).sum::<f64>().sqrt()
+}
+
+/// What the Newton loop on one (regularized) problem ended with.
+struct Inner {
+    iterations: usize,
+    solved: bool,
+    moved: bool,
+}
+
+/// Newton on `(W + σI, q)` from `r` until the regularized residual is at most `tol` or
+/// `cap` iterations; `full_step` takes the Newton step where the line search fails.
+#[allow(clippy::too_many_arguments)]
+fn newton_loop<W: DelassusOperator + ?Sized>(
+    nw: &mut Newton<'_, '_, W>,
+    q: &[f64],
+    sigma: f64,
+    tol: f64,
+    cap: usize,
+    full_step: bool,
+    r: &mut [f64],
+    bufs: &mut Buffers,
+) -> Inner {
+    let k = nw.k;
+    let blocks = nw.prob.blocks;
+    let mut out = Inner {
+        iterations: 0,
+        solved: false,
+        moved: false,
+    };
+    while out.iterations < cap {
+        let f = nw.eval(q, sigma, r, &mut bufs.u, &mut bufs.phi);
+        if !f.is_finite() {
+            break;
+        }
+        let res = super::friction::checked_residual(blocks, q, &r[..k], &bufs.u, tol);
+        if sigma == 0.0 && res < bufs.best_res {
+            // the unregularized problem: keep the best iterate (the full steps of the
+            // plain method may climb), stop after STALL iterations without a new best
+            bufs.best_res = res;
+            bufs.best[..k].copy_from_slice(&r[..k]);
+            bufs.since_best = 0;
+        } else if sigma == 0.0 {
+            bufs.since_best += 1;
+            if bufs.since_best >= STALL {
+                break;
+            }
+        }
+        if sigma == 0.0 && out.iterations.is_multiple_of(STALL) {
+            // and after STALL iterations that did not gain a factor 10
+            if out.iterations > 0 && bufs.best_res > 0.1 * bufs.checkpoint {
+                break;
+            }
+            bufs.checkpoint = bufs.best_res;
+        }
+        if f == 0.0 || res <= tol {
+            out.solved = true;
+            break;
+        }
+        out.iterations += 1;
+        for i in 0..k {
+            bufs.dir[i] = -bufs.phi[i];
+        }
+        if !nw.solve(sigma, &mut bufs.dir) {
+            break;
+        }
+        let mut t = 1.0;
+        let mut accepted = false;
+        for _ in 0..40 {
+            for i in 0..k {
+                bufs.trial[i] = r[i] + t * bufs.dir[i];
+            }
+            let ft = nw.eval(q, sigma, &bufs.trial, &mut bufs.ut, &mut bufs.phi);
+            if ft.is_finite() && ft <= (1.0 - 1e-4 * t) * f {
+                accepted = true;
+                break;
+            }
+            t *= 0.5;
+        }
+        if accepted {
+            r[..k].copy_from_slice(&bufs.trial[..k]);
+        } else if full_step {
+            for i in 0..k {
+                r[i] += bufs.dir[i];
+            }
+        } else {
+            break;
+        }
+        out.moved = true;
+        if r[..k].iter().any(|x| !x.is_finite()) {
+            break;
+        }
+    }
+    out
+}
+
+/// Work vectors of the Newton loop.
+struct Buffers {
+    best: Vec<f64>,
+    best_res: f64,
+    since_best: usize,
+    checkpoint: f64,
+    u: Vec<f64>,
+    ut: Vec<f64>,
+    phi: Vec<f64>,
+    dir: Vec<f64>,
+    trial: Vec<f64>,
+}
+
+impl Buffers {
+    fn new(k: usize) -> Self {
+        Buffers {
+            best: vec![0.0; k],
+            best_res: f64::INFINITY,
+            since_best: 0,
+            checkpoint: f64::INFINITY,
+            u: vec![0.0; k],
+            ut: vec![0.0; k],
+            phi: vec![0.0; k],
+            dir: vec![0.0; k],
+            trial: vec![0.0; k],
+        }
+    }
+}
+
+/// `u = W r + q` from scratch and Siconos' residual.
+fn full_residual<W: DelassusOperator + ?Sized>(
+    prob: &FrictionProblem<'_, W>,
+    k: usize,
+    r: &[f64],
+    u: &mut [f64],
+    tol: f64,
+) -> f64 {
+    u[..k].copy_from_slice(&prob.q[..k]);
+    prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
+    super::friction::checked_residual(prob.blocks, prob.q, &r[..k], &u[..k], tol)
+}
+
+impl FrictionSolver {
+    /// The global Newton methods (module doc); `r` holds the start and gets the best
+    /// iterate met (by residual), `u` its `W r + q`. `sparse` in the result tells which
+    /// storage `J` had.
+    pub(super) fn global_newton<W: DelassusOperator + ?Sized>(
+        &mut self,
+        prob: FrictionProblem<'_, W>,
+        params: &FrictionParams,
+        mode: NewtonMode,
+        k: usize,
+        r: &mut [f64],
+        u: &mut [f64],
+    ) -> (FrictionInfo, bool) {
+        let mut nw = Newton::new(&prob, k, mode);
+        let mut bufs = Buffers::new(k);
+        let mut best = r[..k].to_vec();
+        let mut res = full_residual(&prob, k, r, u, params.tol);
+        let mut best_res = if res.is_finite() { res } else { f64::INFINITY };
+        let (mut iterations, mut outer) = (0usize, 0usize);
+        match mode {
+            NewtonMode::Plain => {
+                // one Newton run to the tolerance, checked on the true residual
+                let inner = newton_loop(
+                    &mut nw,
+                    prob.q,
+                    0.0,
+                    params.tol,
+                    params.max_iterations,
+                    true,
+                    r,
+                    &mut bufs,
+                );
+                iterations = inner.iterations;
+                if bufs.best_res < best_res {
+                    best_res = bufs.best_res;
+                    best.copy_from_slice(&bufs.best);
+                }
+                res = full_residual(&prob, k, r, u, params.tol);
+                if res.is_finite() && res < best_res {
+                    best.copy_from_slice(&r[..k]);
+                }
+            }
+            NewtonMode::Proximal => {
+                let wmax = (0..k)
+                    .map(|i| nw.wd[i + i * k].abs())
+                    .fold(0.0, f64::max)
+                    .max(f64::MIN_POSITIVE);
+                // σ: small first (measured on the shared FCLIB files: 1e-4 of the largest
+                // diagonal took 3–5 proximal iterations where 1e-2 took 5–9); ×0.1 after
+                // a short proximal step, ×10 after an inner solve that did not reach its
+                // tolerance (on spheres-in-a-box, shrinking σ regardless stalled at 1e-6)
+                let mut sigma = 1e-4 * wmax;
+                let mut qt = vec![0.0; k];
+                let mut center = vec![0.0; k];
+                while res > params.tol && iterations < params.max_iterations {
+                    outer += 1;
+                    center.copy_from_slice(&r[..k]);
+                    for i in 0..k {
+                        qt[i] = prob.q[i] - sigma * center[i];
+                    }
+                    let inner_tol = (1e-2 * res).max(0.1 * params.tol);
+                    let budget = (params.max_iterations - iterations).min(50);
+                    let inner =
+                        newton_loop(&mut nw, &qt, sigma, inner_tol, budget, false, r, &mut bufs);
+                    iterations += inner.iterations;
+                    let mut moved = inner.moved;
+                    if !inner.solved {
+                        // Newton stalled where ½‖Φ‖² does not decrease (a local minimum
+                        // of the merit function; seen with μ > 1 in 2-D): finish this
+                        // proximal step with NSGS on the same regularized problem, whose
+                        // blocks are positive definite
+                        if r[..k].iter().any(|x| !x.is_finite()) {
+                            r[..k].copy_from_slice(&center);
+                        }
+                        self.qreg[..k].copy_from_slice(&qt);
+                        let left = params.max_iterations.saturating_sub(iterations).max(1);
+                        let (it, _) = self.nsgs_reg(
+                            prob,
+                            sigma,
+                            (inner_tol, left.min(1000)),
+                            params,
+                            r,
+                            &mut bufs.ut,
+                        );
+                        iterations += it;
+                        moved = true;
+                    }
+                    res = full_residual(&prob, k, r, u, params.tol);
+                    if res.is_finite() && res < best_res {
+                        best_res = res;
+                        best.copy_from_slice(&r[..k]);
+                    }
+                    let step = (0..k)
+                        .map(|i| (r[i] - center[i]).powi(2))
+                        .sum::<f64>()
+                        .sqrt();
+                    if !moved || !inner.solved {
+                        sigma = (sigma * 10.0).min(1e2 * wmax);
+                    } else if step <= 0.5 * norm(&r[..k]).max(f64::MIN_POSITIVE) {
+                        sigma = (sigma * 0.1).max(1e-12 * wmax);
+                    }
+                    if !res.is_finite() || outer > 10_000 {
+                        break;
+                    }
+                }
+            }
+        }
+        // the best iterate met
+        r[..k].copy_from_slice(&best);
+        let res = full_residual(&prob, k, r, u, params.tol);
+        (
+            FrictionInfo {
+                iterations,
+                residual: res,
+                prox_iterations: outer,
+                converged: res <= params.tol,
+                ..FrictionInfo::default()
+            },
+            nw.is_sparse(),
+        )
+    }
+}
