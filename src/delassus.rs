@@ -491,7 +491,9 @@ impl Delassus {
         for (c, &b) in self.pending.iter().enumerate() {
             self.jac.axpy(b, 1.0, &mut blk[c * n..(c + 1) * n]);
         }
-        self.factor.solve_block_in_place(blk, k);
+        // column by column: a column must not depend on the batch it was computed in,
+        // or a resumed run (which recomputes its active columns at once) diverges
+        self.factor.solve_columns_independently(blk, k);
         for (c, &b) in self.pending.iter().enumerate() {
             let s = self.slot[b];
             self.jac
@@ -511,7 +513,7 @@ impl Delassus {
                     }
                 }
             }
-            self.factor.solve_block_in_place(blk2, k);
+            self.factor.solve_columns_independently(blk2, k);
             for (c, &b) in self.pending.iter().enumerate() {
                 let s = self.slot[b];
                 self.jac

@@ -391,6 +391,22 @@ impl SpdFactor {
     }
 
     /// Overwrites the `k` columns of the column-major `n × k` block `x` with `A⁻¹ x`,
+    /// one column at a time, so that each column's result does not depend on which
+    /// others are solved with it (a supernodal block solve runs dense kernels whose
+    /// summation order follows the block's width). The per-active-column Delassus path
+    /// computes its columns in batches that a resumed run cannot reproduce (all active
+    /// columns at once after a restore, a few per activation before): with block solves
+    /// a resumed history differed from the uninterrupted one in the last bits (issue 16
+    /// §4, `tests/regression_checkpoint_resume.rs`). Does not allocate.
+    pub fn solve_columns_independently(&mut self, x: &mut [f64], k: usize) {
+        let n = self.n;
+        debug_assert_eq!(x.len(), n * k);
+        for col in x.chunks_exact_mut(n.max(1)).take(k) {
+            self.solve_in_place(col);
+        }
+    }
+
+    /// Overwrites the `k` columns of the column-major `n × k` block `x` with `A⁻¹ x`,
     /// [`SOLVE_CHUNK`] columns per faer call, sequentially. Does not allocate (the step
     /// loop's path).
     pub fn solve_block_in_place(&mut self, x: &mut [f64], k: usize) {
