@@ -195,7 +195,9 @@ pub struct Summary {
 pub struct RunResult {
     /// The run summary.
     pub summary: Summary,
-    /// Total contact force `Σ P / h` at each step (N).
+    /// Total contact force `Σ P / h` at each step (N); empty for runs that write
+    /// checkpoints (a checkpoint does not grow with the run) and beyond
+    /// [`FORCE_TRACE_MAX_STEPS`].
     pub force: Vec<f64>,
 }
 
@@ -604,9 +606,17 @@ pub const FORCE_TRACE_MAX_STEPS: usize = 1 << 22;
 /// Measures the contact as the run goes: the total impulse, and the samples of the
 /// first contact interval (from the first positive impulse to one step after the last
 /// closed step), which is all [`contact_summary`] reads.
+///
+/// What grows with the run is kept only where something reads it, so that a checkpoint
+/// (which saves the tracker) does not grow with the run (issue 16 §4: each held the
+/// whole force trace, and the bytes written grew quadratically with the run's length):
+/// the per-step trace only for runs that do not checkpoint (library callers read it in
+/// [`RunResult::force`]), the first interval only for scenes with the impacting-bar
+/// reference (whose interval ends after `2L/c0`).
 #[derive(Default)]
 struct ContactTracker {
     trace: Option<Vec<f64>>,
+    interval: bool,
     first: Option<usize>,
     force: Vec<f64>,
     min_gap: Vec<f64>,
@@ -615,9 +625,10 @@ struct ContactTracker {
 }
 
 impl ContactTracker {
-    fn new(steps: usize) -> Self {
+    fn new(steps: usize, trace: bool, interval: bool) -> Self {
         ContactTracker {
-            trace: (steps <= FORCE_TRACE_MAX_STEPS).then(|| Vec::with_capacity(steps)),
+            trace: (trace && steps <= FORCE_TRACE_MAX_STEPS).then(|| Vec::with_capacity(steps)),
+            interval,
             ..ContactTracker::default()
         }
     }
@@ -627,7 +638,7 @@ impl ContactTracker {
             t.push(f);
         }
         self.total_force += f;
-        if self.done {
+        if self.done || !self.interval {
             return;
         }
         if self.first.is_none() && f > 0.0 {
@@ -1008,7 +1019,7 @@ pub fn run_checkpointed(
     let mut output_seconds = t0.elapsed().as_secs_f64();
     let mut obs = RunObserver {
         acc: Acc::default(),
-        tracker: ContactTracker::new(steps),
+        tracker: ContactTracker::new(steps, plan.is_none(), reference.is_some()),
         writers,
         h,
         plan,

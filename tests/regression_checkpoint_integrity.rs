@@ -185,3 +185,39 @@ fn foreign_and_inconsistent_checkpoints_are_refused() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let _ = std::fs::remove_dir_all(&work);
 }
+
+/// Issue 16 §4: a checkpoint does not grow with the run. Each checkpoint held the whole
+/// per-step force trace so far (about 20 bytes a step), so a run's checkpoints wrote
+/// bytes quadratic in its length. The bar of 20 000 steps (its contact interval, which
+/// the summary measures, ends after 2L/c0) checkpointed at step 1 000 and at step
+/// 19 000: the two files may differ only by the digits of their numbers (tolerance 1 %;
+/// with the trace: 17 517 bytes at step 1 000, 209 523 at step 19 000).
+#[test]
+fn checkpoint_size_does_not_grow_with_the_run() {
+    let size = |at: usize| {
+        let dir = tmp(&format!("size-{at}"));
+        let o = bin()
+            .args(["bar", "--elements", "50", "--dt", "2e-6", "--t-end", "4e-2"])
+            .args([
+                "--checkpoint-every",
+                "1000",
+                "--quiet",
+                "--no-plots",
+                "--no-fields",
+            ])
+            .arg("--out")
+            .arg(&dir)
+            .env("SIGNORINI_ABORT_AFTER_STEP", (at + 1).to_string())
+            .output()
+            .unwrap();
+        assert!(!o.status.success(), "the abort hook did not stop the run");
+        std::fs::metadata(dir.join("checkpoint.json"))
+            .unwrap()
+            .len() as f64
+    };
+    let (early, late) = (size(1000), size(19_000));
+    assert!(
+        (late - early).abs() <= 0.01 * early,
+        "checkpoints of one run: {early} bytes at step 1 000, {late} at step 19 000"
+    );
+}

@@ -400,12 +400,7 @@ friction = 0.3
                 "Delassus per-active-column"
             };
             assert!(text.contains(path), "{name}: not the {path} path: {text}");
-            let args = [
-                "run",
-                scene.to_str().unwrap(),
-                "--checkpoint-every",
-                "10",
-            ];
+            let args = ["run", scene.to_str().unwrap(), "--checkpoint-every", "10"];
             check_resume(&name, &args, &[99, 130]);
         }
     }
