@@ -106,7 +106,8 @@ pub struct IntegratorState {
     /// Named vectors: `q`, `v`, `impulse`, `projection`, `impulse_rows`,
     /// `local_velocity`, `tangent_velocity`, `tangent_impulse`, and a scheme's own.
     pub vectors: BTreeMap<String, Floats>,
-    /// Contact status codes (frictional scenes: 0 open, 1 stick, 2 slip).
+    /// Contact status codes (frictional scenes: 0 open, 1 stick, 2 slip, 3 closed
+    /// without friction).
     pub status: Vec<u8>,
 }
 

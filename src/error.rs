@@ -59,7 +59,7 @@ pub enum Error {
         detail: String,
     },
     /// Writing an output file failed (disk full, permissions): the run fails (exit 1).
-    #[error("writing {path}: {source}")]
+    #[error("cannot write {path}: {}", os_reason(source))]
     Write {
         /// The file.
         path: PathBuf,
@@ -68,7 +68,7 @@ pub enum Error {
         source: std::io::Error,
     },
     /// Reading an input file failed (missing, unreadable).
-    #[error("{path}: {source}")]
+    #[error("cannot read {path}: {}", os_reason(source))]
     Io {
         /// The file.
         path: PathBuf,
@@ -155,7 +155,11 @@ impl Error {
             Error::Io { path, source } if path != file => Error::BadFile {
                 file: path,
                 where_: String::new(),
-                detail: format!("{source} (read for {})", file.display()),
+                detail: format!(
+                    "cannot read it: {} (read for {})",
+                    os_reason(&source),
+                    file.display()
+                ),
             },
             other => other,
         }
@@ -166,6 +170,31 @@ impl Error {
         Error::Io {
             path: path.into(),
             source,
+        }
+    }
+}
+
+/// An operating-system error in words, without the bare `(os error N)` code: what a
+/// user can act on (`No such file or directory (os error 2)` reads "no such file or
+/// directory").
+pub fn os_reason(e: &std::io::Error) -> String {
+    use std::io::ErrorKind as K;
+    match e.kind() {
+        K::NotFound => "no such file or directory".into(),
+        K::PermissionDenied => {
+            "permission denied (check the file's and its directory's rights)".into()
+        }
+        K::AlreadyExists => "it already exists (remove it or choose another path)".into(),
+        K::StorageFull => "the disk is full".into(),
+        K::ReadOnlyFilesystem => "the file system is read-only".into(),
+        K::IsADirectory => "it is a directory, not a file".into(),
+        K::NotADirectory => "a component of the path is not a directory".into(),
+        _ => {
+            let text = e.to_string();
+            match text.find(" (os error") {
+                Some(i) => text[..i].to_string(),
+                None => text,
+            }
         }
     }
 }

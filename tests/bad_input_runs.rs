@@ -144,7 +144,7 @@ fn an_unwritable_output_fails_the_run_with_exit_1() {
         ],
         &[],
     );
-    expect("output under a file", r, 1, &["writing", "file/out"]);
+    expect("output under a file", r, 1, &["cannot write", "file/out"]);
 }
 
 #[test]

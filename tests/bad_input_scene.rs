@@ -60,7 +60,7 @@ const CASES: &[Case] = &[
     (
         "unknown node set",
         &[("nodes = \"z0\"", "nodes = \"top\"")],
-        &["contacts[0].nodes", "top", "\"z0\"", "`boundary`"],
+        &["contacts[0].nodes", "top", "`z0`", "`boundary`"],
     ),
     (
         "unknown obstacle",
@@ -225,7 +225,7 @@ const CASES: &[Case] = &[
             "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
             "mesh = { generator = \"file\", path = \"missing.msh\" }",
         )],
-        &["missing.msh", "No such file", "scene.toml"],
+        &["missing.msh", "no such file", "scene.toml"],
     ),
     (
         "unknown mesh extension",
@@ -377,7 +377,7 @@ fn scene_inputs_that_are_not_files_are_refused_without_reading() {
         "missing scene",
         cli(&dir, &["check", "nope.toml"], &[]),
         2,
-        &["nope.toml", "No such file"],
+        &["nope.toml", "no such file"],
     );
     // a mesh file that is a FIFO
     if ok {
@@ -421,6 +421,46 @@ fn friction_on_a_rod_is_refused() {
                 "contacts[0].friction",
                 "0.3",
                 "no tangential direction",
+            ],
+        );
+    }
+}
+
+/// Issue 16 §6: `[[forces]]`, `[[prescribed]]`, `[loads]` and `[reference]` in an
+/// `[example]` scene were accepted and silently ignored; each is refused by name.
+#[test]
+fn tables_an_example_scene_would_ignore_are_refused() {
+    let dir = tmp("example-extra");
+    let base = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/bouncing_ball.toml"),
+    )
+    .unwrap();
+    for (key, table) in [
+        (
+            "forces",
+            "[[forces]]\nbody = \"ball\"\nnodes = \"all\"\ntotal = [1.0]\n",
+        ),
+        (
+            "prescribed",
+            "[[prescribed]]\nbody = \"ball\"\nnodes = \"all\"\nvelocity = [1.0]\n",
+        ),
+        ("loads", "[loads]\ngravity = [-9.81]\n"),
+        (
+            "reference",
+            "[reference.impacting_bar]\nlength = 1.0\narea = 1e-4\nyoung = 2e11\ndensity = 7800.0\nvelocity = -0.1\n",
+        ),
+    ] {
+        let file = format!("{key}.toml");
+        std::fs::write(dir.join(&file), format!("{base}\n{table}")).unwrap();
+        expect(
+            key,
+            cli(&dir, &["check", &file, "--quiet"], &[]),
+            2,
+            &[
+                &file,
+                key,
+                "in an [example] scene",
+                "[example], [time], [scheme] and [output]",
             ],
         );
     }

@@ -43,16 +43,32 @@ pub enum ContactStatus {
     Stick,
     /// Closed, sliding on the boundary of the cone.
     Slip,
+    /// Closed, a frictionless contact (μ = 0 or a one-row block) in a frictional scene:
+    /// neither stick nor slip applies to it.
+    Frictionless,
 }
 
 impl ContactStatus {
-    /// The code written to histories and frames: 0 open, 1 stick, 2 slip.
+    /// The code written to histories and frames: 0 open, 1 stick, 2 slip, 3 closed
+    /// without friction.
     pub fn code(self) -> u8 {
         match self {
             ContactStatus::Open => 0,
             ContactStatus::Stick => 1,
             ContactStatus::Slip => 2,
+            ContactStatus::Frictionless => 3,
         }
+    }
+
+    /// The status of a code (`None` outside 0..=3).
+    pub fn from_code(code: u8) -> Option<Self> {
+        Some(match code {
+            0 => ContactStatus::Open,
+            1 => ContactStatus::Stick,
+            2 => ContactStatus::Slip,
+            3 => ContactStatus::Frictionless,
+            _ => return None,
+        })
     }
 }
 

@@ -1336,7 +1336,8 @@ impl ThetaCore {
     /// Copies the normal and tangential parts of `u_rows` and of the impulse into the
     /// state and classifies each frictional contact: open without normal impulse, stick
     /// when `‖U_T‖` is below 1e-9 of the step's velocity scale (or the impulse strictly
-    /// inside the cone), slip otherwise.
+    /// inside the cone), slip otherwise; a closed contact without friction (μ = 0 or a
+    /// one-row block) has its own status, neither stick nor slip.
     fn scatter_local_velocity(&mut self) {
         let td = self.state.tangent_dim;
         let vs = self
@@ -1366,6 +1367,8 @@ impl ThetaCore {
             let pn = self.p[o];
             self.state.status[c] = if pn <= 0.0 {
                 ContactStatus::Open
+            } else if self.mu[c] == 0.0 || e - o == 1 {
+                ContactStatus::Frictionless
             } else if ut2.sqrt() <= 1e-9 * vs || pt2.sqrt() < (1.0 - 1e-9) * self.mu[c] * pn {
                 ContactStatus::Stick
             } else {

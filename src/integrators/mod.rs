@@ -223,19 +223,19 @@ impl State {
             let saved = s.vector(name, v.len())?;
             v.copy_from_slice(saved);
         }
-        if s.status.len() != self.status.len() || s.status.iter().any(|&c| c > 2) {
+        if s.status.len() != self.status.len()
+            || s.status
+                .iter()
+                .any(|&c| ContactStatus::from_code(c).is_none())
+        {
             return Err(Error::invalid(
                 "checkpoint integrator.status",
                 format!("{} codes", s.status.len()),
-                &format!("expected {} codes in 0..=2", self.status.len()),
+                &format!("expected {} codes in 0..=3", self.status.len()),
             ));
         }
         for (st, &c) in self.status.iter_mut().zip(&s.status) {
-            *st = match c {
-                0 => ContactStatus::Open,
-                1 => ContactStatus::Stick,
-                _ => ContactStatus::Slip,
-            };
+            *st = ContactStatus::from_code(c).unwrap_or_default();
         }
         self.step = s.step;
         self.time = s.time.0;

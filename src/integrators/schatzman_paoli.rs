@@ -75,8 +75,11 @@ impl SchatzmanPaoli {
         )?;
         let n = sys.ndof();
         let m = contacts.len();
-        // start-up: a0 = M⁻¹ (f − K q0 − C v0)
+        // start-up: a0 = M⁻¹ (f(0) − K q0 − C v0), the time-dependent loads active at
+        // t = 0 included (without them the run started with a velocity error of
+        // h f(0)/(2m), a displacement error growing linearly)
         let mut a0 = sys.force.clone();
+        sys.add_loads(0.0, 1.0, &mut a0);
         spmv_add(sys.stiffness.as_ref(), -1.0, q0, &mut a0);
         if let Some(c) = &sys.damping {
             spmv_add(c.as_ref(), -1.0, v0, &mut a0);

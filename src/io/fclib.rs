@@ -167,7 +167,7 @@ pub fn read(path: &Path) -> Result<FrictionContactProblem, Error> {
         Some("hdf5" | "h5") => read_hdf5(path),
         other => Err(Error::invalid(
             &path.display().to_string(),
-            format!("{other:?}"),
+            other.map_or_else(|| "no extension".to_string(), |e| format!(".{e}")),
             "unknown extension: expected .dat (Siconos) or .hdf5/.h5 (FCLIB)",
         )),
     }

@@ -147,7 +147,7 @@ pub const POINT_ARRAYS: [(&str, usize); 4] = [
     ("gap", 1),
 ];
 /// Point arrays of a frame in a frictional scene: also `contact_status` (0 open, 1 stick,
-/// 2 slip; NaN at points without a contact).
+/// 2 slip, 3 closed without friction; NaN at points without a contact).
 pub const FRICTION_POINT_ARRAYS: [(&str, usize); 5] = [
     ("displacement", 3),
     ("velocity", 3),
@@ -179,7 +179,7 @@ pub struct FrameWriter {
     encoding: Encoding,
     /// point index of each contact (from the Jacobian pattern)
     contact_point: Vec<usize>,
-    /// `contact_status` point field (frictional scenes: 0 open, 1 stick, 2 slip; NaN
+    /// `contact_status` point field (frictional scenes: 0 open, 1 stick, 2 slip, 3 closed without friction; NaN
     /// away from contacts), written only when the snapshots carry statuses
     status: Vec<f64>,
     frames: Vec<(f64, String)>,

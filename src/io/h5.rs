@@ -14,7 +14,7 @@
 //!   `[rows, m]` per contact quantity (`gap`, `velocity`, `impulse`, `projection`;
 //!   column `c` is the CSV's `gap_c`, …); in a frictional scene also
 //!   `tangent_impulse` and `slip_velocity` `[rows, m·t]` (column `c·t + j` is the CSV's
-//!   `tangent_impulse_c_j`), `status` `[rows, m]` (0 open, 1 stick, 2 slip),
+//!   `tangent_impulse_c_j`), `status` `[rows, m]` (0 open, 1 stick, 2 slip, 3 closed without friction),
 //!   `friction_iterations` and `friction_residual`. Attributes: `scheme`, `dt`, `theta`
 //!   and `parameters` (the run's parameters as JSON).
 //!
@@ -369,7 +369,7 @@ pub struct History {
     rows_i: Vec<i64>,
     rows_c: Vec<f64>,
     /// Frictional scenes: `tangent_impulse`, `slip_velocity` (`[rows, m·td]`), `status`
-    /// (`[rows, m]`, 0 open, 1 stick, 2 slip) and the friction sweeps and residual.
+    /// (`[rows, m]`, 0 open, 1 stick, 2 slip, 3 closed without friction) and the friction sweeps and residual.
     friction: Option<FrictionHistory>,
     buffered: usize,
 }

@@ -666,8 +666,8 @@ fn read_msh22_binary(path: &Path, bytes: &[u8], header: &[String]) -> Result<Gms
         return Err(bad(
             path,
             format!(
-                "Gmsh 2.2 binary with data size {:?} (expected 8)",
-                header.get(2)
+                "Gmsh 2.2 binary with data size {} (expected 8)",
+                header.get(2).map_or("missing", String::as_str)
             ),
         ));
     }

@@ -257,7 +257,7 @@ impl HistoryWriter {
     /// Creates `path.part` and writes the header for `m` contacts with `tangent_dim`
     /// tangents each (0 in a frictionless scene: the columns of before, unchanged).
     /// Frictional scenes add per contact `tangent_impulse_{c}_{t}` (N·s),
-    /// `slip_velocity_{c}_{t}` (m/s) and `status_{c}` (0 open, 1 stick, 2 slip), and per
+    /// `slip_velocity_{c}_{t}` (m/s) and `status_{c}` (0 open, 1 stick, 2 slip, 3 closed without friction), and per
     /// row `friction_iterations`, `friction_residual`.
     pub fn create(path: &Path, m: usize, tangent_dim: usize) -> Result<Self, Error> {
         let tmp = part_path(path);

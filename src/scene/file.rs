@@ -445,11 +445,23 @@ impl Scene {
         self.scheme.validate().map_err(|e| prefix("scheme", e))?;
         self.output.validate().map_err(|e| prefix("output", e))?;
         if self.example.is_some() {
-            if !self.bodies.is_empty() || !self.contacts.is_empty() || !self.obstacles.is_empty() {
+            // the examples carry their own loads (the paper's f = −2, the oscillator's
+            // forcing); tables that would be silently ignored are refused, by name
+            let extra = [
+                (!self.bodies.is_empty(), "bodies"),
+                (!self.obstacles.is_empty(), "obstacles"),
+                (!self.contacts.is_empty(), "contacts"),
+                (!self.forces.is_empty(), "forces"),
+                (!self.prescribed.is_empty(), "prescribed"),
+                (self.loads.gravity.is_some(), "loads"),
+                (self.reference.is_some(), "reference"),
+            ];
+            if let Some((_, key)) = extra.iter().find(|(present, _)| *present) {
                 return Err(Error::invalid(
-                    "example",
-                    "with bodies, obstacles or contacts",
-                    "an example scene holds only [example], [time], [scheme] and [output]",
+                    key,
+                    "in an [example] scene",
+                    "an example scene holds only [example], [time], [scheme] and [output]: \
+                     its loads are the example's own parameters (`signorini example --help`)",
                 ));
             }
             return Ok(());
@@ -1237,8 +1249,17 @@ fn node_set(mesh: &crate::model::solid::Mesh, name: &str) -> Result<Vec<usize>, 
                 "nodes",
                 name,
                 &format!(
-                    "no such node set; the mesh has {:?} (and `boundary`, `all`)",
-                    mesh.node_sets.keys().collect::<Vec<_>>()
+                    "no such node set; the mesh has {} (and `boundary`, `all`)",
+                    {
+                        let mut names: Vec<_> =
+                            mesh.node_sets.keys().map(|k| format!("`{k}`")).collect();
+                        names.sort();
+                        if names.is_empty() {
+                            "none".to_string()
+                        } else {
+                            names.join(", ")
+                        }
+                    }
                 ),
             )
         })

@@ -528,7 +528,10 @@ impl FrictionSolver {
             let inner_tol = (1e-2 * res).max(0.1 * params.tol);
             let budget = params.max_iterations - total;
             let (it, _) = self.nsgs_reg(prob, sigma, (inner_tol, budget), params, r, u);
-            total += it;
+            // an outer iteration counts at least one: an inner solve that finds its
+            // problem already solved must not let the loop run uncounted (the cap
+            // bounds the outer iterations too)
+            total += it.max(1);
             res = self.full_residual(prob, r, u, params.tol);
             let step: f64 = (0..k)
                 .map(|i| (r[i] - self.rprev[i]).powi(2))
