@@ -11,7 +11,8 @@ reading the file),
 the iterations, Siconos' residual as each code reports it, and whether it converged.
 
 Global problems are condensed here as signorini does (W = H^T M^-1 H, q = H^T M^-1 f + w,
-dense LU), so both codes solve the same local problem. Siconos 4.4 has no FCLIB reader.
+sparse LU of M), so both codes solve the same local problem. Siconos 4.4 has no FCLIB
+reader. Needs Debian's python3-scipy besides python3-siconos and python3-h5py.
 
 Usage: /usr/bin/python3 benches/fclib_siconos.py [path/to/signorini] [DIR]
 """
@@ -30,21 +31,16 @@ TOL, MAX_IT, REPEAT = 1e-8, 20000, 5
 
 
 def sparse(g):
+    """The matrix of an FCLIB group as a scipy CSC matrix (duplicates summed)."""
+    import scipy.sparse as sp
     m, n, nz = int(g["m"][()]), int(g["n"][()]), int(g["nz"][()])
     p, i, x = np.array(g["p"]), np.array(g["i"]), np.array(g["x"])
-    a = np.zeros((m, n))
     if nz == -1:  # CSC
-        for c in range(n):
-            for k in range(p[c], p[c + 1]):
-                a[i[k], c] += x[k]
-    elif nz == -2:  # CSR
-        for r in range(m):
-            for k in range(p[r], p[r + 1]):
-                a[r, i[k]] += x[k]
-    else:  # triplets: i = row, p = column (CSparse)
-        for k in range(nz):
-            a[i[k], p[k]] += x[k]
-    return a
+        return sp.csc_matrix((x[: p[n]], i[: p[n]], p[: n + 1]), shape=(m, n))
+    if nz == -2:  # CSR
+        return sp.csr_matrix((x[: p[m]], i[: p[m]], p[: m + 1]), shape=(m, n)).tocsc()
+    # triplets: i = row, p = column (CSparse)
+    return sp.coo_matrix((x[:nz], (i[:nz], p[:nz])), shape=(m, n)).tocsc()
 
 
 def load(path):
@@ -82,14 +78,17 @@ def load(path):
     f = h5py.File(path, "r")
     if "fclib_local" in f:
         g = f["fclib_local"]
-        return (int(g["spacedim"][()]), sparse(g["W"]), np.array(g["vectors/q"]),
+        return (int(g["spacedim"][()]), sparse(g["W"]).toarray(), np.array(g["vectors/q"]),
                 np.array(g["vectors/mu"]))
+    # global: condensed with a sparse LU of M (Spheres-i099's M has 12 000 rows)
+    import scipy.sparse.linalg as sla
     g = f["fclib_global"]
     m, h = sparse(g["M"]), sparse(g["H"])
-    x = np.linalg.solve(m, np.column_stack([h, np.array(g["vectors/f"])]))
+    rhs = np.column_stack([h.toarray(), np.array(g["vectors/f"])])
+    x = sla.splu(m).solve(rhs)
     w = h.T @ x[:, :-1]
     q = h.T @ x[:, -1] + np.array(g["vectors/w"])
-    return int(g["spacedim"][()]), w, q, np.array(g["vectors/mu"])
+    return int(g["spacedim"][()]), np.asarray(w), q, np.array(g["vectors/mu"])
 
 
 def siconos(d, w, q, mu, solver):

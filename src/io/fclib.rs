@@ -31,6 +31,9 @@ pub const MAX_ROWS: usize = 16384;
 pub const MAX_MU: f64 = 1e6;
 /// Largest magnitude of an entry of `W` or `q`.
 pub const MAX_ENTRY: f64 = 1e150;
+/// Largest global problem (rows of `M`) condensed: `M` is read sparse, factored by a
+/// sparse LU, and only `M⁻¹ H` is dense.
+pub const MAX_GLOBAL_DOFS: usize = 1 << 22;
 /// Largest `.dat` file read (bytes).
 const MAX_DAT_BYTES: u64 = 1 << 30;
 
@@ -445,13 +448,9 @@ mod hdf5_impl {
             .map_err(|e| h5err(path, name, e))
     }
 
-    /// A sparse matrix of the file as dense column-major `rows × cols`.
-    fn matrix(
-        f: &hdf5::File,
-        path: &Path,
-        g: &str,
-        limit: usize,
-    ) -> Result<(usize, usize, Vec<f64>), Error> {
+    /// A sparse matrix of the file: its sizes and its entries as (row, column, value)
+    /// triplets (duplicates to be summed).
+    fn triplets(f: &hdf5::File, path: &Path, g: &str, limit: usize) -> Result<Sparse, Error> {
         let at = |k: &str| format!("{g}/{k}");
         let m = int(f, path, &at("m"))?;
         let n = int(f, path, &at("n"))?;
@@ -466,7 +465,7 @@ mod hdf5_impl {
         let p = ints(f, path, &at("p"))?;
         let i = ints(f, path, &at("i"))?;
         let x = reals(f, path, &at("x"))?;
-        let mut a = vec![0.0; m * n];
+        let mut a = Vec::with_capacity(x.len());
         let idx = |v: i64, lim: usize, what: &str| -> Result<usize, Error> {
             if v < 0 || v as u64 >= lim as u64 {
                 Err(bad(format!("{what} index {v} outside 0..{lim}")))
@@ -497,7 +496,7 @@ mod hdf5_impl {
                     for k in s as usize..e as usize {
                         let r = idx(i[k], minor, "minor")?;
                         let (row, col) = if nz == -1 { (r, c) } else { (c, r) };
-                        a[row + col * m] += x[k];
+                        a.push((row, col, x[k]));
                     }
                 }
             }
@@ -510,12 +509,87 @@ mod hdf5_impl {
                     // CSparse triplets: i = row, p = column
                     let row = idx(i[k], m, "row")?;
                     let col = idx(p[k], n, "column")?;
-                    a[row + col * m] += x[k];
+                    a.push((row, col, x[k]));
                 }
             }
             other => return Err(bad(format!("nz = {other}: expected −1, −2 or ≥ 0"))),
         }
-        Ok((m, n, a))
+        Ok(Sparse {
+            rows: m,
+            cols: n,
+            entries: a,
+        })
+    }
+
+    /// A matrix read from the file, as triplets.
+    struct Sparse {
+        rows: usize,
+        cols: usize,
+        entries: Vec<(usize, usize, f64)>,
+    }
+
+    impl Sparse {
+        /// Dense column-major copy (the caller bounds the size).
+        fn dense(&self) -> Vec<f64> {
+            let mut a = vec![0.0; self.rows * self.cols];
+            for &(i, j, v) in &self.entries {
+                a[i + j * self.rows] += v;
+            }
+            a
+        }
+    }
+
+    /// `W = Hᵀ M⁻¹ H`, `q = Hᵀ M⁻¹ f + w` with faer's sparse LU of `M` (partial
+    /// pivoting: LMGC90's `M` is not always symmetric). A dense LU of Siconos'
+    /// Spheres-i099-356-679 (`M` of 12 000 rows, diagonal) would need 1.2 GB and 1e12
+    /// flops; the sparse one is instant there and exact on the others.
+    fn condense(
+        path: &Path,
+        mm: &Sparse,
+        hh: &Sparse,
+        fv: &[f64],
+        wv: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>), Error> {
+        use faer::linalg::solvers::Solve;
+        use faer::sparse::{SparseColMat, Triplet};
+        let (n, m) = (mm.rows, hh.cols);
+        let trip: Vec<Triplet<usize, usize, f64>> = mm
+            .entries
+            .iter()
+            .map(|&(i, j, v)| Triplet::new(i, j, v))
+            .collect();
+        let singular = |what: String| {
+            Error::invalid(
+                &format!("{}: fclib_global/M", path.display()),
+                format!("{n}×{n}"),
+                &format!("cannot be factored ({what}): expected an invertible mass matrix"),
+            )
+        };
+        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip)
+            .map_err(|e| singular(format!("{e}")))?;
+        let lu = a.sp_lu().map_err(|e| singular(format!("{e}")))?;
+        // X = M⁻¹ [H f]
+        let mut x = faer::Mat::<f64>::zeros(n, m + 1);
+        for &(i, j, v) in &hh.entries {
+            x[(i, j)] += v;
+        }
+        for (i, &fi) in fv.iter().enumerate() {
+            x[(i, m)] = fi;
+        }
+        lu.solve_in_place(x.as_mut());
+        if (0..m + 1).any(|j| x.col(j).iter().any(|v| !v.is_finite())) {
+            return Err(singular("non-finite solve".into()));
+        }
+        // W = Hᵀ X (H sparse: column a of H meets every column of X)
+        let mut w = vec![0.0; m * m];
+        let mut q = wv.to_vec();
+        for &(k, a_, v) in &hh.entries {
+            for b in 0..m {
+                w[a_ + b * m] += v * x[(k, b)];
+            }
+            q[a_] += v * x[(k, m)];
+        }
+        Ok((w, q))
     }
 
     pub(super) fn read(path: &Path) -> Result<FrictionContactProblem, Error> {
@@ -527,7 +601,8 @@ mod hdf5_impl {
         };
         if f.link_exists("fclib_local") {
             let dim = int(&f, path, "fclib_local/spacedim")?;
-            let (m, n, w) = matrix(&f, path, "fclib_local/W", MAX_ROWS)?;
+            let wm = triplets(&f, path, "fclib_local/W", MAX_ROWS)?;
+            let (m, n, w) = (wm.rows, wm.cols, wm.dense());
             if m != n {
                 return Err(Error::invalid(
                     &format!("{}: fclib_local/W", path.display()),
@@ -547,10 +622,10 @@ mod hdf5_impl {
             .finish(path);
         }
         if f.link_exists("fclib_global") {
-            use faer::linalg::solvers::Solve;
             let dim = int(&f, path, "fclib_global/spacedim")?;
-            let (nm, nm2, mm) = matrix(&f, path, "fclib_global/M", MAX_ROWS)?;
-            let (hn, hr, hh) = matrix(&f, path, "fclib_global/H", MAX_ROWS)?;
+            let mm = triplets(&f, path, "fclib_global/M", MAX_GLOBAL_DOFS)?;
+            let hh = triplets(&f, path, "fclib_global/H", MAX_GLOBAL_DOFS)?;
+            let (nm, nm2, hn, hr) = (mm.rows, mm.cols, hh.rows, hh.cols);
             let fv = reals(&f, path, "fclib_global/vectors/f")?;
             let wv = reals(&f, path, "fclib_global/vectors/w")?;
             if nm != nm2 || hn != nm || fv.len() != nm || wv.len() != hr {
@@ -560,33 +635,26 @@ mod hdf5_impl {
                     "expected M n×n, H n×m, f of n and w of m values",
                 ));
             }
-            let lu = faer::Mat::from_fn(nm, nm, |i, j| mm[i + j * nm]).partial_piv_lu();
-            // X = M⁻¹ [H f]
-            let mut x = faer::Mat::from_fn(
-                nm,
-                hr + 1,
-                |i, j| {
-                    if j < hr { hh[i + j * nm] } else { fv[i] }
-                },
-            );
-            lu.solve_in_place(x.as_mut());
-            let mut w = vec![0.0; hr * hr];
-            let mut q = wv.clone();
-            for b in 0..hr {
-                for a in 0..hr {
-                    w[a + b * hr] = (0..nm).map(|k| hh[k + a * nm] * x[(k, b)]).sum();
-                }
+            // M⁻¹ [H f] is n × (m + 1) dense: bounded like a dense W
+            if hr > MAX_ROWS || (nm as u64) * (hr as u64 + 1) > (MAX_ROWS as u64).pow(2) {
+                return Err(Error::invalid(
+                    &format!("{}: fclib_global", path.display()),
+                    format!("M {nm}×{nm}, H {hn}×{hr}"),
+                    &format!(
+                        "too large to condense: M⁻¹ H has {} values, the limit is {}",
+                        (nm as u64) * (hr as u64 + 1),
+                        (MAX_ROWS as u64).pow(2)
+                    ),
+                ));
             }
-            for (a, qa) in q.iter_mut().enumerate() {
-                *qa += (0..nm).map(|k| hh[k + a * nm] * x[(k, hr)]).sum::<f64>();
-            }
+            let (w, q) = condense(path, &mm, &hh, &fv, &wv)?;
             return FrictionContactProblem {
                 dim: dim.max(0) as usize,
                 w,
                 q,
                 mu: reals(&f, path, "fclib_global/vectors/mu")?,
                 guess,
-                form: "global (condensed W = Hᵀ M⁻¹ H by dense LU)",
+                form: "global (condensed W = Hᵀ M⁻¹ H by a sparse LU of M)",
                 asymmetry: 0.0,
             }
             .finish(path);

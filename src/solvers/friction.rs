@@ -357,6 +357,9 @@ pub struct FrictionSolver {
     pub(super) qreg: Vec<f64>,
     rprev: Vec<f64>,
     one_step: bool,
+    /// NSGS leaves when its rate cannot reach the tolerance within its cap (`auto`'s
+    /// first stage in one-step problems).
+    give_up_early: bool,
 }
 
 impl FrictionSolver {
@@ -369,6 +372,7 @@ impl FrictionSolver {
             qreg: vec![0.0; capacity],
             rprev: vec![0.0; capacity],
             one_step: false,
+            give_up_early: false,
         }
     }
 
@@ -455,7 +459,9 @@ impl FrictionSolver {
                 // the proximal Newton restarts from the caller's start: from NSGS's
                 // iterate it spent 2 180 iterations on Capsules-i125-1213 against 13
                 self.rprev[..k].copy_from_slice(&r[..k]);
+                self.give_up_early = self.one_step;
                 let mut info = nsgs(self, first.min(params.max_iterations), r, u);
+                self.give_up_early = false;
                 let mut spent = info.iterations;
                 // the stages share the cap: none starts once it is spent
                 let left = |spent: usize| FrictionParams {
@@ -614,7 +620,26 @@ impl FrictionSolver {
             return (0, res);
         }
         let mut sweeps = 0;
+        // residual and sweep of the reference point of the rate estimate
+        let (mut ref_res, mut ref_sweep) = (f64::NAN, 0usize);
         while sweeps < cap {
+            if self.give_up_early && sweeps >= 20 && sweeps - ref_sweep >= 10 {
+                // `auto`'s first stage: leave when the rate since the reference point
+                // cannot reach the tolerance within the budget (NSGS converges linearly;
+                // on the slider–crank it needed 367 sweeps where Newton needs 1)
+                let rate = (res / ref_res).powf(1.0 / (sweeps - ref_sweep) as f64);
+                let needed = if rate < 1.0 {
+                    (tol / res).ln() / rate.ln()
+                } else {
+                    f64::INFINITY
+                };
+                if needed > (cap - sweeps) as f64 {
+                    break;
+                }
+            }
+            if sweeps == 10 || (sweeps > 10 && sweeps - ref_sweep >= 20) {
+                (ref_res, ref_sweep) = (res, sweeps);
+            }
             sweeps += 1;
             for b in prob.blocks {
                 let (o, d) = (b.offset, b.dim);
