@@ -469,32 +469,35 @@ impl FrictionSolver {
                     ..*params
                 };
                 if info.converged || spent >= params.max_iterations {
-                } else if self.one_step {
-                    let p = FrictionParams {
-                        max_iterations: left(spent).max_iterations.min(AUTO_NSN),
-                        ..*params
-                    };
-                    let mut next = newton(self, NewtonMode::Plain, &p, r, u);
-                    spent += next.iterations;
-                    next.iterations = spent;
-                    info = next;
-                    if !info.converged && spent < params.max_iterations {
-                        let (r0, res0) = (r[..k].to_vec(), info.residual);
-                        r[..k].copy_from_slice(&self.rprev[..k]);
-                        let mut next = newton(self, NewtonMode::Proximal, &left(spent), r, u);
-                        if next.residual.is_nan() || next.residual > res0 {
-                            // keep the better of the two stages
-                            r[..k].copy_from_slice(&r0);
-                            u[..k].copy_from_slice(&prob.q[..k]);
-                            prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
-                            next.residual = res0;
-                        }
-                        next.iterations += spent;
-                        info = next;
-                    }
-                } else {
+                    return Ok(info);
+                }
+                if !self.one_step {
+                    // the step loop: PROX, which does not allocate
                     let mut next = self.prox(prob, &left(spent), k, r, u);
                     next.iterations += spent;
+                    return Ok(next);
+                }
+                let p = FrictionParams {
+                    max_iterations: left(spent).max_iterations.min(AUTO_NSN),
+                    ..*params
+                };
+                let mut next = newton(self, NewtonMode::Plain, &p, r, u);
+                spent += next.iterations;
+                next.iterations = spent;
+                info = next;
+                if !info.converged && spent < params.max_iterations {
+                    let (r0, res0) = (r[..k].to_vec(), info.residual);
+                    r[..k].copy_from_slice(&self.rprev[..k]);
+                    let mut next = newton(self, NewtonMode::Proximal, &left(spent), r, u);
+                    next.iterations += spent;
+                    if next.residual.is_nan() || next.residual > res0 {
+                        // the plain method's iterate was the better one: keep it
+                        r[..k].copy_from_slice(&r0);
+                        u[..k].copy_from_slice(&prob.q[..k]);
+                        prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
+                        next.residual = res0;
+                        next.solver = FrictionSolverKind::Nsn;
+                    }
                     info = next;
                 }
                 info
