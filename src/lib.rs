@@ -22,6 +22,7 @@
 
 // Numerical kernels index several arrays in lockstep; iterator chains would hide that.
 #![allow(clippy::needless_range_loop)]
+#![deny(unsafe_code)]
 
 pub mod analytic;
 pub mod assembly;

@@ -1,6 +1,8 @@
 //! `signorini`: command-line front end. Parses flags, prints progress and results;
 //! all the work is in the library.
 
+#![deny(unsafe_code)]
+
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;

@@ -879,12 +879,11 @@ impl Drop for FrameStream {
 }
 
 /// The little-endian bytes of an `f64` slice (every supported target is little-endian;
-/// checked at compile time below).
+/// checked at compile time below), by bytemuck's checked cast: the crate has no
+/// `unsafe` of its own.
 fn bytemuck_f64(v: &[f64]) -> &[u8] {
     const _: () = assert!(cfg!(target_endian = "little"));
-    // SAFETY: f64 has no padding and every bit pattern is a valid u8 sequence; the
-    // length is the slice's size in bytes and the lifetime is the input's.
-    unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<u8>(), std::mem::size_of_val(v)) }
+    bytemuck::cast_slice(v)
 }
 
 /// Removes the `frame_*.vtu` files a previous run left in `dir`: a shorter run would

@@ -211,6 +211,10 @@ pub struct FrictionInfo {
     pub solver: FrictionSolverKind,
     /// The Newton methods factored a sparse Jacobian (the block pattern of `W`).
     pub sparse_jacobian: bool,
+    /// Local 2-D solves for which no case of the law was consistent (the least
+    /// inconsistent one was kept): 0 unless a `W_αα` is not positive definite or a sign
+    /// sits at round-off.
+    pub inconsistent_local_solves: usize,
 }
 
 /// Projection of `x = (x_N, x_T)` on the cone `‖x_T‖ ≤ μ x_N` (in place).
@@ -360,6 +364,8 @@ pub struct FrictionSolver {
     /// NSGS leaves when its rate cannot reach the tolerance within its cap (`auto`'s
     /// first stage in one-step problems).
     give_up_early: bool,
+    /// Local 2-D solves without a consistent case in the current [`FrictionSolver::solve`].
+    inconsistent: usize,
 }
 
 impl FrictionSolver {
@@ -373,6 +379,7 @@ impl FrictionSolver {
             rprev: vec![0.0; capacity],
             one_step: false,
             give_up_early: false,
+            inconsistent: 0,
         }
     }
 
@@ -426,6 +433,7 @@ impl FrictionSolver {
             }
             self.diag[b.offset] = d;
         }
+        self.inconsistent = 0;
         let nsgs = |s: &mut Self, cap: usize, r: &mut [f64], u: &mut [f64]| {
             let (it, res) = s.nsgs(prob, 0.0, (params.tol, cap), params, r, u);
             FrictionInfo {
@@ -469,13 +477,13 @@ impl FrictionSolver {
                     ..*params
                 };
                 if info.converged || spent >= params.max_iterations {
-                    return Ok(info);
+                    return Ok(self.counted(info));
                 }
                 if !self.one_step {
                     // the step loop: PROX, which does not allocate
                     let mut next = self.prox(prob, &left(spent), k, r, u);
                     next.iterations += spent;
-                    return Ok(next);
+                    return Ok(self.counted(next));
                 }
                 let p = FrictionParams {
                     max_iterations: left(spent).max_iterations.min(AUTO_NSN),
@@ -503,7 +511,15 @@ impl FrictionSolver {
                 info
             }
         };
-        Ok(info)
+        Ok(self.counted(info))
+    }
+
+    /// `info` with the local solves' inconsistency count of this solve.
+    fn counted(&self, info: FrictionInfo) -> FrictionInfo {
+        FrictionInfo {
+            inconsistent_local_solves: self.inconsistent,
+            ..info
+        }
     }
 
     /// Proximal point: NSGS on `(W + σI, q − σ r_j)`, σ shrinking while the outer
@@ -661,7 +677,9 @@ impl FrictionSolver {
                 }
                 let mut rl = [0.0; 3];
                 rl[..d].copy_from_slice(&r[o..o + d]);
-                solve_local(&wl, &ql, b.mu, d, params.local_max_iterations, &mut rl);
+                if !solve_local(&wl, &ql, b.mu, d, params.local_max_iterations, &mut rl) {
+                    self.inconsistent += 1;
+                }
                 let mut delta = [0.0; 3];
                 let mut changed = false;
                 for i in 0..d {
@@ -698,8 +716,18 @@ impl FrictionSolver {
 }
 
 /// Solves one block exactly: `u = W r + q` (W is `d × d`, row-major in a 3×3 array)
-/// with `C* ∋ û ⊥ r ∈ C`. `r` holds the warm start (used by the 3-D Newton).
-pub fn solve_local(w: &[f64; 9], q: &[f64; 3], mu: f64, d: usize, max_it: usize, r: &mut [f64; 3]) {
+/// with `C* ∋ û ⊥ r ∈ C`. `r` holds the warm start (used by the 3-D Newton). Returns
+/// false when no case of the 2-D law is consistent (`W_αα` not positive definite, or
+/// round-off on a sign): `r` is then the least inconsistent case, and the caller counts
+/// it ([`FrictionInfo::inconsistent_local_solves`]).
+pub fn solve_local(
+    w: &[f64; 9],
+    q: &[f64; 3],
+    mu: f64,
+    d: usize,
+    max_it: usize,
+    r: &mut [f64; 3],
+) -> bool {
     match d {
         1 => {
             r[0] = if q[0] >= 0.0 || w[0] <= 0.0 {
@@ -707,22 +735,26 @@ pub fn solve_local(w: &[f64; 9], q: &[f64; 3], mu: f64, d: usize, max_it: usize,
             } else {
                 -q[0] / w[0]
             };
+            true
         }
         2 => solve_local_2d(w, q, mu, r),
-        _ => solve_local_3d(w, q, mu, max_it, r),
+        _ => {
+            solve_local_3d(w, q, mu, max_it, r);
+            true
+        }
     }
 }
 
 /// The 2-D law in closed form: the first consistent case of open, stick, slip with
 /// `u_T > 0` (`r_T = −μ r_N`), slip with `u_T < 0` (`r_T = μ r_N`).
-fn solve_local_2d(w: &[f64; 9], q: &[f64; 3], mu: f64, r: &mut [f64; 3]) {
+fn solve_local_2d(w: &[f64; 9], q: &[f64; 3], mu: f64, r: &mut [f64; 3]) -> bool {
     let (wnn, wnt, wtn, wtt) = (w[0], w[1], w[3], w[4]);
     let (qn, qt) = (q[0], q[1]);
     r[2] = 0.0;
     if qn >= 0.0 {
         r[0] = 0.0;
         r[1] = 0.0;
-        return;
+        return true;
     }
     // stick: W r = −q
     let det = wnn * wtt - wnt * wtn;
@@ -732,7 +764,7 @@ fn solve_local_2d(w: &[f64; 9], q: &[f64; 3], mu: f64, r: &mut [f64; 3]) {
         if rn >= 0.0 && rt.abs() <= mu * rn {
             r[0] = rn;
             r[1] = rt;
-            return;
+            return true;
         }
     }
     // slip: r_T = −s μ r_N with s = sign(u_T)
@@ -748,7 +780,7 @@ fn solve_local_2d(w: &[f64; 9], q: &[f64; 3], mu: f64, r: &mut [f64; 3]) {
         if rn >= 0.0 && s * ut >= 0.0 {
             r[0] = rn;
             r[1] = rt;
-            return;
+            return true;
         }
         // keep the least inconsistent case (round-off on a sign)
         let viol = (-s * ut).max(0.0);
@@ -758,6 +790,7 @@ fn solve_local_2d(w: &[f64; 9], q: &[f64; 3], mu: f64, r: &mut [f64; 3]) {
     }
     r[0] = best.1;
     r[1] = best.2;
+    false
 }
 
 /// The Alart–Curnier function of a 3-D block and (optionally) one element of its
@@ -962,6 +995,59 @@ fn solve3(a: &[f64; 9], b: &[f64; 3]) -> Option<[f64; 3]> {
 mod tests {
     use super::*;
     use crate::delassus::DenseOperator;
+
+    /// Issue 16 §6: the local solvers report what they cannot solve. An indefinite 2-D
+    /// block `W = [[1, 2], [2, 1]]`, `q = (−1, 0.5)`, μ = 0.5 has no consistent case
+    /// (stick needs det W > 0; slip one way has a zero pivot, the other a tangential
+    /// velocity of the wrong sign): the solve counts it. A block with `W_NN = 0` is
+    /// refused before any sweep.
+    #[test]
+    fn inconsistent_and_non_positive_blocks_are_reported() {
+        let params = FrictionParams {
+            solver: FrictionSolverKind::Nsgs,
+            max_iterations: 3,
+            ..FrictionParams::default()
+        };
+        let blocks = [Block {
+            offset: 0,
+            dim: 2,
+            mu: 0.5,
+        }];
+        let w = [1.0, 2.0, 2.0, 1.0];
+        let op = DenseOperator::new(2, &w);
+        let (mut r, mut u) = ([0.0; 2], [0.0; 2]);
+        let info = FrictionSolver::with_capacity(2)
+            .solve(
+                FrictionProblem {
+                    w: &op,
+                    q: &[-1.0, 0.5],
+                    blocks: &blocks,
+                },
+                &params,
+                &mut r,
+                &mut u,
+            )
+            .unwrap();
+        assert!(info.inconsistent_local_solves > 0, "{info:?}");
+        let w0 = [0.0, 0.0, 0.0, 1.0];
+        let op = DenseOperator::new(2, &w0);
+        let err = FrictionSolver::with_capacity(2)
+            .solve(
+                FrictionProblem {
+                    w: &op,
+                    q: &[-1.0, 0.5],
+                    blocks: &blocks,
+                },
+                &params,
+                &mut r,
+                &mut u,
+            )
+            .unwrap_err();
+        assert!(
+            matches!(err, SolveError::NonPositiveDiagonal { row: 0, .. }),
+            "{err}"
+        );
+    }
 
     /// A single 3-D contact pressed with a tangential load below the cone sticks, above
     /// it slides with `‖r_T‖ = μ r_N` and `r_T` against `u_T`.
