@@ -12,10 +12,12 @@
 //!   Jacobians and Delassus data are functions of `q` and are evaluated again;
 //! - the run's accumulators (iteration statistics, the contact measurement) and output
 //!   cursors (bytes and rows of the history that belong to the checkpointed steps, the
-//!   frames written); on resume the CSV is cut to those bytes and the HDF5 datasets to
-//!   those rows and frames, then appended to.
+//!   number of frames written, whose times the resumed run reads back from the `.pvd`);
+//!   on resume the CSV is cut to those bytes and the HDF5 datasets to those rows and
+//!   frames, then appended to. Nothing in it grows with the number of steps (version
+//!   3: version 2 held the per-step force trace and every frame's time).
 //!
-//! What a checkpoint guards (version 2): the build that wrote it, the output directory it
+//! What a checkpoint guards (since version 2): the build that wrote it, the output directory it
 //! belongs to, and the size and SHA-256 of every input file (the scene file and its mesh
 //! files); `resume` refuses a checkpoint whose build, directory or inputs differ, whose
 //! `every` is 0, whose history cursor falls inside a row or whose arrays disagree, each
@@ -37,7 +39,7 @@ use crate::error::Error;
 /// The format name in every checkpoint.
 pub const FORMAT: &str = "signorini-checkpoint";
 /// The format version this build writes and reads.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 /// The checkpoint's file name in a run directory.
 pub const FILE: &str = "checkpoint.json";
 
@@ -189,8 +191,9 @@ pub struct RunState {
     pub history_bytes: u64,
     /// History rows written up to the checkpoint (the length of the HDF5 `/history`).
     pub history_rows: u64,
-    /// Times of the frames written (the `.pvd` entries).
-    pub frames: Vec<Bits>,
+    /// Frames written (their times are read back from the `.pvd`, so that a checkpoint
+    /// does not grow with the run; version 3, version 2 held every time).
+    pub frames: usize,
     /// A contact was closed at the checkpointed step (frames are saved at switches).
     pub closed_before: bool,
 }

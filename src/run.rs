@@ -662,8 +662,8 @@ struct Writers {
     frame_stride: usize,
     history_stride: usize,
     closed_before: bool,
-    /// Times of the frames pushed (the `.pvd` entries, for checkpoints).
-    frame_times: Vec<f64>,
+    /// Frames pushed (for checkpoints).
+    frame_count: usize,
     seconds: f64,
 }
 
@@ -696,7 +696,7 @@ impl Writers {
                 hw.flush()?;
             }
             w.push(s, integ.jacobian(), integ.dt())?;
-            self.frame_times.push(s.time);
+            self.frame_count += 1;
         }
         self.seconds += t0.elapsed().as_secs_f64();
         Ok(())
@@ -792,7 +792,7 @@ impl RunObserver {
             energy0: Bits(p.energy0),
             history_bytes: self.writers.history.as_ref().map_or(0, |h| h.bytes()),
             history_rows: self.writers.history.as_ref().map_or(0, |h| h.rows()),
-            frames: self.writers.frame_times.iter().map(|&t| Bits(t)).collect(),
+            frames: self.writers.frame_count,
             closed_before: self.writers.closed_before,
         };
         Checkpoint {
@@ -833,7 +833,7 @@ impl RunObserver {
         t.done = r.contact_done;
         t.total_force = r.total_force.0;
         self.writers.closed_before = r.closed_before;
-        self.writers.frame_times = r.frames.iter().map(|b| b.0).collect();
+        self.writers.frame_count = r.frames;
     }
 }
 
@@ -905,7 +905,7 @@ pub fn run_checkpointed(
         frame_stride: usize::MAX,
         history_stride: usize::MAX,
         closed_before: false,
-        frame_times: Vec::new(),
+        frame_count: 0,
         seconds: 0.0,
     };
     let mut plan = None;
@@ -953,17 +953,14 @@ pub fn run_checkpointed(
         // a model without field geometry (the academic examples) writes no frames
         if o.options.fields && !geom.points.is_empty() {
             let w = match resume {
-                Some(c) => {
-                    let times: Vec<f64> = c.run.frames.iter().map(|b| b.0).collect();
-                    FrameWriter::resume(
-                        o.dir,
-                        "fields",
-                        geom,
-                        integ.jacobian(),
-                        o.options.encoding,
-                        &times,
-                    )?
-                }
+                Some(c) => FrameWriter::resume(
+                    o.dir,
+                    "fields",
+                    geom,
+                    integ.jacobian(),
+                    o.options.encoding,
+                    c.run.frames,
+                )?,
                 None => FrameWriter::create(
                     o.dir,
                     "fields",
@@ -977,7 +974,7 @@ pub fn run_checkpointed(
             }
             #[cfg(feature = "hdf5")]
             let w = match &h5 {
-                Some(f) => w.with_hdf5(f, resume.map(|c| c.run.frames.len()))?,
+                Some(f) => w.with_hdf5(f, resume.map(|c| c.run.frames))?,
                 None => w,
             };
             let s = integ.state();
@@ -985,7 +982,7 @@ pub fn run_checkpointed(
                 FrameStream::spawn_with_statuses(w, s.q.len(), m, s.status.len(), FRAME_POOL);
             if resume.is_none() {
                 w.push(s, integ.jacobian(), h)?;
-                writers.frame_times.push(s.time);
+                writers.frame_count += 1;
             }
             writers.frames = Some(w);
         }

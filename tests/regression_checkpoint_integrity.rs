@@ -189,9 +189,11 @@ fn foreign_and_inconsistent_checkpoints_are_refused() {
 /// Issue 16 §4: a checkpoint does not grow with the run. Each checkpoint held the whole
 /// per-step force trace so far (about 20 bytes a step), so a run's checkpoints wrote
 /// bytes quadratic in its length. The bar of 20 000 steps (its contact interval, which
-/// the summary measures, ends after 2L/c0) checkpointed at step 1 000 and at step
-/// 19 000: the two files may differ only by the digits of their numbers (tolerance 1 %;
-/// with the trace: 17 517 bytes at step 1 000, 209 523 at step 19 000).
+/// the summary measures, ends after 2L/c0), with its field frames, checkpointed at step
+/// 1 000 and at step 19 000: the two files may differ only by the digits of their
+/// numbers (tolerance 1 %; with the trace: 17 517 bytes at step 1 000, 209 523 at step
+/// 19 000, without frames; the frames' times, one per frame, are now read back from the
+/// `.pvd` on resume).
 #[test]
 fn checkpoint_size_does_not_grow_with_the_run() {
     let size = |at: usize| {

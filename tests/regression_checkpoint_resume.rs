@@ -306,7 +306,7 @@ fn missing_old_and_corrupt_checkpoints_are_named() {
     .unwrap();
     let e = err(&dir);
     assert!(
-        e.contains("version 0") && e.contains("reads version 2"),
+        e.contains("version 0") && e.contains("reads version 3"),
         "{e}"
     );
     // a real checkpoint with one vector cut short
@@ -403,5 +403,62 @@ friction = 0.3
             let args = ["run", scene.to_str().unwrap(), "--checkpoint-every", "10"];
             check_resume(&name, &args, &[99, 130]);
         }
+    }
+}
+
+/// Since checkpoint version 3 the frames' times are read back from `fields.pvd` on
+/// resume (the checkpoint keeps only their count): a `.pvd` that lists fewer frames than
+/// the checkpoint, or other files, is refused with exit 2, naming it.
+#[test]
+fn a_changed_frame_collection_is_refused_on_resume() {
+    let args = [
+        "bar",
+        "--elements",
+        "50",
+        "--dt",
+        "1e-6",
+        "--t-end",
+        "4e-4",
+        "--checkpoint-every",
+        "100",
+    ];
+    for (case, edit) in [
+        (
+            "fewer",
+            Box::new(|t: &str| {
+                // drop every DataSet line but the first
+                let mut seen = false;
+                t.lines()
+                    .filter(|l| {
+                        let ds = l.contains("<DataSet");
+                        let keep = !ds || !seen;
+                        seen |= ds;
+                        keep
+                    })
+                    .collect::<Vec<_>>()
+                    .join("\n")
+            }) as Box<dyn Fn(&str) -> String>,
+        ),
+        (
+            "renamed",
+            Box::new(|t: &str| t.replace("frame_000001.vtu", "frame_000009.vtu")),
+        ),
+    ] {
+        let dir = tmp(&format!("pvd-{case}"));
+        let o = run(&args, &dir, Some(250));
+        assert!(
+            !o.status.success(),
+            "{case}: the abort hook did not stop the run"
+        );
+        let pvd = dir.join("fields.pvd");
+        let text = std::fs::read_to_string(&pvd).unwrap();
+        std::fs::write(&pvd, edit(&text)).unwrap();
+        let o = resume(&dir);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{case}: {err}");
+        assert!(
+            err.contains("fields.pvd") && err.contains("the run directory was changed"),
+            "{case}: {err}"
+        );
     }
 }

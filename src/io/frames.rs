@@ -219,21 +219,46 @@ impl FrameWriter {
         Self::new_unchecked(dir, stem, geom, jac, encoding)
     }
 
-    /// Continues the frames of a checkpointed run: the frames at `times` are on disk
-    /// (`<stem>/frame_000000.vtu` …) and stay listed in the `.pvd`; the next frame
-    /// takes the next number (frames a killed run wrote after its checkpoint are
-    /// written again, identically).
+    /// Continues the frames of a checkpointed run: its first `count` frames are on disk
+    /// (`<stem>/frame_000000.vtu` …) and listed, with their times, by the `.pvd` (which
+    /// the run rewrote atomically after each frame, and synced before the checkpoint);
+    /// they stay listed, and the next frame takes the next number (frames a killed run
+    /// wrote after its checkpoint are written again, identically). The times are read
+    /// back from the `.pvd` — written as Rust's shortest round-trip decimals, so
+    /// exactly — rather than kept in the checkpoint, which then does not grow with the
+    /// run.
     pub fn resume(
         dir: &Path,
         stem: &str,
         geom: Geometry,
         jac: &ContactJacobian,
         encoding: Encoding,
-        times: &[f64],
+        count: usize,
     ) -> Result<Self, Error> {
         let mut w = Self::new_unchecked(dir, stem, geom, jac, encoding)?;
-        for (k, &t) in times.iter().enumerate() {
+        let pvd = w.pvd_path();
+        let text =
+            crate::limits::read_text(&pvd, "frame collection", crate::limits::MAX_TEXT_BYTES)?;
+        let listed = pvd_entries(&text);
+        if listed.len() < count {
+            return Err(Error::bad_file(
+                &pvd,
+                "",
+                format!(
+                    "lists {} frames, the checkpoint {count}: the run directory was changed",
+                    listed.len()
+                ),
+            ));
+        }
+        for (k, (t, file)) in listed.into_iter().take(count).enumerate() {
             let name = format!("{stem}/frame_{k:06}.vtu");
+            if file != name {
+                return Err(Error::bad_file(
+                    &pvd,
+                    "",
+                    format!("entry {k} is {file}, expected {name}: the run directory was changed"),
+                ));
+            }
             if !dir.join(&name).is_file() {
                 return Err(Error::bad_file(
                     dir.join(&name),
@@ -884,6 +909,24 @@ impl Drop for FrameStream {
 fn bytemuck_f64(v: &[f64]) -> &[u8] {
     const _: () = assert!(cfg!(target_endian = "little"));
     bytemuck::cast_slice(v)
+}
+
+/// The `(timestep, file)` entries of a `.pvd` collection as this module writes it
+/// (one `<DataSet timestep="…" … file="…"/>` a line); lines that do not parse end the
+/// list.
+fn pvd_entries(text: &str) -> Vec<(f64, String)> {
+    let attr = |line: &str, key: &str| -> Option<String> {
+        let start = line.find(&format!("{key}=\""))? + key.len() + 2;
+        let end = start + line[start..].find('"')?;
+        Some(line[start..end].to_string())
+    };
+    text.lines()
+        .filter(|l| l.trim_start().starts_with("<DataSet"))
+        .map_while(|l| {
+            let t = attr(l, "timestep")?.parse::<f64>().ok()?;
+            Some((t, attr(l, "file")?))
+        })
+        .collect()
 }
 
 /// Removes the `frame_*.vtu` files a previous run left in `dir`: a shorter run would
