@@ -438,6 +438,9 @@ pub struct RunChecks {
     pub newton_cap: usize,
     /// The friction sweep cap (`scheme.friction.max_iterations`), for the message.
     pub friction_cap: usize,
+    /// The friction solver (`scheme.friction.solver`), for the message: it advises
+    /// only what the run has not tried.
+    pub friction_solver: crate::solvers::friction::FrictionSolverKind,
 }
 
 impl RunChecks {
@@ -453,6 +456,7 @@ impl RunChecks {
             },
             newton_cap: params.newton.max_iterations,
             friction_cap: params.friction.max_iterations,
+            friction_solver: params.friction.solver,
         }
     }
 
@@ -508,11 +512,20 @@ impl RunChecks {
         }
         if st.caps_hit > 0 && !self.allow_caps {
             let detail = if st.friction_caps > 0 {
+                use crate::solvers::friction::FrictionSolverKind as K;
+                // `auto` and `prox` already ran the proximal method: switching the
+                // solver cannot help them, only the budget or the step can
+                let switch = match self.friction_solver {
+                    K::Nsgs => ", try scheme.friction.solver = \"auto\" (PROX after NSGS)",
+                    _ => "",
+                };
                 format!(
-                    "the friction solver stopped at its cap of {} sweeps with residual {:.3e} \
-                     (raise scheme.friction.max_iterations, try scheme.friction.solver = \
-                     \"prox\", or set scheme.allow_caps = true to count caps instead)",
-                    self.friction_cap, st.friction_residual
+                    "the {} friction solver stopped at its cap of {} sweeps with residual \
+                     {:.3e} (raise scheme.friction.max_iterations{switch}, lower the time \
+                     step, or set scheme.allow_caps = true to count caps instead)",
+                    self.friction_solver.name(),
+                    self.friction_cap,
+                    st.friction_residual
                 )
             } else {
                 format!(

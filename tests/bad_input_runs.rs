@@ -289,3 +289,48 @@ fn plot_bounds_extreme_histories_and_skips_a_cut_row() {
     let lines: Vec<&str> = signorini::plot::complete_lines(&t).collect();
     assert_eq!(lines.len(), 3, "header and two complete rows");
 }
+
+/// Issue 16 §6: a run failure advises only remedies that can help. A friction cap of one
+/// sweep stops the sliding block at step 1 (exit 1); with `nsgs` the message suggests
+/// `auto` (which adds PROX), with `auto` it does not (PROX already ran), and both name
+/// the solver, the cap and the budget and step remedies.
+#[test]
+fn a_friction_cap_advises_only_what_was_not_tried() {
+    let dir = tmp("friction-cap");
+    let base = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/sliding_block.toml"),
+    )
+    .unwrap();
+    for (solver, suggests_auto) in [("nsgs", true), ("auto", false)] {
+        let scene = base.replacen(
+            "kind = \"combined-projection\"",
+            &format!(
+                "kind = \"combined-projection\"\n[scheme.friction]\nsolver = \"{solver}\"\nmax_iterations = 1"
+            ),
+            1,
+        );
+        let file = format!("{solver}.toml");
+        std::fs::write(dir.join(&file), scene).unwrap();
+        let (code, err) = cli(
+            &dir,
+            &["run", &file, "--quiet", "--no-plots", "--no-fields"],
+            &[],
+        );
+        expect(
+            solver,
+            (code, err.clone()),
+            1,
+            &[
+                "step 1",
+                &format!("the {solver} friction solver stopped at its cap of 1 sweeps"),
+                "raise scheme.friction.max_iterations",
+                "lower the time step",
+            ],
+        );
+        assert_eq!(
+            err.contains("try scheme.friction.solver = \"auto\""),
+            suggests_auto,
+            "{solver}: {err}"
+        );
+    }
+}
