@@ -239,7 +239,7 @@ pub fn project_on_cone(x: &mut [f64], mu: f64) {
     x[1..].iter_mut().for_each(|t| *t *= s);
 }
 
-fn norm(x: &[f64]) -> f64 {
+pub(super) fn norm(x: &[f64]) -> f64 {
     x.iter().map(|v| v * v).sum::<f64>().sqrt()
 }
 
@@ -272,13 +272,15 @@ pub fn residual(blocks: &[Block], q: &[f64], r: &[f64], u: &[f64]) -> f64 {
             block_error2(&r[s.clone()], &u[s], b.mu)
         })
         .sum();
+    relative(e2.sqrt(), blocks, q, r, u)
+}
+
+/// `e / max(‖q‖, ‖r‖, ‖u‖)` over the rows of `blocks` (no division when that maximum is
+/// at most machine epsilon), the scale of Siconos' residual.
+fn relative(e: f64, blocks: &[Block], q: &[f64], r: &[f64], u: &[f64]) -> f64 {
     let k = blocks.last().map_or(0, |b| b.offset + b.dim);
     let scale = norm(&q[..k]).max(norm(&r[..k])).max(norm(&u[..k]));
-    if scale <= f64::EPSILON {
-        e2.sqrt()
-    } else {
-        e2.sqrt() / scale
-    }
+    if scale <= f64::EPSILON { e } else { e / scale }
 }
 
 /// Where [`residual`] is at most `tol`, raises it to the take-off error
@@ -292,7 +294,6 @@ pub fn checked_residual(blocks: &[Block], q: &[f64], r: &[f64], u: &[f64], tol: 
     if res.is_nan() || res > tol {
         return res;
     }
-    let k = blocks.last().map_or(0, |b| b.offset + b.dim);
     let worst = blocks
         .iter()
         .filter(|b| r[b.offset] <= 0.0 && u[b.offset] < 0.0)
@@ -301,12 +302,20 @@ pub fn checked_residual(blocks: &[Block], q: &[f64], r: &[f64], u: &[f64], tol: 
     if worst == 0.0 {
         return res;
     }
-    let scale = norm(&q[..k]).max(norm(&r[..k])).max(norm(&u[..k]));
-    res.max(if scale <= f64::EPSILON {
-        worst
-    } else {
-        worst / scale
-    })
+    res.max(relative(worst, blocks, q, r, u))
+}
+
+/// `u = W r + q` from scratch and the residual ([`checked_residual`] at `tol`).
+pub(super) fn full_residual<W: DelassusOperator + ?Sized>(
+    prob: &FrictionProblem<'_, W>,
+    r: &[f64],
+    u: &mut [f64],
+    tol: f64,
+) -> f64 {
+    let k = prob.blocks.last().map_or(0, |b| b.offset + b.dim);
+    u[..k].copy_from_slice(&prob.q[..k]);
+    prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
+    checked_residual(prob.blocks, prob.q, &r[..k], &u[..k], tol)
 }
 
 /// The velocity accuracy of a solution, in m/s: the largest over the blocks of
@@ -360,6 +369,8 @@ pub struct FrictionSolver {
     col: Vec<f64>,
     pub(super) qreg: Vec<f64>,
     rprev: Vec<f64>,
+    /// The caller's start `r` (`auto` restarts its last stage from it).
+    start: Vec<f64>,
     one_step: bool,
     /// NSGS leaves when its rate cannot reach the tolerance within its cap (`auto`'s
     /// first stage in one-step problems).
@@ -377,6 +388,7 @@ impl FrictionSolver {
             col: vec![0.0; capacity],
             qreg: vec![0.0; capacity],
             rprev: vec![0.0; capacity],
+            start: vec![0.0; capacity],
             one_step: false,
             give_up_early: false,
             inconsistent: 0,
@@ -466,7 +478,7 @@ impl FrictionSolver {
                 };
                 // the proximal Newton restarts from the caller's start: from NSGS's
                 // iterate it spent 2 180 iterations on Capsules-i125-1213 against 13
-                self.rprev[..k].copy_from_slice(&r[..k]);
+                self.start[..k].copy_from_slice(&r[..k]);
                 self.give_up_early = self.one_step;
                 let mut info = nsgs(self, first.min(params.max_iterations), r, u);
                 self.give_up_early = false;
@@ -495,7 +507,7 @@ impl FrictionSolver {
                 info = next;
                 if !info.converged && spent < params.max_iterations {
                     let (r0, res0) = (r[..k].to_vec(), info.residual);
-                    r[..k].copy_from_slice(&self.rprev[..k]);
+                    r[..k].copy_from_slice(&self.start[..k]);
                     let mut next = newton(self, NewtonMode::Proximal, &left(spent), r, u);
                     next.iterations += spent;
                     if next.residual.is_nan() || next.residual > res0 {
@@ -542,7 +554,7 @@ impl FrictionSolver {
         let mut sigma = wmax;
         let mut total = 0;
         let mut outer = 0;
-        let mut res = self.full_residual(prob, r, u, params.tol);
+        let mut res = full_residual(&prob, r, u, params.tol);
         while res > params.tol && total < params.max_iterations {
             outer += 1;
             self.rprev[..k].copy_from_slice(&r[..k]);
@@ -557,7 +569,7 @@ impl FrictionSolver {
             // problem already solved must not let the loop run uncounted (the cap
             // bounds the outer iterations too)
             total += it.max(1);
-            res = self.full_residual(prob, r, u, params.tol);
+            res = full_residual(&prob, r, u, params.tol);
             let step: f64 = (0..k)
                 .map(|i| (r[i] - self.rprev[i]).powi(2))
                 .sum::<f64>()
@@ -575,20 +587,6 @@ impl FrictionSolver {
             solver: FrictionSolverKind::Prox,
             ..FrictionInfo::default()
         }
-    }
-
-    /// `u = W r + q` from scratch and the residual ([`checked_residual`] at `tol`).
-    fn full_residual<W: DelassusOperator + ?Sized>(
-        &self,
-        prob: FrictionProblem<'_, W>,
-        r: &[f64],
-        u: &mut [f64],
-        tol: f64,
-    ) -> f64 {
-        let k = prob.blocks.last().map_or(0, |b| b.offset + b.dim);
-        u[..k].copy_from_slice(&prob.q[..k]);
-        prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
-        checked_residual(prob.blocks, prob.q, r, u, tol)
     }
 
     /// NSGS on `(W + σI, qreg)` where `qreg` is already in `self.qreg`, to `tol` within
@@ -1013,11 +1011,10 @@ mod tests {
             dim: 2,
             mu: 0.5,
         }];
-        let w = [1.0, 2.0, 2.0, 1.0];
-        let op = DenseOperator::new(2, &w);
-        let (mut r, mut u) = ([0.0; 2], [0.0; 2]);
-        let info = FrictionSolver::with_capacity(2)
-            .solve(
+        let solve = |w: &[f64; 4]| {
+            let op = DenseOperator::new(2, w);
+            let (mut r, mut u) = ([0.0; 2], [0.0; 2]);
+            FrictionSolver::with_capacity(2).solve(
                 FrictionProblem {
                     w: &op,
                     q: &[-1.0, 0.5],
@@ -1027,22 +1024,10 @@ mod tests {
                 &mut r,
                 &mut u,
             )
-            .unwrap();
+        };
+        let info = solve(&[1.0, 2.0, 2.0, 1.0]).unwrap();
         assert!(info.inconsistent_local_solves > 0, "{info:?}");
-        let w0 = [0.0, 0.0, 0.0, 1.0];
-        let op = DenseOperator::new(2, &w0);
-        let err = FrictionSolver::with_capacity(2)
-            .solve(
-                FrictionProblem {
-                    w: &op,
-                    q: &[-1.0, 0.5],
-                    blocks: &blocks,
-                },
-                &params,
-                &mut r,
-                &mut u,
-            )
-            .unwrap_err();
+        let err = solve(&[0.0, 0.0, 0.0, 1.0]).unwrap_err();
         assert!(
             matches!(err, SolveError::NonPositiveDiagonal { row: 0, .. }),
             "{err}"

@@ -33,7 +33,9 @@
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 
-use super::friction::{Block, FrictionInfo, FrictionParams, FrictionProblem, FrictionSolver};
+use super::friction::{
+    Block, FrictionInfo, FrictionParams, FrictionProblem, FrictionSolver, full_residual, norm,
+};
 use crate::delassus::DelassusOperator;
 
 /// Which Newton method runs (module doc).
@@ -264,58 +266,51 @@ impl<'p, 'a, W: DelassusOperator + ?Sized> Newton<'p, 'a, W> {
         0.5 * phi[..k].iter().map(|x| x * x).sum::<f64>()
     }
 
-    /// `J[row, c]` for row `o_α + i` of block α: `Σ_l B_α[i,l] (W + σI)[o_α+l, c] +
-    /// A_α[i, c − o_α]`.
-    fn entry(&self, al: usize, i: usize, c: usize, sigma: f64) -> f64 {
-        let blk = &self.prob.blocks[al];
-        let (o, d) = (blk.offset, blk.dim);
-        let (a, b) = (&self.a[al], &self.b[al]);
-        let mut v = 0.0;
-        for l in 0..d {
-            let wv = self.wd[o + l + c * self.k] + if o + l == c { sigma } else { 0.0 };
-            v += b[i * d + l] * wv;
-        }
-        if c >= o && c < o + d {
-            v += a[i * d + (c - o)];
-        }
-        v
-    }
-
     /// Solves `J dir = rhs` in place (the `A_α`, `B_α` of the last [`Newton::eval`]);
     /// false when `J` is singular.
     fn solve(&mut self, sigma: f64, dir: &mut [f64]) -> bool {
-        let k = self.k;
-        match &self.jac {
-            Jacobian::Dense(_) => {
-                let Jacobian::Dense(mut j) =
-                    std::mem::replace(&mut self.jac, Jacobian::Dense(Vec::new()))
-                else {
-                    unreachable!()
-                };
+        let Newton {
+            prob,
+            k,
+            wd,
+            a,
+            b,
+            jac,
+            block_of_row,
+            ..
+        } = self;
+        let (k, blocks) = (*k, prob.blocks);
+        // J[row, c] for row o_α + i of block α: Σ_l B_α[i,l] (W + σI)[o_α+l, c] +
+        // A_α[i, c − o_α]
+        let entry = |al: usize, i: usize, c: usize| {
+            let (o, d) = (blocks[al].offset, blocks[al].dim);
+            let mut v = 0.0;
+            for l in 0..d {
+                let wv = wd[o + l + c * k] + if o + l == c { sigma } else { 0.0 };
+                v += b[al][i * d + l] * wv;
+            }
+            if c >= o && c < o + d {
+                v += a[al][i * d + (c - o)];
+            }
+            v
+        };
+        match jac {
+            Jacobian::Dense(j) => {
                 for c in 0..k {
                     for row in 0..k {
-                        let al = self.block_of_row[row];
-                        let i = row - self.prob.blocks[al].offset;
-                        j[row + c * k] = self.entry(al, i, c, sigma);
+                        let al = block_of_row[row];
+                        j[row + c * k] = entry(al, row - blocks[al].offset, c);
                     }
                 }
-                crate::linalg::dense_lu_solve(&mut j, k, dir);
-                self.jac = Jacobian::Dense(j);
-                dir.iter().all(|x| x.is_finite())
+                crate::linalg::dense_lu_solve(j, k, dir);
             }
-            Jacobian::Sparse(_) => {
-                let Jacobian::Sparse(mut sp) =
-                    std::mem::replace(&mut self.jac, Jacobian::Dense(Vec::new()))
-                else {
-                    unreachable!()
-                };
+            Jacobian::Sparse(sp) => {
                 let mut pos = 0;
-                for (be, bb) in self.prob.blocks.iter().enumerate() {
-                    for j in 0..bb.dim {
-                        let c = bb.offset + j;
+                for (be, bb) in blocks.iter().enumerate() {
+                    for c in bb.offset..bb.offset + bb.dim {
                         for &al in &sp.block_rows[be] {
-                            for i in 0..self.prob.blocks[al].dim {
-                                sp.values[pos] = self.entry(al, i, c, sigma);
+                            for i in 0..blocks[al].dim {
+                                sp.values[pos] = entry(al, i, c);
                                 pos += 1;
                             }
                         }
@@ -324,19 +319,15 @@ impl<'p, 'a, W: DelassusOperator + ?Sized> Newton<'p, 'a, W> {
                 let sym =
                     SymbolicSparseColMatRef::new_checked(k, k, &sp.col_ptr, None, &sp.row_idx);
                 let mat = SparseColMatRef::new(sym, &sp.values);
-                let ok = match Lu::try_new_with_symbolic(sp.symbolic.clone(), mat) {
-                    Ok(lu) => {
-                        use faer::linalg::solvers::SolveCore;
-                        let rhs = faer::MatMut::from_column_major_slice_mut(&mut dir[..k], k, 1);
-                        lu.solve_in_place_with_conj(faer::Conj::No, rhs);
-                        dir.iter().all(|x| x.is_finite())
-                    }
-                    Err(_) => false,
+                let Ok(lu) = Lu::try_new_with_symbolic(sp.symbolic.clone(), mat) else {
+                    return false;
                 };
-                self.jac = Jacobian::Sparse(sp);
-                ok
+                use faer::linalg::solvers::SolveCore;
+                let rhs = faer::MatMut::from_column_major_slice_mut(&mut dir[..k], k, 1);
+                lu.solve_in_place_with_conj(faer::Conj::No, rhs);
             }
         }
+        dir.iter().all(|x| x.is_finite())
     }
 
     fn is_sparse(&self) -> bool {
@@ -372,10 +363,6 @@ fn block_rho(wd: &[f64], k: usize, b: &Block, mode: NewtonMode) -> (f64, f64) {
             (1.0 / norm, 1.0 / norm)
         }
     }
-}
-
-fn norm(x: &[f64]) -> f64 {
-    x.iter().map(|v| v * v).sum::<f64>().sqrt()
 }
 
 /// What the Newton loop on one (regularized) problem ended with.
@@ -500,19 +487,6 @@ impl Buffers {
     }
 }
 
-/// `u = W r + q` from scratch and Siconos' residual.
-fn full_residual<W: DelassusOperator + ?Sized>(
-    prob: &FrictionProblem<'_, W>,
-    k: usize,
-    r: &[f64],
-    u: &mut [f64],
-    tol: f64,
-) -> f64 {
-    u[..k].copy_from_slice(&prob.q[..k]);
-    prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
-    super::friction::checked_residual(prob.blocks, prob.q, &r[..k], &u[..k], tol)
-}
-
 impl FrictionSolver {
     /// The global Newton methods (module doc); `r` holds the start and gets the best
     /// iterate met (by residual), `u` its `W r + q`. `sparse` in the result tells which
@@ -529,7 +503,7 @@ impl FrictionSolver {
         let mut nw = Newton::new(&prob, k, mode);
         let mut bufs = Buffers::new(k);
         let mut best = r[..k].to_vec();
-        let mut res = full_residual(&prob, k, r, u, params.tol);
+        let mut res = full_residual(&prob, r, u, params.tol);
         let mut best_res = if res.is_finite() { res } else { f64::INFINITY };
         let (mut iterations, mut outer) = (0usize, 0usize);
         match mode {
@@ -550,7 +524,7 @@ impl FrictionSolver {
                     best_res = bufs.best_res;
                     best.copy_from_slice(&bufs.best);
                 }
-                res = full_residual(&prob, k, r, u, params.tol);
+                res = full_residual(&prob, r, u, params.tol);
                 if res.is_finite() && res < best_res {
                     best.copy_from_slice(&r[..k]);
                 }
@@ -600,7 +574,7 @@ impl FrictionSolver {
                         iterations += it;
                         moved = true;
                     }
-                    res = full_residual(&prob, k, r, u, params.tol);
+                    res = full_residual(&prob, r, u, params.tol);
                     if res.is_finite() && res < best_res {
                         best_res = res;
                         best.copy_from_slice(&r[..k]);
@@ -622,7 +596,7 @@ impl FrictionSolver {
         }
         // the best iterate met
         r[..k].copy_from_slice(&best);
-        let res = full_residual(&prob, k, r, u, params.tol);
+        let res = full_residual(&prob, r, u, params.tol);
         (
             FrictionInfo {
                 iterations,
