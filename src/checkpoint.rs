@@ -15,7 +15,8 @@
 //!   number of frames written, whose times the resumed run reads back from the `.pvd`);
 //!   on resume the CSV is cut to those bytes and the HDF5 datasets to those rows and
 //!   frames, then appended to. Nothing in it grows with the number of steps (version
-//!   3: version 2 held the per-step force trace and every frame's time).
+//!   3: version 2 held the per-step force trace and every frame's time). Version 4
+//!   adds the friction fallback and complementarity fallback counters.
 //!
 //! What a checkpoint guards (since version 2): the build that wrote it, the output directory it
 //! belongs to, and the size and SHA-256 of every input file (the scene file and its mesh
@@ -39,7 +40,7 @@ use crate::error::Error;
 /// The format name in every checkpoint.
 pub const FORMAT: &str = "signorini-checkpoint";
 /// The format version this build writes and reads.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 /// The checkpoint's file name in a run directory.
 pub const FILE: &str = "checkpoint.json";
 
@@ -167,12 +168,14 @@ pub struct RunState {
     pub lcp_res: Bits,
     /// Largest violation.
     pub violation: Bits,
-    /// Friction statistics: solves, sweeps, largest sweeps, steps with a solve, caps.
-    pub friction_counts: [usize; 5],
+    /// Friction statistics: solves, sweeps, largest sweeps, steps with a solve, caps,
+    /// solves past NSGS.
+    pub friction_counts: [usize; 6],
     /// Friction residual sum and maximum.
     pub friction_residual: [Bits; 2],
-    /// Coupled position solves, stagnated Newton loops, steps with held rows.
-    pub newton_loops: [usize; 3],
+    /// Coupled position solves, stagnated Newton loops, steps with held rows,
+    /// complementarity fallbacks of Algorithm 2.
+    pub newton_loops: [usize; 4],
     /// The per-step force trace (empty beyond `FORCE_TRACE_MAX_STEPS`).
     pub trace: Option<Floats>,
     /// First step with a positive impulse.

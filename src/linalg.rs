@@ -742,18 +742,27 @@ impl std::fmt::Debug for DenseLu {
 }
 
 impl DenseLu {
-    /// Scratch for matrices of up to `capacity` rows.
+    /// Scratch for matrices of up to `capacity` rows. Factors one identity of up to
+    /// 128 rows on the way: faer's matrix-product kernels read the CPU's cache sizes
+    /// from `/sys` (allocating) on their first call in the process, which must not be
+    /// the step loop's first solve.
     pub fn with_capacity(capacity: usize) -> Self {
         use faer::linalg::lu::partial_pivoting::{factor, solve};
         let c = capacity.max(1);
         let req = factor::lu_in_place_scratch::<usize, f64>(c, c, Par::Seq, Default::default())
             .or(solve::solve_in_place_scratch::<usize, f64>(c, 1, Par::Seq));
-        DenseLu {
+        let mut lu = DenseLu {
             capacity,
             perm: vec![0; c],
             perm_inv: vec![0; c],
             mem: MemBuffer::new(req),
-        }
+        };
+        let w = capacity.min(128);
+        let mut eye = vec![0.0; w * w];
+        (0..w).for_each(|i| eye[i + i * w] = 1.0);
+        let mut b = vec![1.0; w];
+        lu.solve(&mut eye, w, &mut b);
+        lu
     }
 
     /// Rows this workspace takes.

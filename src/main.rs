@@ -119,9 +119,14 @@ struct FclibArgs {
     /// The friction solver.
     #[arg(long, value_enum, default_value = "auto")]
     solver: signorini::solvers::friction::FrictionSolverKind,
-    /// Residual to reach (Siconos' natural-map error, relative).
+    /// Residual to reach (relative; see --residual).
     #[arg(long, default_value_t = 1e-8)]
     tol: f64,
+    /// Which residual: `siconos` (Siconos' natural-map error on De Saxcé's velocity,
+    /// comparable with Siconos' figures) or `velocity` (Alart–Curnier's map, each contact
+    /// scaled to m/s by its W_NN: what the schemes stop on).
+    #[arg(long, default_value = "siconos", value_parser = ["siconos", "velocity"])]
+    residual: String,
     /// Cap on NSGS sweeps (over all proximal iterations for prox).
     #[arg(long, default_value_t = 20000)]
     max_iter: usize,
@@ -569,7 +574,9 @@ fn fclib(a: &FclibArgs) -> Result<bool, signorini::Error> {
             "must be in [1, 1000000]",
         ));
     }
-    let sol = signorini::io::fclib::solve_repeated(&prob, &params, a.warm, a.repeat)?;
+    let measure =
+        signorini::solvers::friction::Measure::parse(&a.residual).expect("clap checked the name");
+    let sol = signorini::io::fclib::solve_repeated(&prob, &params, measure, a.warm, a.repeat)?;
     out!("problem             {} ({})", a.file.display(), prob.form);
     out!(
         "size                {} contacts in {}-D, {} rows; μ in [{}, {}]; W asymmetry {:.1e}",
@@ -581,9 +588,10 @@ fn fclib(a: &FclibArgs) -> Result<bool, signorini::Error> {
         prob.asymmetry
     );
     out!(
-        "solver              {} (tol {:e}, cap {} sweeps{})",
+        "solver              {} (tol {:e} on the {} residual, cap {} sweeps{})",
         sol.solver,
         a.tol,
+        sol.measure.name(),
         a.max_iter,
         if a.warm && prob.guess.is_some() {
             ", warm start from /guesses/1"
@@ -713,18 +721,20 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
         s.caps_hit
     );
     let l = &s.newton_loops;
-    if l.coupled_solves + l.stalls + l.steps_with_held_rows > 0 {
+    if l.coupled_solves + l.stalls + l.steps_with_held_rows + l.complementarity_fallbacks > 0 {
         out!(
-            "newton loops        {} coupled position solves, {} stalls within √tol, {} steps with held rows",
+            "newton loops        {} coupled position solves, {} stalls within √tol, {} steps with held rows, {} rounds redone with complementarity",
             l.coupled_solves,
             l.stalls,
-            l.steps_with_held_rows
+            l.steps_with_held_rows,
+            l.complementarity_fallbacks
         );
     }
     if let Some(f) = &s.friction {
         out!(
-            "friction            {} solves, {:.2} sweeps each (max {} in a step), residual mean {:.2e} max {:.2e}; caps hit {}",
+            "friction            {} solves ({} past NSGS), {:.2} sweeps each (max {} in a step), residual mean {:.2e} max {:.2e}; caps hit {}",
             f.solves,
+            f.fallbacks,
             f.sweeps_mean,
             f.sweeps_max_per_step,
             f.residual_mean,

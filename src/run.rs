@@ -85,10 +85,12 @@ pub struct FrictionSummary {
     pub sweeps_max_per_step: usize,
     /// Mean over the steps with a friction solve of the step's largest final residual.
     pub residual_mean: f64,
-    /// Largest final residual (Siconos' natural-map error).
+    /// Largest final residual (the velocity residual of `solvers::friction`).
     pub residual_max: f64,
     /// Solves that hit the sweep cap (counted in `caps_hit` too).
     pub caps_hit: usize,
+    /// Solves NSGS did not finish (finished by `auto`'s Newton or PROX fallback).
+    pub fallbacks: usize,
 }
 
 /// Measured contact response with its analytic counterpart.
@@ -128,6 +130,9 @@ pub struct NewtonLoops {
     pub stalls: usize,
     /// Steps that ended with a row held at g = 0 with P = 0 and τ < 0.
     pub steps_with_held_rows: usize,
+    /// Algorithm 2: index-set rounds redone with Algorithm 1's position rule because
+    /// the combined rule capped or held rows (`StepStats::complementarity_fallbacks`).
+    pub complementarity_fallbacks: usize,
 }
 
 /// Everything a run reports (`summary.json`).
@@ -215,8 +220,9 @@ struct Acc {
     fr_res_max: f64,
     fr_steps: usize,
     fr_caps: usize,
+    fr_fallbacks: usize,
     /// Coupled position solves, stagnated Newton loops, steps with held rows.
-    loops: [usize; 3],
+    loops: [usize; 4],
 }
 
 impl Acc {
@@ -235,6 +241,7 @@ impl Acc {
         self.loops[0] += s.coupled_solves;
         self.loops[1] += s.newton_stalls;
         self.loops[2] += usize::from(s.held_rows > 0);
+        self.loops[3] += s.complementarity_fallbacks;
         if s.friction_solves > 0 {
             self.fr_solves += s.friction_solves;
             self.fr_sweeps += s.friction_iterations;
@@ -243,6 +250,7 @@ impl Acc {
             self.fr_res_max = self.fr_res_max.max(s.friction_residual);
             self.fr_steps += 1;
             self.fr_caps += s.friction_caps;
+            self.fr_fallbacks += s.friction_fallbacks;
         }
         self.lcp_res = self.lcp_res.max(s.lcp_residual);
         self.violation = self.violation.max(s.max_violation);
@@ -255,6 +263,7 @@ impl Acc {
             residual_mean: self.fr_res_sum / self.fr_steps.max(1) as f64,
             residual_max: self.fr_res_max,
             caps_hit: self.fr_caps,
+            fallbacks: self.fr_fallbacks,
         })
     }
     fn iterations(&self, steps: usize) -> Iterations {
@@ -793,6 +802,7 @@ impl RunObserver {
                 a.fr_sweeps_max,
                 a.fr_steps,
                 a.fr_caps,
+                a.fr_fallbacks,
             ],
             friction_residual: [Bits(a.fr_res_sum), Bits(a.fr_res_max)],
             newton_loops: a.loops,
@@ -835,6 +845,7 @@ impl RunObserver {
             a.fr_sweeps_max,
             a.fr_steps,
             a.fr_caps,
+            a.fr_fallbacks,
         ] = r.friction_counts;
         (a.fr_res_sum, a.fr_res_max) = (r.friction_residual[0].0, r.friction_residual[1].0);
         a.loops = r.newton_loops;
@@ -1094,6 +1105,7 @@ pub fn run_checkpointed(
             coupled_solves: acc.loops[0],
             stalls: acc.loops[1],
             steps_with_held_rows: acc.loops[2],
+            complementarity_fallbacks: acc.loops[3],
         },
         friction: acc.friction(s.tangent_dim > 0),
         max_lcp_residual: acc.lcp_res,

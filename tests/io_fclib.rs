@@ -114,6 +114,45 @@ fn every_dat_problem_is_solved_to_1e8_by_auto() {
     }
 }
 
+/// The step loop's velocity residual (issue 16 §2: Alart–Curnier's map per block scaled
+/// to m/s by its `W_NN`, which μ does not amplify) on the same real problems: `auto`
+/// stopping on it reaches 1e-8 on every `.dat` file, and the residual recomputed from
+/// the returned `r` by `friction::velocity_residual` agrees with the report to 1e-12
+/// (the two differ only by the summation order of `W r`).
+#[test]
+fn every_dat_problem_is_solved_to_1e8_on_the_velocity_residual() {
+    use signorini::delassus::DenseOperator;
+    use signorini::solvers::friction::{Block, Measure, velocity_residual};
+    let mut names: Vec<String> = std::fs::read_dir(data(""))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".dat"))
+        .collect();
+    names.sort();
+    for name in &names {
+        let p = fclib::read(&data(name)).unwrap();
+        let params = params(FrictionSolverKind::Auto, 1e-8);
+        let s = fclib::solve_repeated(&p, &params, Measure::Velocity, false, 1).unwrap();
+        assert!(s.converged && s.residual <= 1e-8, "{name}: {s:?}");
+        assert_eq!(s.measure, Measure::Velocity);
+        let n = p.rows();
+        let blocks: Vec<Block> = (0..p.contacts())
+            .map(|a| Block {
+                offset: a * p.dim,
+                dim: p.dim,
+                mu: p.mu[a],
+            })
+            .collect();
+        let op = DenseOperator::new(n, &p.w);
+        let own = velocity_residual(&op, &blocks, &p.q, &s.r, &s.u);
+        assert!(
+            (own - s.residual).abs() <= 1e-12,
+            "{name}: {own} vs {}",
+            s.residual
+        );
+    }
+}
+
 /// De Saxcé's complementarity accepts `r = 0` with `u_N < 0` when `μ‖u_T‖` is large:
 /// `W = I`, `q = (−1, 10, 0)`, `μ = 3` reads residual 0 at `r = 0` by Siconos' measure.
 /// Coulomb's law wants the slip solution `r = (1, −3, 0)·…` with `u_N = 0`: every solver
@@ -330,6 +369,19 @@ fn fclib_command_writes_the_solution_and_exits_1_on_a_cap() {
         assert!(j.get(key).is_some(), "{key} missing in {j}");
     }
     assert_eq!(j["r"].as_array().unwrap().len(), 3);
+    assert_eq!(j["measure"], "siconos");
+    // the step loop's residual on request, named in the output and the JSON
+    let st = std::process::Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .args(["fclib"])
+        .arg(data("FrictionContact3D_RR_1c.dat"))
+        .args(["--residual", "velocity", "--solution"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(st.status.success());
+    assert!(String::from_utf8_lossy(&st.stdout).contains("on the velocity residual"));
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(j["measure"], "velocity");
     let st = std::process::Command::new(env!("CARGO_BIN_EXE_signorini"))
         .args(["fclib"])
         .arg(data("FC2D_SliderCrankLagrangian00000.dat"))

@@ -197,3 +197,37 @@ fn coupled_position_solves_do_not_allocate() {
         }
     }
 }
+
+/// `auto`'s Newton fallback in the step loop and Algorithm 2's complementarity rounds
+/// (issue 16 §2, large μ): the shipped sliding block launched at 1 m/s with μ = 1e6,
+/// where NSGS and PROX cycle on the first step and the dense Newton methods finish, and
+/// with μ = 1e3, where the combined rule's Newton loop cycles on the first step and the
+/// round is redone with complementarity. Both must run (asserted) without allocating.
+#[test]
+fn large_friction_fallbacks_do_not_allocate() {
+    use signorini::scene::file::Scene;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/sliding_block.toml");
+    let text = std::fs::read_to_string(path).unwrap();
+    for mu in [1e6, 1e3] {
+        let scene =
+            Scene::from_toml(&text.replace("friction = 0.3", &format!("friction = {mu:?}")))
+                .unwrap();
+        let (model, _) = scene.build().unwrap();
+        let mut integ = model.into_integrator(&scene.scheme, scene.time.dt).unwrap();
+        let (mut friction_fallbacks, mut rounds_redone) = (0, 0);
+        let before = ALLOCS.with(|c| c.get());
+        for _ in 0..50 {
+            let st = integ.step().unwrap();
+            assert_eq!(st.caps_hit, 0, "μ = {mu}");
+            friction_fallbacks += st.friction_fallbacks;
+            rounds_redone += st.complementarity_fallbacks;
+        }
+        let n = ALLOCS.with(|c| c.get()) - before;
+        assert_eq!(n, 0, "μ = {mu}: allocated {n} times");
+        if mu == 1e6 {
+            assert!(friction_fallbacks > 0, "μ = {mu}: no Newton fallback ran");
+        } else {
+            assert!(rounds_redone > 0, "μ = {mu}: no complementarity round ran");
+        }
+    }
+}

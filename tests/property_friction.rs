@@ -4,7 +4,8 @@
 //! in 2-D and 3-D, with frictionless blocks mixed in.
 //!
 //! Checked on every problem:
-//! - the solver reports convergence and Siconos' residual ≤ 1e-10 (the tolerance asked):
+//! - the solver reports convergence and its residual ≤ 1e-10 (the tolerance asked), both
+//!   Siconos' (one-step solvers) and the velocity residual (the step loop's solvers):
 //!   NSGS, PROX and Newton for μ ≤ 0.5; for μ up to 1.5 the Newton solver (NSGS is not
 //!   guaranteed to converge for large μ — Coulomb's law is not associated — and CI found
 //!   a 2-D case with μ ≈ 1.1 where it cycles at a residual of 0.09, pinned below);
@@ -17,7 +18,8 @@
 use proptest::prelude::*;
 use signorini::delassus::DenseOperator;
 use signorini::solvers::friction::{
-    Block, FrictionParams, FrictionProblem, FrictionSolver, FrictionSolverKind, residual,
+    Block, FrictionParams, FrictionProblem, FrictionSolver, FrictionSolverKind, Measure, residual,
+    velocity_residual,
 };
 
 fn spd(k: usize, a: &[f64]) -> Vec<f64> {
@@ -37,9 +39,25 @@ fn solve(
     q: &[f64],
     blocks: &[Block],
 ) -> (Vec<f64>, Vec<f64>, f64) {
+    solve_measured(kind, Measure::Siconos, w, q, blocks)
+}
+
+/// As [`solve`], stopping on `measure` (Siconos': the one-step solver; velocity: the
+/// step loop's).
+fn solve_measured(
+    kind: FrictionSolverKind,
+    measure: Measure,
+    w: &[f64],
+    q: &[f64],
+    blocks: &[Block],
+) -> (Vec<f64>, Vec<f64>, f64) {
     let k = q.len();
     let op = DenseOperator::new(k, w);
-    let mut s = FrictionSolver::with_capacity(k);
+    let mut s = match measure {
+        Measure::Siconos => FrictionSolver::for_one_step(k),
+        Measure::Velocity => FrictionSolver::with_capacity(k),
+    };
+    assert_eq!(s.measure(), measure);
     let (mut r, mut u) = (vec![0.0; k], vec![0.0; k]);
     let params = FrictionParams {
         solver: kind,
@@ -123,12 +141,18 @@ proptest! {
         let q = &q[..k];
         let mut us = Vec::new();
         for kind in [FrictionSolverKind::Nsgs, FrictionSolverKind::Prox, FrictionSolverKind::Newton] {
-            let (r, u, res) = solve(kind, &w, q, &bl);
-            prop_assert!(res <= 1e-10);
-            // the residual function agrees with the solver's report
-            prop_assert!((residual(&bl, q, &r, &u) - res).abs() <= 1e-12);
-            check_cone(&bl, q, &r, &u);
-            us.push(u);
+            for measure in [Measure::Siconos, Measure::Velocity] {
+                let (r, u, res) = solve_measured(kind, measure, &w, q, &bl);
+                prop_assert!(res <= 1e-10);
+                // the residual function agrees with the solver's report
+                let own = match measure {
+                    Measure::Siconos => residual(&bl, q, &r, &u),
+                    Measure::Velocity => velocity_residual(&DenseOperator::new(k, &w), &bl, q, &r, &u),
+                };
+                prop_assert!((own - res).abs() <= 1e-12, "{measure:?}: {own} vs {res}");
+                check_cone(&bl, q, &r, &u);
+                us.push(u);
+            }
         }
         let scale = us[0].iter().fold(1.0_f64, |a, x| a.max(x.abs()));
         // μ ≤ 0.5 with an SPD W: u is unique in practice, the three solvers agree
@@ -205,6 +229,7 @@ fn regression_nsgs_cycles_at_large_mu_and_newton_solves_it() {
                 blocks: &bl,
             },
             &FrictionParams {
+                solver: FrictionSolverKind::Nsgs,
                 tol: 1e-10,
                 max_iterations: 20_000,
                 ..FrictionParams::default()

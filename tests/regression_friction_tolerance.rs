@@ -65,16 +65,24 @@ fn friction_tolerances_above_1e_4_or_not_positive_are_refused() {
 }
 
 /// Large friction coefficients (issue 16 §2: μ = 1e3 and 1e6 failed the sliding block at
-/// step 1). The 3-D local solve now tries the exact stick solution first; with NSGS the
-/// shipped block (damped, h = 2e-4) launched at 1 m/s runs with μ = 1, 10, 100 and 300
-/// with no cap (before: the cap at step 1 from μ = 10 on), and at μ = 1 its centre of
-/// mass travels v0²/(2 μ g) within 1 % (measured 0.2 %). From μ = 10 on the base stops
-/// within the first 50 steps while the soft block (E = 1e7) swings on: the centre of
-/// mass then ends 8 mm behind its start at μ = 10 (not investigated further; the closed
-/// form of a rigid block does not hold), so only the run is asserted there.
+/// step 1). The 3-D local solve tries the exact stick solution first; the shipped block
+/// (damped, h = 2e-4) launched at 1 m/s runs under Algorithm 2 with every μ of the
+/// documented range's decades, 1 to 1e6, with no cap, and at μ = 1 its centre of mass
+/// travels v0²/(2 μ g) within 1 % (measured 0.2 %). Three causes were removed, each
+/// counted as data: from μ = 1e3 the combined rule's Newton loop cycled on the first
+/// step (the round is redone with complementarity, `complementarity_fallbacks`); from
+/// μ = 1e5 NSGS and PROX cycle (the dense Newton methods finish, `friction_fallbacks`);
+/// and Siconos' residual multiplies the round-off of `u_T` by μ (the step loop stops on
+/// the velocity residual, whose floor μ ε is the solve's tolerance where larger). From
+/// μ = 10 on the base stops within the first 50 steps while the soft block (E = 1e7)
+/// swings on: the centre of mass then ends 6–8 mm behind its start (the closed form of a
+/// rigid block does not hold), so only the run is asserted there. That backward walk is
+/// the soft block's rocking, not a solver's artefact: at h = 5e-5 Moreau–Jean and
+/// Algorithms 1 and 2 agree on it (−14.7, −14.8 and −15.4 mm at μ = 10; −5.7, −5.4 and
+/// −7.0 mm at μ = 1e6, measured).
 #[test]
 fn large_friction_coefficients_run_and_stop_at_v0_squared_over_2_mu_g() {
-    for mu in [1.0, 10.0, 100.0, 300.0] {
+    for mu in [1.0, 10.0, 100.0, 300.0, 1e3, 1e4, 1e5, 1e6] {
         let path =
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/sliding_block.toml");
         let text = std::fs::read_to_string(path)

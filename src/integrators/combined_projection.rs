@@ -53,7 +53,18 @@ impl Integrator for CombinedProjection {
         loop {
             st.index_set_iterations += 1;
             c.pos_mask.copy_from_slice(&c.vel_mask);
+            let caps = st.caps_hit;
             c.newton(VelocityLaw::Impact, rule, &mut st)?;
+            if st.caps_hit > caps || st.held_rows > 0 {
+                st.caps_hit = caps;
+                st.held_rows = 0;
+                st.complementarity_fallbacks += 1;
+                c.newton(
+                    VelocityLaw::Impact,
+                    PositionRule::AllComplementarity,
+                    &mut st,
+                )?;
+            }
             // activation (eq. 66)
             let mut grew = false;
             for a in 0..c.m {

@@ -66,7 +66,9 @@ use crate::delassus::{Delassus, Op};
 use crate::error::Error;
 use crate::linalg::{SparseMatrix, SpdFactor, spmv_add, sym_spmv_add};
 use crate::model::LinearSystem;
-use crate::solvers::friction::{Block, FrictionParams, FrictionProblem, FrictionSolver};
+use crate::solvers::friction::{
+    Block, FrictionParams, FrictionProblem, FrictionSolver, FrictionSolverKind,
+};
 use crate::solvers::lcp::LcpSolver;
 use crate::solvers::mlcp::Mlcp;
 use crate::solvers::{SolveError, SolveInfo};
@@ -803,6 +805,8 @@ impl ThetaCore {
                             stats.friction_solves += 1;
                             stats.friction_iterations += info.iterations;
                             stats.friction_residual = stats.friction_residual.max(info.residual);
+                            stats.friction_fallbacks +=
+                                usize::from(info.solver != FrictionSolverKind::Nsgs);
                             if !info.converged {
                                 stats.caps_hit += 1;
                                 stats.friction_caps += 1;

@@ -128,8 +128,12 @@ pub struct StepStats {
     pub friction_solves: usize,
     /// NSGS sweeps over all friction problems of the step.
     pub friction_iterations: usize,
-    /// Largest final friction residual of the step (Siconos' natural-map error).
+    /// Largest final friction residual of the step (the velocity residual,
+    /// [`crate::solvers::friction::Measure::Velocity`]).
     pub friction_residual: f64,
+    /// Friction solves of the step that NSGS did not finish (`auto` fell back on the
+    /// Newton methods or PROX; [`crate::solvers::friction::FrictionInfo::solver`]).
+    pub friction_fallbacks: usize,
     /// Friction solves of the step that hit the sweep cap (also in `caps_hit`).
     pub friction_caps: usize,
     /// Coupled position solves (eq. 53–55 on the current contact states) that replaced
@@ -143,6 +147,10 @@ pub struct StepStats {
     /// (eq. 65 had no solution with them as complementarity rows; see
     /// [`core`]'s position problem), in the last index-set round of the step.
     pub held_rows: usize,
+    /// Algorithm 2: index-set rounds redone with Algorithm 1's position rule
+    /// (`0 ≤ g ⊥ τ ≥ 0` on every active row) because the combined rule (eq. 67–70)
+    /// hit the Newton cap or left held rows.
+    pub complementarity_fallbacks: usize,
 }
 
 /// A time integrator for a linear structure with contacts.

@@ -24,6 +24,7 @@
 use std::path::Path;
 
 use crate::error::Error;
+use crate::solvers::friction::Measure;
 
 /// Largest problem (rows of `W`) read into dense storage: 16384² values = 2 GiB.
 pub const MAX_ROWS: usize = 16384;
@@ -674,8 +675,10 @@ pub struct Solution {
     pub r: Vec<f64>,
     /// Velocities `W r + q`, same layout.
     pub u: Vec<f64>,
-    /// Siconos' residual (see [`crate::solvers::friction`]).
+    /// The residual reached, by [`Solution::measure`].
     pub residual: f64,
+    /// Which residual: Siconos' (default) or the step loop's velocity residual.
+    pub measure: crate::solvers::friction::Measure,
     /// NSGS sweeps (summed over the proximal iterations for PROX).
     pub iterations: usize,
     /// Proximal iterations (PROX only).
@@ -698,21 +701,22 @@ pub fn solve(
     params: &crate::solvers::friction::FrictionParams,
     warm: bool,
 ) -> Result<Solution, Error> {
-    solve_repeated(prob, params, warm, 1)
+    solve_repeated(prob, params, Measure::Siconos, warm, 1)
 }
 
-/// As [`solve`], `repeat` times from the same start; `seconds` is the median (warm
-/// caches, as a benchmark in one process measures the other code).
+/// As [`solve`], stopping on `measure`, `repeat` times from the same start; `seconds`
+/// is the median (warm caches, as a benchmark in one process measures the other code).
 pub fn solve_repeated(
     prob: &FrictionContactProblem,
     params: &crate::solvers::friction::FrictionParams,
+    measure: Measure,
     warm: bool,
     repeat: usize,
 ) -> Result<Solution, Error> {
     let mut times = Vec::with_capacity(repeat.max(1));
     let mut last = None;
     for _ in 0..repeat.max(1) {
-        let s = solve_once(prob, params, warm)?;
+        let s = solve_once(prob, params, measure, warm)?;
         times.push(s.seconds);
         last = Some(s);
     }
@@ -725,6 +729,7 @@ pub fn solve_repeated(
 fn solve_once(
     prob: &FrictionContactProblem,
     params: &crate::solvers::friction::FrictionParams,
+    measure: Measure,
     warm: bool,
 ) -> Result<Solution, Error> {
     use crate::delassus::DenseOperator;
@@ -745,7 +750,7 @@ fn solve_once(
         _ => vec![0.0; n],
     };
     let mut u = vec![0.0; n];
-    let mut solver = FrictionSolver::for_one_step(n);
+    let mut solver = FrictionSolver::for_one_step(n).with_measure(measure);
     let op = DenseOperator::new(n, &prob.w);
     let t0 = std::time::Instant::now();
     let info = solver
@@ -765,6 +770,7 @@ fn solve_once(
         r,
         u,
         residual: info.residual,
+        measure,
         iterations: info.iterations,
         prox_iterations: info.prox_iterations,
         converged: info.converged,

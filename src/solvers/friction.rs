@@ -27,11 +27,22 @@
 //!   convergence where NSGS crawls. It forms an `n × n` matrix per iteration, so it is
 //!   for one-step problems (`signorini fclib`), not for the step loop.
 //!
-//! The step loop also reads [`velocity_error`], the same natural map scaled block by
-//! block into m/s, to derive its own tolerances (`integrators::core`).
+//! Two residuals ([`Measure`]), each relative and with `u` recomputed from scratch as
+//! `W r + q`:
 //!
-//! The residual is the one Siconos reports (`fc3d_compute_error`):
-//! `‖r − P_C(r − û)‖ / max(‖q‖, ‖r‖, ‖u‖)`, with `u` recomputed from scratch as `W r + q`.
+//! * Siconos' (`fc3d_compute_error`, one-step problems, so that figures compare):
+//!   `‖r − P_C(r − û)‖ / max(‖q‖, ‖r‖, ‖u‖)` ([`residual`], with the take-off check of
+//!   [`checked_residual`]). It adds impulses to velocities, and through `û` it weighs
+//!   the round-off of `u_T` by μ.
+//! * The velocity residual (the step loop): Alart–Curnier's map of each block at
+//!   `ρ = 1/W_NN`, scaled back to m/s, over `max(‖q‖, ‖u‖, ‖D r‖)`
+//!   ([`velocity_residual`]): one tolerance means the same for a heavy body and a light
+//!   node, and μ does not amplify it. The step loop also reads [`velocity_error`], its
+//!   largest block term in m/s, to derive its own tolerances (`integrators::core`).
+//!
+//! In slip the law pins `r_T = μ r_N` while `u_N` is known to the round-off of `u`, so
+//! no residual falls below about `μ ε`: a solve's tolerance is raised to `μ_max ε` where
+//! that is larger ([`FrictionInfo::tolerance`]).
 //! Tolerance, iteration caps, the iterations and the residual are data
 //! ([`FrictionParams`], [`FrictionInfo`]); a cap hit is flagged in
 //! [`FrictionInfo::converged`] with the residual reached, never a silent stop.
@@ -62,8 +73,9 @@ pub struct Block {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum FrictionSolverKind {
-    /// NSGS first, then the robust methods on what it leaves (default): in the step loop
-    /// PROX, in one-step problems the plain Newton method and then proximal Newton.
+    /// NSGS first, then the robust methods on what it leaves (default): the plain Newton
+    /// method and then proximal Newton (in the step loop on a dense workspace sized at
+    /// set-up, up to [`super::newton::STEP_NEWTON_ROWS`] rows; PROX above).
     /// [`FrictionInfo::solver`] says which one finished.
     #[default]
     Auto,
@@ -94,7 +106,10 @@ impl FrictionSolverKind {
     /// One phrase for `signorini check`.
     pub fn describe(self) -> &'static str {
         match self {
-            FrictionSolverKind::Auto => "NSGS, falling back to proximal point over NSGS",
+            FrictionSolverKind::Auto => {
+                "NSGS, falling back to the global Newton methods (dense, up to 1024 rows) or \
+                 to proximal point over NSGS"
+            }
             FrictionSolverKind::Nsgs => "NSGS with exact local solves",
             FrictionSolverKind::Prox => "proximal point over NSGS",
             FrictionSolverKind::Nsn => "global Alart–Curnier Newton",
@@ -215,6 +230,9 @@ pub struct FrictionInfo {
     /// inconsistent one was kept): 0 unless a `W_αα` is not positive definite or a sign
     /// sits at round-off.
     pub inconsistent_local_solves: usize,
+    /// The tolerance the solve stopped on: the caller's, raised to the round-off floor
+    /// `μ_max ε` where the friction coefficient is that large ([`FrictionSolver::solve`]).
+    pub tolerance: f64,
 }
 
 /// Projection of `x = (x_N, x_T)` on the cone `‖x_T‖ ≤ μ x_N` (in place).
@@ -243,20 +261,14 @@ pub(super) fn norm(x: &[f64]) -> f64 {
     x.iter().map(|v| v * v).sum::<f64>().sqrt()
 }
 
-/// Squared natural-map error of one block: `‖r − P_C(r − û)‖²`.
+/// Squared natural-map error of one block: `‖r − P_C(r − û)‖²`, `û = u + μ‖u_T‖ e_N`.
 fn block_error2(r: &[f64], u: &[f64], mu: f64) -> f64 {
-    natural_map2(r, u, mu, 1.0)
-}
-
-/// `‖r − P_C(r − ρ û)‖²` of one block (`û = u + μ‖u_T‖ e_N`): [`residual`] takes
-/// `ρ = 1`, [`velocity_error`] the block's `1/W_NN`.
-fn natural_map2(r: &[f64], u: &[f64], mu: f64, rho: f64) -> f64 {
     let d = r.len();
     let mut x = [0.0; 3];
     let ut = norm(&u[1..d]);
-    x[0] = r[0] - rho * (u[0] + mu * ut);
+    x[0] = r[0] - (u[0] + mu * ut);
     for i in 1..d {
-        x[i] = r[i] - rho * u[i];
+        x[i] = r[i] - u[i];
     }
     project_on_cone(&mut x[..d], mu);
     (0..d).map(|i| (r[i] - x[i]).powi(2)).sum()
@@ -305,24 +317,89 @@ pub fn checked_residual(blocks: &[Block], q: &[f64], r: &[f64], u: &[f64], tol: 
     res.max(relative(worst, blocks, q, r, u))
 }
 
-/// `u = W r + q` from scratch and the residual ([`checked_residual`] at `tol`).
-pub(super) fn full_residual<W: DelassusOperator + ?Sized>(
-    prob: &FrictionProblem<'_, W>,
+/// `‖Φ_α‖²` of one block's Alart–Curnier map with `ρ` on every row:
+/// `Φ_N = r_N − max(0, r_N − ρ u_N)`, `Φ_T = r_T − P_{B(μ p_N)}(r_T − ρ u_T)` with
+/// `p_N = max(0, r_N − ρ u_N)` (the `Φ` of [`super::newton`]). It states Coulomb's law
+/// itself, not De Saxcé's: a sticking block reads `ρ‖u‖` whatever μ, where the natural
+/// map of [`residual`] reads `‖u + μ‖u_T‖ e_N‖`, `μ` times the round-off of `u_T`
+/// (μ = 1e6: a floor near 1e-10 that no solver can pass), and a block taking off with
+/// `u_N < 0` reads `ρ|u_N|`, so no take-off check is needed.
+fn ac_map2(r: &[f64], u: &[f64], mu: f64, rho: f64) -> f64 {
+    let d = r.len();
+    let xn = r[0] - rho * u[0];
+    let pn = xn.max(0.0);
+    let mut e2 = (r[0] - pn).powi(2);
+    if d == 1 {
+        return e2;
+    }
+    let mut xt = [0.0; 2];
+    for t in 0..d - 1 {
+        xt[t] = r[1 + t] - rho * u[1 + t];
+    }
+    let nx = norm(&xt[..d - 1]);
+    let rad = mu * pn;
+    let f = if nx <= rad { 1.0 } else { rad / nx };
+    for t in 0..d - 1 {
+        e2 += (r[1 + t] - f * xt[t]).powi(2);
+    }
+    e2
+}
+
+/// The residual of the step loop's friction solves, in velocity units and relative:
+/// `(Σ_α ‖Φ_α‖² / ρ_α²)^½ / max(‖q‖, ‖u‖, ‖D r‖)` with [`ac_map2`]'s `Φ_α` at
+/// `ρ_α = 1/W_NN` of the block and `D` the blocks' `W_NN` (`diag`, the 3×3 diagonal
+/// blocks, row-major, indexed by offset). Every term is a velocity, so one tolerance
+/// means the same for a 10 kg body and a 1 mg node, and μ does not amplify the
+/// round-off of `u_T` (module doc of [`residual`]'s difference). Blocks with
+/// `W_NN ≤ 0` read infinitely wrong.
+pub(super) fn velocity_residual_diag(
+    blocks: &[Block],
+    diag: &[[f64; 9]],
+    q: &[f64],
     r: &[f64],
-    u: &mut [f64],
-    tol: f64,
+    u: &[f64],
 ) -> f64 {
-    let k = prob.blocks.last().map_or(0, |b| b.offset + b.dim);
-    u[..k].copy_from_slice(&prob.q[..k]);
-    prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
-    checked_residual(prob.blocks, prob.q, &r[..k], &u[..k], tol)
+    let (mut e2, mut dr2) = (0.0, 0.0);
+    for b in blocks {
+        let s = b.offset..b.offset + b.dim;
+        let wnn = diag[b.offset][0];
+        if wnn.is_nan() || wnn <= 0.0 {
+            return f64::INFINITY;
+        }
+        e2 += ac_map2(&r[s.clone()], &u[s.clone()], b.mu, 1.0 / wnn) * wnn * wnn;
+        dr2 += r[s].iter().map(|x| (wnn * x).powi(2)).sum::<f64>();
+    }
+    let k = blocks.last().map_or(0, |b| b.offset + b.dim);
+    let scale = norm(&q[..k]).max(norm(&u[..k])).max(dr2.sqrt());
+    if scale <= f64::MIN_POSITIVE {
+        e2.sqrt()
+    } else {
+        e2.sqrt() / scale
+    }
+}
+
+/// [`Measure::Velocity`]'s residual of `(r, u)` (`u = W r + q`) for the operator `w`:
+/// the form the step loop's solvers stop on ([`velocity_residual_diag`]).
+pub fn velocity_residual<W: DelassusOperator + ?Sized>(
+    w: &W,
+    blocks: &[Block],
+    q: &[f64],
+    r: &[f64],
+    u: &[f64],
+) -> f64 {
+    let k = blocks.last().map_or(0, |b| b.offset + b.dim);
+    let mut diag = vec![[0.0; 9]; k];
+    for b in blocks {
+        diag[b.offset][0] = w.entry(b.offset, b.offset);
+    }
+    velocity_residual_diag(blocks, &diag, q, r, u)
 }
 
 /// The velocity accuracy of a solution, in m/s: the largest over the blocks of
-/// `‖r − P_C(r − ρ û)‖ / ρ` with `ρ = 1/W_NN` of the block (the natural map with each
-/// block's own scale, so that an impulse error counts by the velocity it makes). Unlike
-/// [`residual`], which adds impulses and velocities, it means the same for a 10 kg body
-/// and a 1 mg node; the step loop derives its Newton stopping floor from it
+/// `‖Φ_α‖ / ρ` with [`ac_map2`]'s Alart–Curnier map at `ρ = 1/W_NN` of the block, so
+/// that an impulse error counts by the velocity it makes. Unlike [`residual`], which
+/// adds impulses and velocities, it means the same for a 10 kg body and a 1 mg node,
+/// and μ does not amplify it; the step loop derives its Newton stopping floor from it
 /// ([`crate::integrators::core`]). Blocks with `W_NN ≤ 0` count as infinitely wrong.
 pub fn velocity_error<W: DelassusOperator + ?Sized>(
     w: &W,
@@ -337,8 +414,7 @@ pub fn velocity_error<W: DelassusOperator + ?Sized>(
         if wnn.is_nan() || wnn <= 0.0 {
             return f64::INFINITY;
         }
-        let rho = 1.0 / wnn;
-        worst = worst.max(natural_map2(&r[s.clone()], &u[s], b.mu, rho).sqrt() / rho);
+        worst = worst.max(ac_map2(&r[s.clone()], &u[s], b.mu, 1.0 / wnn).sqrt() * wnn);
     }
     worst
 }
@@ -371,17 +447,70 @@ pub struct FrictionSolver {
     rprev: Vec<f64>,
     /// The caller's start `r` (`auto` restarts its last stage from it).
     start: Vec<f64>,
-    one_step: bool,
+    pub(super) one_step: bool,
     /// NSGS leaves when its rate cannot reach the tolerance within its cap (`auto`'s
     /// first stage in one-step problems).
     give_up_early: bool,
     /// Local 2-D solves without a consistent case in the current [`FrictionSolver::solve`].
     inconsistent: usize,
+    /// The residual the solves stop on and report.
+    measure: Measure,
+    /// The Newton methods' workspace of the step loop (`auto`'s fallback; sized once).
+    pub(super) newton: Option<Box<super::newton::NewtonWork>>,
+}
+
+/// Which residual a [`FrictionSolver`] stops on and reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Measure {
+    /// Siconos' [`residual`] (impulses and velocities added; `fc3d_compute_error`), so
+    /// that one-step figures compare with Siconos' ([`FrictionSolver::for_one_step`]).
+    Siconos,
+    /// [`velocity_residual`]: velocities only, each block scaled by its `W_NN`, Coulomb's
+    /// law in Alart–Curnier form (the step loop, [`FrictionSolver::with_capacity`]).
+    Velocity,
+}
+
+impl Measure {
+    /// The command-line name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Measure::Siconos => "siconos",
+            Measure::Velocity => "velocity",
+        }
+    }
+
+    /// Parses a command-line name.
+    pub fn parse(s: &str) -> Option<Self> {
+        [Measure::Siconos, Measure::Velocity]
+            .into_iter()
+            .find(|m| m.name() == s)
+    }
 }
 
 impl FrictionSolver {
-    /// Buffers for problems of up to `capacity` rows.
+    /// Buffers for problems of up to `capacity` rows, for the step loop: nothing
+    /// allocates after this, including `auto`'s Newton fallback (a dense workspace
+    /// while `capacity` is at most [`super::newton::STEP_NEWTON_ROWS`]); the residual is
+    /// [`Measure::Velocity`].
     pub fn with_capacity(capacity: usize) -> Self {
+        FrictionSolver {
+            newton: Self::step_newton_work(capacity),
+            ..Self::bare(capacity, Measure::Velocity)
+        }
+    }
+
+    /// Buffers for one-step problems of `rows` rows (`signorini fclib`): `auto` may then
+    /// fall back on the Newton methods, which allocate (a sparse `J` where `W` is
+    /// sparse); the residual is Siconos' ([`Measure::Siconos`]).
+    pub fn for_one_step(rows: usize) -> Self {
+        FrictionSolver {
+            one_step: true,
+            ..Self::bare(rows, Measure::Siconos)
+        }
+    }
+
+    fn bare(capacity: usize, measure: Measure) -> Self {
         FrictionSolver {
             capacity,
             diag: vec![[0.0; 9]; capacity],
@@ -392,21 +521,56 @@ impl FrictionSolver {
             one_step: false,
             give_up_early: false,
             inconsistent: 0,
-        }
-    }
-
-    /// Buffers for one-step problems of `rows` rows (`signorini fclib`): `auto` may then
-    /// fall back on the Newton methods, which allocate.
-    pub fn for_one_step(rows: usize) -> Self {
-        FrictionSolver {
-            one_step: true,
-            ..Self::with_capacity(rows)
+            measure,
+            newton: None,
         }
     }
 
     /// Rows this workspace holds.
     pub fn capacity(&self) -> usize {
         self.capacity
+    }
+
+    /// This solver, stopping on and reporting `measure` instead of its default.
+    pub fn with_measure(self, measure: Measure) -> Self {
+        FrictionSolver { measure, ..self }
+    }
+
+    /// The residual this solver stops on and reports.
+    pub fn measure(&self) -> Measure {
+        self.measure
+    }
+
+    /// The residual of `(r, u)` by [`FrictionSolver::measure`] (`u` already `W r + q`, or
+    /// `(W + σI) r + q` for a regularized `q`); for Siconos' measure, checked for
+    /// take-off at `tol` ([`checked_residual`]). The diagonal blocks must be those of
+    /// the current [`FrictionSolver::solve`].
+    pub(super) fn residual_of(
+        &self,
+        blocks: &[Block],
+        q: &[f64],
+        r: &[f64],
+        u: &[f64],
+        tol: f64,
+    ) -> f64 {
+        match self.measure {
+            Measure::Siconos => checked_residual(blocks, q, r, u, tol),
+            Measure::Velocity => velocity_residual_diag(blocks, &self.diag, q, r, u),
+        }
+    }
+
+    /// `u = W r + q` from scratch and [`FrictionSolver::residual_of`].
+    pub(super) fn full_residual_of<W: DelassusOperator + ?Sized>(
+        &self,
+        prob: &FrictionProblem<'_, W>,
+        r: &[f64],
+        u: &mut [f64],
+        tol: f64,
+    ) -> f64 {
+        let k = prob.blocks.last().map_or(0, |b| b.offset + b.dim);
+        u[..k].copy_from_slice(&prob.q[..k]);
+        prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
+        self.residual_of(prob.blocks, prob.q, &r[..k], &u[..k], tol)
     }
 
     /// Solves `prob` with `params`; `r` holds the warm start on entry and the solution
@@ -446,6 +610,17 @@ impl FrictionSolver {
             self.diag[b.offset] = d;
         }
         self.inconsistent = 0;
+        // Coulomb's law in slip pins r_T to μ r_N while u_N is known to the round-off of
+        // u: no residual of a slipping block falls below about μ ε (its backward error;
+        // measured: every solver stalled at 2.5e-12 to 9e-12 on a μ = 1e6 block at tol
+        // 1e-12). The tolerance is raised to that floor: μ = 1e6 gives 2.2e-10; μ ≤ 1e3
+        // leaves every tolerance from 1e-12 up unchanged.
+        let floor = prob.blocks.iter().map(|b| b.mu).fold(0.0, f64::max) * f64::EPSILON;
+        let raised = FrictionParams {
+            tol: params.tol.max(floor),
+            ..*params
+        };
+        let params = &raised;
         let nsgs = |s: &mut Self, cap: usize, r: &mut [f64], u: &mut [f64]| {
             let (it, res) = s.nsgs(prob, 0.0, (params.tol, cap), params, r, u);
             FrictionInfo {
@@ -489,13 +664,15 @@ impl FrictionSolver {
                     ..*params
                 };
                 if info.converged || spent >= params.max_iterations {
-                    return Ok(self.counted(info));
+                    return Ok(self.counted(info, params.tol));
                 }
-                if !self.one_step {
-                    // the step loop: PROX, which does not allocate
+                let newton_fits =
+                    self.one_step || self.newton.as_ref().is_some_and(|nw| nw.capacity() >= k);
+                if !newton_fits {
+                    // the step loop beyond the Newton workspace: PROX
                     let mut next = self.prox(prob, &left(spent), k, r, u);
                     next.iterations += spent;
-                    return Ok(self.counted(next));
+                    return Ok(self.counted(next, params.tol));
                 }
                 let p = FrictionParams {
                     max_iterations: left(spent).max_iterations.min(AUTO_NSN),
@@ -506,13 +683,15 @@ impl FrictionSolver {
                 next.iterations = spent;
                 info = next;
                 if !info.converged && spent < params.max_iterations {
-                    let (r0, res0) = (r[..k].to_vec(), info.residual);
+                    // the plain method's iterate, in PROX's scratch (PROX does not run here)
+                    let res0 = info.residual;
+                    self.rprev[..k].copy_from_slice(&r[..k]);
                     r[..k].copy_from_slice(&self.start[..k]);
                     let mut next = newton(self, NewtonMode::Proximal, &left(spent), r, u);
                     next.iterations += spent;
                     if next.residual.is_nan() || next.residual > res0 {
                         // the plain method's iterate was the better one: keep it
-                        r[..k].copy_from_slice(&r0);
+                        r[..k].copy_from_slice(&self.rprev[..k]);
                         u[..k].copy_from_slice(&prob.q[..k]);
                         prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
                         next.residual = res0;
@@ -523,13 +702,15 @@ impl FrictionSolver {
                 info
             }
         };
-        Ok(self.counted(info))
+        Ok(self.counted(info, params.tol))
     }
 
-    /// `info` with the local solves' inconsistency count of this solve.
-    fn counted(&self, info: FrictionInfo) -> FrictionInfo {
+    /// `info` with the local solves' inconsistency count of this solve and the
+    /// tolerance it stopped on.
+    fn counted(&self, info: FrictionInfo, tolerance: f64) -> FrictionInfo {
         FrictionInfo {
             inconsistent_local_solves: self.inconsistent,
+            tolerance,
             ..info
         }
     }
@@ -554,7 +735,7 @@ impl FrictionSolver {
         let mut sigma = wmax;
         let mut total = 0;
         let mut outer = 0;
-        let mut res = full_residual(&prob, r, u, params.tol);
+        let mut res = self.full_residual_of(&prob, r, u, params.tol);
         while res > params.tol && total < params.max_iterations {
             outer += 1;
             self.rprev[..k].copy_from_slice(&r[..k]);
@@ -569,7 +750,7 @@ impl FrictionSolver {
             // problem already solved must not let the loop run uncounted (the cap
             // bounds the outer iterations too)
             total += it.max(1);
-            res = full_residual(&prob, r, u, params.tol);
+            res = self.full_residual_of(&prob, r, u, params.tol);
             let step: f64 = (0..k)
                 .map(|i| (r[i] - self.rprev[i]).powi(2))
                 .sum::<f64>()
@@ -632,7 +813,7 @@ impl FrictionSolver {
         for i in 0..k {
             u[i] += sigma * r[i];
         }
-        let mut res = checked_residual(prob.blocks, prob.q, r, u, tol);
+        let mut res = self.residual_of(prob.blocks, prob.q, r, u, tol);
         if res <= tol {
             return (0, res);
         }
@@ -695,7 +876,10 @@ impl FrictionSolver {
                     r[o..o + d].copy_from_slice(&rl[..d]);
                 }
             }
-            res = residual(prob.blocks, prob.q, r, u);
+            res = match self.measure {
+                Measure::Siconos => residual(prob.blocks, prob.q, r, u),
+                Measure::Velocity => velocity_residual_diag(prob.blocks, &self.diag, prob.q, r, u),
+            };
             if res <= tol {
                 // confirm on u recomputed from scratch (the updates accumulate rounding)
                 u[..k].copy_from_slice(&prob.q[..k]);
@@ -703,7 +887,7 @@ impl FrictionSolver {
                 for i in 0..k {
                     u[i] += sigma * r[i];
                 }
-                res = checked_residual(prob.blocks, prob.q, r, u, tol);
+                res = self.residual_of(prob.blocks, prob.q, r, u, tol);
                 if res <= tol {
                     break;
                 }

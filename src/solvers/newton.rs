@@ -26,16 +26,16 @@
 //! only with the contacts of its two bodies: on Siconos' 256-contact spheres-in-a-box
 //! problem the sparse factorization is what makes an iteration cheap.
 //!
-//! These solvers form `J` and factor it per iteration, so they allocate: they are for
-//! one-step problems (`signorini fclib`, and the `auto` fallback there), not for the
-//! step loop, which refuses them.
+//! One-step problems (`signorini fclib`) build the workspace per solve, sparse where `W`
+//! is. The step loop's `auto` fallback uses a workspace sized once at set-up
+//! ([`NewtonWork`]: dense `W` and `J`, the LU's scratch; contact spaces up to
+//! [`STEP_NEWTON_ROWS`] rows), so a step does not allocate; `nsn` and `newton` by name
+//! stay refused in scenes.
 
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 
-use super::friction::{
-    Block, FrictionInfo, FrictionParams, FrictionProblem, FrictionSolver, full_residual, norm,
-};
+use super::friction::{Block, FrictionInfo, FrictionParams, FrictionProblem, FrictionSolver, norm};
 use crate::delassus::DelassusOperator;
 
 /// Which Newton method runs (module doc).
@@ -56,6 +56,10 @@ const STALL: usize = 60;
 /// NSGS 90 % of the 9 766 iterations on BoxesStack1-i100000-32 and 0.25 s; 50 took
 /// 1 315 iterations and 0.21 s, spheres-in-a-box 2.6 → 1.9 s, the others unchanged).
 const NSGS_FINISH: usize = 50;
+/// Largest contact space (rows) for which the step loop keeps a Newton workspace
+/// (`auto`'s fallback there; above it `auto` falls back on PROX): two dense `k × k`
+/// matrices, 16 MiB at 1024 rows, and an LU of `k³/3` flops per iteration.
+pub const STEP_NEWTON_ROWS: usize = 1024;
 /// Below this many rows the dense LU is always used.
 const SPARSE_MIN_ROWS: usize = 64;
 
@@ -140,31 +144,97 @@ enum Jacobian {
     Sparse(SparseJacobian),
 }
 
-/// The data of one Newton solve: dense copy of `W`, per-block ρ, `A_α`, `B_α`, `J`.
-struct Newton<'p, 'a, W: DelassusOperator + ?Sized> {
-    prob: &'p FrictionProblem<'a, W>,
+/// The data of the Newton methods, sized for up to `capacity` rows: a dense copy of
+/// `W`, per-block ρ, `A_α`, `B_α`, `J`, the dense LU's scratch and the work vectors.
+/// The step loop keeps one, sized once at set-up ([`FrictionSolver::with_capacity`]),
+/// and uses only its dense `J`, so a solve does not allocate; one-step problems build
+/// one per solve, sparse where `W` is.
+pub(super) struct NewtonWork {
+    capacity: usize,
     k: usize,
     wd: Vec<f64>,
     rho: Vec<(f64, f64)>,
     a: Vec<[f64; 9]>,
     b: Vec<[f64; 9]>,
     jac: Jacobian,
+    /// The dense `J`'s LU scratch (the step loop); `None`: faer's one-shot LU with
+    /// its own scratch (one-step problems, multithreaded above 512 rows).
+    lu: Option<crate::linalg::DenseLu>,
     block_of_row: Vec<usize>,
+    bufs: Buffers,
+    best: Vec<f64>,
+    qt: Vec<f64>,
+    center: Vec<f64>,
 }
 
-impl<'p, 'a, W: DelassusOperator + ?Sized> Newton<'p, 'a, W> {
-    fn new(prob: &'p FrictionProblem<'a, W>, k: usize, mode: NewtonMode) -> Self {
-        let mut wd = vec![0.0; k * k];
+impl std::fmt::Debug for NewtonWork {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "NewtonWork {{ capacity: {} }}", self.capacity)
+    }
+}
+
+impl Clone for NewtonWork {
+    fn clone(&self) -> Self {
+        NewtonWork::with_capacity(self.capacity, self.lu.is_some())
+    }
+}
+
+impl NewtonWork {
+    /// Buffers for up to `capacity` rows; `own_lu`: the dense LU's scratch too (no
+    /// allocation per iteration).
+    pub(super) fn with_capacity(capacity: usize, own_lu: bool) -> Self {
+        let c = capacity;
+        NewtonWork {
+            capacity,
+            k: 0,
+            wd: vec![0.0; c * c],
+            rho: vec![(0.0, 0.0); c],
+            a: vec![[0.0; 9]; c],
+            b: vec![[0.0; 9]; c],
+            jac: Jacobian::Dense(if own_lu { vec![0.0; c * c] } else { Vec::new() }),
+            lu: own_lu.then(|| crate::linalg::DenseLu::with_capacity(c)),
+            block_of_row: vec![0; c],
+            bufs: Buffers::new(c),
+            best: vec![0.0; c],
+            qt: vec![0.0; c],
+            center: vec![0.0; c],
+        }
+    }
+
+    /// Rows this workspace takes.
+    pub(super) fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// Loads `prob` (its first `k ≤ capacity` rows): `W` dense, ρ per block, and for
+    /// `allow_sparse` a sparse `J` on `W`'s block pattern where that pays (allocates).
+    fn load<W: DelassusOperator + ?Sized>(
+        &mut self,
+        prob: &FrictionProblem<'_, W>,
+        k: usize,
+        mode: NewtonMode,
+        allow_sparse: bool,
+    ) {
+        self.k = k;
+        let wd = &mut self.wd;
         for c in 0..k {
             for i in 0..k {
                 wd[i + c * k] = prob.w.entry(i, c);
             }
         }
         let blocks = prob.blocks;
-        let rho = blocks.iter().map(|b| block_rho(&wd, k, b, mode)).collect();
-        let mut block_of_row = vec![0; k];
         for (bi, b) in blocks.iter().enumerate() {
-            block_of_row[b.offset..b.offset + b.dim].fill(bi);
+            self.rho[bi] = block_rho(wd, k, b, mode);
+            self.block_of_row[b.offset..b.offset + b.dim].fill(bi);
+        }
+        self.bufs.reset();
+        if !allow_sparse {
+            return;
+        }
+        if let Jacobian::Dense(j) = &mut self.jac
+            && j.len() < k * k
+        {
+            j.resize(k * k, 0.0);
         }
         // block pattern of W
         let nb = blocks.len();
@@ -184,58 +254,54 @@ impl<'p, 'a, W: DelassusOperator + ?Sized> Newton<'p, 'a, W> {
         }
         let sparse = k >= SPARSE_MIN_ROWS
             && (nnz_blocks as f64) <= SPARSE_FRACTION * (nb as f64) * (nb as f64);
-        let jac = if sparse {
-            let mut col_ptr = Vec::with_capacity(k + 1);
-            let mut row_idx = Vec::new();
-            col_ptr.push(0);
-            for (be, bb) in blocks.iter().enumerate() {
-                for _ in 0..bb.dim {
-                    for &al in &block_rows[be] {
-                        let ba = &blocks[al];
-                        row_idx.extend(ba.offset..ba.offset + ba.dim);
-                    }
-                    col_ptr.push(row_idx.len());
+        if !sparse {
+            return;
+        }
+        let mut col_ptr = Vec::with_capacity(k + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for (be, bb) in blocks.iter().enumerate() {
+            for _ in 0..bb.dim {
+                for &al in &block_rows[be] {
+                    let ba = &blocks[al];
+                    row_idx.extend(ba.offset..ba.offset + ba.dim);
                 }
+                col_ptr.push(row_idx.len());
             }
-            let sym = SymbolicSparseColMatRef::new_checked(k, k, &col_ptr, None, &row_idx);
-            let mut w_values = Vec::with_capacity(row_idx.len());
-            for c in 0..k {
-                w_values.extend(
-                    row_idx[col_ptr[c]..col_ptr[c + 1]]
-                        .iter()
-                        .map(|&i| wd[i + c * k]),
-                );
-            }
-            match SymbolicLu::try_new(sym) {
-                Ok(symbolic) => Jacobian::Sparse(SparseJacobian {
-                    values: vec![0.0; row_idx.len()],
-                    w_values,
-                    col_ptr,
-                    row_idx,
-                    block_rows,
-                    symbolic,
-                }),
-                Err(_) => Jacobian::Dense(vec![0.0; k * k]),
-            }
-        } else {
-            Jacobian::Dense(vec![0.0; k * k])
-        };
-        Newton {
-            prob,
-            k,
-            wd,
-            rho,
-            a: vec![[0.0; 9]; nb],
-            b: vec![[0.0; 9]; nb],
-            jac,
-            block_of_row,
+        }
+        let sym = SymbolicSparseColMatRef::new_checked(k, k, &col_ptr, None, &row_idx);
+        let mut w_values = Vec::with_capacity(row_idx.len());
+        for c in 0..k {
+            w_values.extend(
+                row_idx[col_ptr[c]..col_ptr[c + 1]]
+                    .iter()
+                    .map(|&i| wd[i + c * k]),
+            );
+        }
+        if let Ok(symbolic) = SymbolicLu::try_new(sym) {
+            self.jac = Jacobian::Sparse(SparseJacobian {
+                values: vec![0.0; row_idx.len()],
+                w_values,
+                col_ptr,
+                row_idx,
+                block_rows,
+                symbolic,
+            });
         }
     }
 
     /// `Φ` at `r` for `(W + σI, q)`, `u = (W + σI) r + q`, the blocks `A_α`, `B_α`;
     /// returns `½‖Φ‖²`.
-    fn eval(&mut self, q: &[f64], sigma: f64, r: &[f64], u: &mut [f64], phi: &mut [f64]) -> f64 {
-        let k = self.k;
+    fn eval<W: DelassusOperator + ?Sized>(
+        &mut self,
+        prob: &FrictionProblem<'_, W>,
+        q: &[f64],
+        sigma: f64,
+        r: &[f64],
+        u: &mut [f64],
+        phi: &mut [f64],
+    ) -> f64 {
+        let (k, blocks) = (self.k, prob.blocks);
         u[..k].copy_from_slice(&q[..k]);
         if let Jacobian::Sparse(sp) = &self.jac {
             for (c, &rc) in r[..k].iter().enumerate() {
@@ -246,12 +312,12 @@ impl<'p, 'a, W: DelassusOperator + ?Sized> Newton<'p, 'a, W> {
                 }
             }
         } else {
-            self.prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
+            prob.w.mul_add(1.0, &r[..k], &mut u[..k]);
         }
         for i in 0..k {
             u[i] += sigma * r[i];
         }
-        for (bi, blk) in self.prob.blocks.iter().enumerate() {
+        for (bi, blk) in blocks.iter().enumerate() {
             let (o, d) = (blk.offset, blk.dim);
             ac_block(
                 &r[o..o + d],
@@ -266,20 +332,20 @@ impl<'p, 'a, W: DelassusOperator + ?Sized> Newton<'p, 'a, W> {
         0.5 * phi[..k].iter().map(|x| x * x).sum::<f64>()
     }
 
-    /// Solves `J dir = rhs` in place (the `A_α`, `B_α` of the last [`Newton::eval`]);
+    /// Solves `J dir = rhs` in place (the `A_α`, `B_α` of the last [`NewtonWork::eval`]);
     /// false when `J` is singular.
-    fn solve(&mut self, sigma: f64, dir: &mut [f64]) -> bool {
-        let Newton {
-            prob,
+    fn solve(&mut self, blocks: &[Block], sigma: f64, dir: &mut [f64]) -> bool {
+        let NewtonWork {
             k,
             wd,
             a,
             b,
             jac,
+            lu,
             block_of_row,
             ..
         } = self;
-        let (k, blocks) = (*k, prob.blocks);
+        let k = *k;
         // J[row, c] for row o_α + i of block α: Σ_l B_α[i,l] (W + σI)[o_α+l, c] +
         // A_α[i, c − o_α]
         let entry = |al: usize, i: usize, c: usize| {
@@ -302,7 +368,14 @@ impl<'p, 'a, W: DelassusOperator + ?Sized> Newton<'p, 'a, W> {
                         j[row + c * k] = entry(al, row - blocks[al].offset, c);
                     }
                 }
-                crate::linalg::dense_lu_solve(j, k, dir);
+                match lu {
+                    Some(lu) => {
+                        if !lu.solve(j, k, dir) {
+                            return false;
+                        }
+                    }
+                    None => crate::linalg::dense_lu_solve(j, k, dir),
+                }
             }
             Jacobian::Sparse(sp) => {
                 let mut pos = 0;
@@ -327,7 +400,7 @@ impl<'p, 'a, W: DelassusOperator + ?Sized> Newton<'p, 'a, W> {
                 lu.solve_in_place_with_conj(faer::Conj::No, rhs);
             }
         }
-        dir.iter().all(|x| x.is_finite())
+        dir[..k].iter().all(|x| x.is_finite())
     }
 
     fn is_sparse(&self) -> bool {
@@ -376,28 +449,53 @@ struct Inner {
 /// `cap` iterations; `full_step` takes the Newton step where the line search fails.
 #[allow(clippy::too_many_arguments)]
 fn newton_loop<W: DelassusOperator + ?Sized>(
-    nw: &mut Newton<'_, '_, W>,
+    solver: &FrictionSolver,
+    nw: &mut NewtonWork,
+    prob: &FrictionProblem<'_, W>,
     q: &[f64],
     sigma: f64,
     tol: f64,
     cap: usize,
     full_step: bool,
     r: &mut [f64],
+) -> Inner {
+    let mut bufs = std::mem::take(&mut nw.bufs);
+    let out = newton_iterations(
+        solver,
+        nw,
+        prob,
+        q,
+        (sigma, tol, cap, full_step),
+        r,
+        &mut bufs,
+    );
+    nw.bufs = bufs;
+    out
+}
+
+/// The loop of [`newton_loop`], with its work vectors apart from `nw`.
+fn newton_iterations<W: DelassusOperator + ?Sized>(
+    solver: &FrictionSolver,
+    nw: &mut NewtonWork,
+    prob: &FrictionProblem<'_, W>,
+    q: &[f64],
+    (sigma, tol, cap, full_step): (f64, f64, usize, bool),
+    r: &mut [f64],
     bufs: &mut Buffers,
 ) -> Inner {
     let k = nw.k;
-    let blocks = nw.prob.blocks;
+    let blocks = prob.blocks;
     let mut out = Inner {
         iterations: 0,
         solved: false,
         moved: false,
     };
     while out.iterations < cap {
-        let f = nw.eval(q, sigma, r, &mut bufs.u, &mut bufs.phi);
+        let f = nw.eval(prob, q, sigma, r, &mut bufs.u, &mut bufs.phi);
         if !f.is_finite() {
             break;
         }
-        let res = super::friction::checked_residual(blocks, q, &r[..k], &bufs.u, tol);
+        let res = solver.residual_of(blocks, q, &r[..k], &bufs.u[..k], tol);
         if sigma == 0.0 && res < bufs.best_res {
             // the unregularized problem: keep the best iterate (the full steps of the
             // plain method may climb), stop after STALL iterations without a new best
@@ -425,7 +523,7 @@ fn newton_loop<W: DelassusOperator + ?Sized>(
         for i in 0..k {
             bufs.dir[i] = -bufs.phi[i];
         }
-        if !nw.solve(sigma, &mut bufs.dir) {
+        if !nw.solve(blocks, sigma, &mut bufs.dir) {
             break;
         }
         let mut t = 1.0;
@@ -434,7 +532,7 @@ fn newton_loop<W: DelassusOperator + ?Sized>(
             for i in 0..k {
                 bufs.trial[i] = r[i] + t * bufs.dir[i];
             }
-            let ft = nw.eval(q, sigma, &bufs.trial, &mut bufs.ut, &mut bufs.phi);
+            let ft = nw.eval(prob, q, sigma, &bufs.trial, &mut bufs.ut, &mut bufs.phi);
             if ft.is_finite() && ft <= (1.0 - 1e-4 * t) * f {
                 accepted = true;
                 break;
@@ -459,6 +557,7 @@ fn newton_loop<W: DelassusOperator + ?Sized>(
 }
 
 /// Work vectors of the Newton loop.
+#[derive(Default)]
 struct Buffers {
     best: Vec<f64>,
     best_res: f64,
@@ -485,12 +584,27 @@ impl Buffers {
             trial: vec![0.0; k],
         }
     }
+
+    /// Forgets the best iterate of an earlier solve.
+    fn reset(&mut self) {
+        self.best_res = f64::INFINITY;
+        self.since_best = 0;
+        self.checkpoint = f64::INFINITY;
+    }
 }
 
 impl FrictionSolver {
+    /// The step loop's Newton workspace, for contact spaces of up to `capacity` rows
+    /// (`None` above [`STEP_NEWTON_ROWS`]).
+    pub(super) fn step_newton_work(capacity: usize) -> Option<Box<NewtonWork>> {
+        (capacity > 0 && capacity <= STEP_NEWTON_ROWS)
+            .then(|| Box::new(NewtonWork::with_capacity(capacity, true)))
+    }
+
     /// The global Newton methods (module doc); `r` holds the start and gets the best
     /// iterate met (by residual), `u` its `W r + q`. `sparse` in the result tells which
-    /// storage `J` had.
+    /// storage `J` had. The step loop's solver uses its own workspace (dense `J`, no
+    /// allocation; the caller checks that `k` fits); one-step solvers build one.
     pub(super) fn global_newton<W: DelassusOperator + ?Sized>(
         &mut self,
         prob: FrictionProblem<'_, W>,
@@ -500,33 +614,56 @@ impl FrictionSolver {
         r: &mut [f64],
         u: &mut [f64],
     ) -> (FrictionInfo, bool) {
-        let mut nw = Newton::new(&prob, k, mode);
-        let mut bufs = Buffers::new(k);
-        let mut best = r[..k].to_vec();
-        let mut res = full_residual(&prob, r, u, params.tol);
+        let mut nw = match self.newton.take() {
+            Some(nw) if nw.capacity() >= k => nw,
+            _ => Box::new(NewtonWork::with_capacity(k, false)),
+        };
+        nw.load(&prob, k, mode, self.one_step);
+        let out = self.newton_with(&mut nw, prob, params, mode, k, r, u);
+        if !self.one_step {
+            self.newton = Some(nw);
+        }
+        out
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn newton_with<W: DelassusOperator + ?Sized>(
+        &mut self,
+        nw: &mut NewtonWork,
+        prob: FrictionProblem<'_, W>,
+        params: &FrictionParams,
+        mode: NewtonMode,
+        k: usize,
+        r: &mut [f64],
+        u: &mut [f64],
+    ) -> (FrictionInfo, bool) {
+        let mut best = std::mem::take(&mut nw.best);
+        best[..k].copy_from_slice(&r[..k]);
+        let mut res = self.full_residual_of(&prob, r, u, params.tol);
         let mut best_res = if res.is_finite() { res } else { f64::INFINITY };
         let (mut iterations, mut outer) = (0usize, 0usize);
         match mode {
             NewtonMode::Plain => {
                 // one Newton run to the tolerance, checked on the true residual
                 let inner = newton_loop(
-                    &mut nw,
+                    self,
+                    nw,
+                    &prob,
                     prob.q,
                     0.0,
                     params.tol,
                     params.max_iterations,
                     true,
                     r,
-                    &mut bufs,
                 );
                 iterations = inner.iterations;
-                if bufs.best_res < best_res {
-                    best_res = bufs.best_res;
-                    best.copy_from_slice(&bufs.best);
+                if nw.bufs.best_res < best_res {
+                    best_res = nw.bufs.best_res;
+                    best[..k].copy_from_slice(&nw.bufs.best[..k]);
                 }
-                res = full_residual(&prob, r, u, params.tol);
+                res = self.full_residual_of(&prob, r, u, params.tol);
                 if res.is_finite() && res < best_res {
-                    best.copy_from_slice(&r[..k]);
+                    best[..k].copy_from_slice(&r[..k]);
                 }
             }
             NewtonMode::Proximal => {
@@ -539,18 +676,18 @@ impl FrictionSolver {
                 // a short proximal step, ×10 after an inner solve that did not reach its
                 // tolerance (on spheres-in-a-box, shrinking σ regardless stalled at 1e-6)
                 let mut sigma = 1e-4 * wmax;
-                let mut qt = vec![0.0; k];
-                let mut center = vec![0.0; k];
+                let mut qt = std::mem::take(&mut nw.qt);
+                let mut center = std::mem::take(&mut nw.center);
                 while res > params.tol && iterations < params.max_iterations {
                     outer += 1;
-                    center.copy_from_slice(&r[..k]);
+                    center[..k].copy_from_slice(&r[..k]);
                     for i in 0..k {
                         qt[i] = prob.q[i] - sigma * center[i];
                     }
                     let inner_tol = (1e-2 * res).max(0.1 * params.tol);
                     let budget = (params.max_iterations - iterations).min(50);
                     let inner =
-                        newton_loop(&mut nw, &qt, sigma, inner_tol, budget, false, r, &mut bufs);
+                        newton_loop(self, nw, &prob, &qt, sigma, inner_tol, budget, false, r);
                     iterations += inner.iterations;
                     let mut moved = inner.moved;
                     if !inner.solved {
@@ -559,9 +696,9 @@ impl FrictionSolver {
                         // proximal step with NSGS on the same regularized problem, whose
                         // blocks are positive definite
                         if r[..k].iter().any(|x| !x.is_finite()) {
-                            r[..k].copy_from_slice(&center);
+                            r[..k].copy_from_slice(&center[..k]);
                         }
-                        self.qreg[..k].copy_from_slice(&qt);
+                        self.qreg[..k].copy_from_slice(&qt[..k]);
                         let left = params.max_iterations.saturating_sub(iterations).max(1);
                         let (it, _) = self.nsgs_reg(
                             prob,
@@ -569,15 +706,15 @@ impl FrictionSolver {
                             (inner_tol, left.min(NSGS_FINISH)),
                             params,
                             r,
-                            &mut bufs.ut,
+                            &mut nw.bufs.ut,
                         );
                         iterations += it;
                         moved = true;
                     }
-                    res = full_residual(&prob, r, u, params.tol);
+                    res = self.full_residual_of(&prob, r, u, params.tol);
                     if res.is_finite() && res < best_res {
                         best_res = res;
-                        best.copy_from_slice(&r[..k]);
+                        best[..k].copy_from_slice(&r[..k]);
                     }
                     let step = (0..k)
                         .map(|i| (r[i] - center[i]).powi(2))
@@ -592,11 +729,14 @@ impl FrictionSolver {
                         break;
                     }
                 }
+                nw.qt = qt;
+                nw.center = center;
             }
         }
         // the best iterate met
-        r[..k].copy_from_slice(&best);
-        let res = full_residual(&prob, r, u, params.tol);
+        r[..k].copy_from_slice(&best[..k]);
+        nw.best = best;
+        let res = self.full_residual_of(&prob, r, u, params.tol);
         (
             FrictionInfo {
                 iterations,
