@@ -522,10 +522,14 @@ impl RunChecks {
         if st.caps_hit > 0 && !self.allow_caps {
             let detail = if st.friction_caps > 0 {
                 use crate::solvers::friction::FrictionSolverKind as K;
-                // `auto` and `prox` already ran the proximal method: switching the
-                // solver cannot help them, only the budget or the step can
+                // `auto` already ran everything it has: switching the solver cannot
+                // help it, only the budget or the step can; `nsgs` and `prox` lack
+                // the Newton methods `auto` adds
                 let switch = match self.friction_solver {
-                    K::Nsgs => ", try scheme.friction.solver = \"auto\" (PROX after NSGS)",
+                    K::Nsgs | K::Prox => {
+                        ", try scheme.friction.solver = \"auto\" (the Newton methods after \
+                         NSGS, PROX beyond 1024 contact rows)"
+                    }
                     _ => "",
                 };
                 format!(

@@ -291,9 +291,9 @@ fn plot_bounds_extreme_histories_and_skips_a_cut_row() {
 }
 
 /// Issue 16 §6: a run failure advises only remedies that can help. A friction cap of one
-/// sweep stops the sliding block at step 1 (exit 1); with `nsgs` the message suggests
-/// `auto` (which adds PROX), with `auto` it does not (PROX already ran), and both name
-/// the solver, the cap and the budget and step remedies.
+/// sweep stops the sliding block at step 1 (exit 1); with `nsgs` and `prox` the message
+/// suggests `auto` (which adds the Newton methods), with `auto` it does not (they already
+/// ran), and all name the solver, the cap and the budget and step remedies.
 #[test]
 fn a_friction_cap_advises_only_what_was_not_tried() {
     let dir = tmp("friction-cap");
@@ -301,7 +301,7 @@ fn a_friction_cap_advises_only_what_was_not_tried() {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/sliding_block.toml"),
     )
     .unwrap();
-    for (solver, suggests_auto) in [("nsgs", true), ("auto", false)] {
+    for (solver, suggests_auto) in [("nsgs", true), ("prox", true), ("auto", false)] {
         let scene = base.replacen(
             "kind = \"combined-projection\"",
             &format!(
