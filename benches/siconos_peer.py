@@ -77,8 +77,11 @@ def main():
     ok = True
     with tempfile.TemporaryDirectory() as tmp:
         for scheme, args in [("moreau-jean", ["--scheme", "moreau-jean"]),
+                             # Siconos' projection kicks the tip node and the bar gains
+                             # 15 % of its energy, which signorini refuses by default
                              ("combined-projection", ["--metric", "euclidean",
-                                                      "--no-projection-feedback"])]:
+                                                      "--no-projection-feedback",
+                                                      "--max-energy-excess", "inf"])]:
             a, sic_sps = siconos_run(scheme)
             b, our_sps = signorini_run(exe, args, os.path.join(tmp, scheme))
             dp = np.abs(a[:, 1] - b[:, 1]).max() / np.abs(a[:, 1]).max()

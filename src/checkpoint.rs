@@ -16,7 +16,8 @@
 //!   on resume the CSV is cut to those bytes and the HDF5 datasets to those rows and
 //!   frames, then appended to. Nothing in it grows with the number of steps (version
 //!   3: version 2 held the per-step force trace and every frame's time). Version 4
-//!   adds the friction fallback and complementarity fallback counters.
+//!   adds the friction fallback and complementarity fallback counters and the energy
+//!   balance.
 //!
 //! What a checkpoint guards (since version 2): the build that wrote it, the output directory it
 //! belongs to, and the size and SHA-256 of every input file (the scene file and its mesh
@@ -176,6 +177,10 @@ pub struct RunState {
     /// Coupled position solves, stagnated Newton loops, steps with held rows,
     /// complementarity fallbacks of Algorithm 2.
     pub newton_loops: [usize; 4],
+    /// The energy balance's sums (`model::energy::EnergyAudit::save`).
+    pub energy_audit: [Bits; 6],
+    /// Largest relative energy excess met.
+    pub energy_excess: Bits,
     /// The per-step force trace (empty beyond `FORCE_TRACE_MAX_STEPS`).
     pub trace: Option<Floats>,
     /// First step with a positive impulse.

@@ -325,6 +325,10 @@ struct BarArgs {
     /// instead of failing the run (exit code 1) at the first one.
     #[arg(long)]
     allow_caps: bool,
+    /// Largest energy growth beyond the work supplied, relative to the run's energy
+    /// scale, before the run fails (exit code 1); `inf` accepts any.
+    #[arg(long, default_value_t = 0.01)]
+    max_energy_excess: f64,
     /// Output directory.
     #[arg(long, default_value = "out/bar")]
     out: PathBuf,
@@ -392,6 +396,7 @@ impl BarArgs {
         p.newton.tol = self.newton_tol;
         p.newton.max_iterations = self.newton_max_iterations;
         p.allow_caps = self.allow_caps;
+        p.max_energy_excess = self.max_energy_excess;
         s
     }
 }

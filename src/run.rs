@@ -135,6 +135,16 @@ pub struct NewtonLoops {
     pub complementarity_fallbacks: usize,
 }
 
+/// A run's energy balance ([`Summary::energy_balance`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct EnergyBalance {
+    /// Work supplied by the time-dependent loads and the prescribed motion (J).
+    pub supplied_work: f64,
+    /// Largest `(E − E₀ − W) / scale` met at the checks (0 when it never was positive); above
+    /// `scheme.max_energy_excess` the run fails.
+    pub excess_max: f64,
+}
+
 /// Everything a run reports (`summary.json`).
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
@@ -186,6 +196,10 @@ pub struct Summary {
     pub max_lcp_residual: f64,
     /// Energy (kinetic + potential) at the start and at the end (J).
     pub energy: [f64; 2],
+    /// The energy balance (`model::energy`): work supplied by loads and prescribed
+    /// motion, and the largest excess met relative to the run's energy scale (`None` for
+    /// Schatzman–Paoli, whose discrete energy is not the θ-method's).
+    pub energy_balance: Option<EnergyBalance>,
     /// Linear-algebra path taken.
     pub path: String,
     /// Seconds to build the model (mesh, parallel assembly of `M` and `K`, contacts).
@@ -223,6 +237,8 @@ struct Acc {
     fr_fallbacks: usize,
     /// Coupled position solves, stagnated Newton loops, steps with held rows.
     loops: [usize; 4],
+    /// Largest relative energy excess met ([`EnergyCheck`]).
+    energy_excess: f64,
 }
 
 impl Acc {
@@ -450,6 +466,8 @@ pub struct RunChecks {
     /// The friction solver (`scheme.friction.solver`), for the message: it advises
     /// only what the run has not tried.
     pub friction_solver: crate::solvers::friction::FrictionSolverKind,
+    /// Largest relative energy excess (`scheme.max_energy_excess`).
+    pub max_energy_excess: f64,
 }
 
 impl RunChecks {
@@ -466,6 +484,7 @@ impl RunChecks {
             newton_cap: params.newton.max_iterations,
             friction_cap: params.friction.max_iterations,
             friction_solver: params.friction.solver,
+            max_energy_excess: params.max_energy_excess,
         }
     }
 
@@ -691,6 +710,8 @@ struct Writers {
     /// Frames pushed (for checkpoints).
     frame_count: usize,
     seconds: f64,
+    /// Scratch of the prescribed dofs' energy.
+    scratch: Vec<f64>,
 }
 
 impl Writers {
@@ -706,8 +727,9 @@ impl Writers {
             .as_mut()
             .filter(|_| k.is_multiple_of(self.history_stride) || last)
         {
-            let ke = integ.system().kinetic_energy(&s.v);
-            let pe = integ.system().potential_energy(&s.q);
+            let (ke, pe) = integ
+                .system()
+                .energies(s.time, &s.q, &s.v, &mut self.scratch);
             w.row(s, st, ke, pe)?;
         }
         let closed = s.impulse.iter().any(|&p| p > 0.0);
@@ -746,18 +768,73 @@ struct CheckpointPlan {
     abort_after: Option<usize>,
 }
 
-/// The run's own observer: statistics, contact measurement, output, checkpoints.
+/// The run's own observer: statistics, energy balance, contact measurement, output,
+/// checkpoints.
 struct RunObserver {
     acc: Acc,
     tracker: ContactTracker,
     writers: Writers,
     h: f64,
     plan: Option<CheckpointPlan>,
+    energy: Option<EnergyCheck>,
+}
+
+/// Steps between two checks of the energy balance (each costs the two quadratic forms
+/// of the energy; the work is summed every step).
+pub const ENERGY_CHECK_STRIDE: usize = 64;
+
+/// The energy-balance check of a θ-method run (module doc of [`crate::model::energy`]).
+struct EnergyCheck {
+    audit: crate::model::energy::EnergyAudit,
+    theta: f64,
+    /// `scheme.max_energy_excess`.
+    max: f64,
+}
+
+impl EnergyCheck {
+    /// Sums the step's work; every [`ENERGY_CHECK_STRIDE`] steps and at the last one,
+    /// checks the balance (the largest relative excess goes to `worst`).
+    fn observe(
+        &mut self,
+        integ: &dyn Integrator,
+        last: bool,
+        worst: &mut f64,
+    ) -> Result<(), Error> {
+        let (s, sys, h) = (integ.state(), integ.system(), integ.dt());
+        self.audit.advance(sys, s.time - h, h, self.theta, &s.q);
+        if !(last || s.step.is_multiple_of(ENERGY_CHECK_STRIDE)) {
+            return Ok(());
+        }
+        let x = self.audit.excess(sys, s.time, &s.q, &s.v);
+        let (rel, abs) = (x.relative, x.joules);
+        *worst = worst.max(rel);
+        if rel > self.max {
+            return Err(Error::RunFailed {
+                step: s.step,
+                time: s.time,
+                contact: None,
+                detail: format!(
+                    "the energy grew by {abs:.3e} J ({:.1} % of the run's energy scale) beyond \
+                     the {:.3e} J supplied by loads and prescribed motion, more than \
+                     scheme.max_energy_excess = {}: the solution is not the scheme's (lower \
+                     the time step or the tolerances, do not allow caps, or raise \
+                     scheme.max_energy_excess (--max-energy-excess) to accept it)",
+                    100.0 * rel,
+                    self.audit.work(),
+                    self.max
+                ),
+            });
+        }
+        Ok(())
+    }
 }
 
 impl Observer for RunObserver {
     fn observe(&mut self, integ: &dyn Integrator, st: &StepStats, last: bool) -> Result<(), Error> {
         self.acc.add(st);
+        if let Some(e) = self.energy.as_mut() {
+            e.observe(integ, last, &mut self.acc.energy_excess)?;
+        }
         let s = integ.state();
         let f = s.impulse.iter().sum::<f64>() / self.h;
         let g = s.gap.iter().copied().fold(f64::INFINITY, f64::min);
@@ -810,6 +887,12 @@ impl RunObserver {
             ],
             friction_residual: [Bits(a.fr_res_sum), Bits(a.fr_res_max)],
             newton_loops: a.loops,
+            energy_audit: self
+                .energy
+                .as_ref()
+                .map_or([0.0; 6], |e| e.audit.save())
+                .map(Bits),
+            energy_excess: Bits(a.energy_excess),
             trace: t.trace.clone().map(Floats),
             first_contact: t.first,
             contact_force: Floats(t.force.clone()),
@@ -853,6 +936,7 @@ impl RunObserver {
         ] = r.friction_counts;
         (a.fr_res_sum, a.fr_res_max) = (r.friction_residual[0].0, r.friction_residual[1].0);
         a.loops = r.newton_loops;
+        a.energy_excess = r.energy_excess.0;
         let t = &mut self.tracker;
         t.trace = r.trace.as_ref().map(|f| f.0.clone());
         t.first = r.first_contact;
@@ -935,13 +1019,20 @@ pub fn run_checkpointed(
         closed_before: false,
         frame_count: 0,
         seconds: 0.0,
+        scratch: vec![0.0; 2 * integ.system().prescribed_dofs()],
     };
     let mut plan = None;
     let energy0 = match resume {
         Some(c) => c.run.energy0.0,
         None => {
-            let s = integ.state();
-            integ.system().kinetic_energy(&s.v) + integ.system().potential_energy(&s.q)
+            let (s, sys) = (integ.state(), integ.system());
+            let (ke, pe) = sys.energies(
+                s.time,
+                &s.q,
+                &s.v,
+                &mut vec![0.0; 2 * sys.prescribed_dofs()],
+            );
+            ke + pe
         }
     };
     // held until the run returns: a second run into the same directory is refused
@@ -1048,9 +1139,23 @@ pub fn run_checkpointed(
         writers,
         h,
         plan,
+        // Schatzman–Paoli's velocity is a central difference: its discrete energy is
+        // not the θ-method's, whose balance the check reads
+        energy: (integ.name() != "schatzman-paoli").then(|| {
+            let s = integ.state();
+            EnergyCheck {
+                audit: crate::model::energy::EnergyAudit::new(integ.system(), s.time, &s.q, &s.v),
+                theta,
+                max: checks.max_energy_excess,
+            }
+        }),
     };
     if let Some(c) = resume {
         obs.restore(&c.run);
+        if let Some(e) = obs.energy.as_mut() {
+            e.audit
+                .restore(c.run.energy_audit.map(|b| b.0), &integ.state().q);
+        }
     }
     let start = Instant::now();
     drive(integ, steps, checks, &mut [&mut obs], progress)?;
@@ -1060,8 +1165,13 @@ pub fn run_checkpointed(
         tracker,
         mut writers,
         plan,
+        energy,
         ..
     } = obs;
+    let energy_balance = energy.map(|e| EnergyBalance {
+        supplied_work: e.audit.work(),
+        excess_max: acc.energy_excess,
+    });
     output_seconds += writers.seconds;
     if let Some(w) = writers.history.take() {
         w.finish()?;
@@ -1085,7 +1195,15 @@ pub fn run_checkpointed(
     let wall = start.elapsed().as_secs_f64();
     let s = integ.state();
     let sys = integ.system();
-    let energy1 = sys.kinetic_energy(&s.v) + sys.potential_energy(&s.q);
+    let energy1 = {
+        let (ke, pe) = sys.energies(
+            s.time,
+            &s.q,
+            &s.v,
+            &mut vec![0.0; 2 * sys.prescribed_dofs()],
+        );
+        ke + pe
+    };
     let contact = reference.map(|r| contact_summary(&tracker, h, sys, &s.v, r));
     let summary = Summary {
         scheme: integ.name().to_string(),
@@ -1114,6 +1232,7 @@ pub fn run_checkpointed(
         friction: acc.friction(s.tangent_dim > 0),
         max_lcp_residual: acc.lcp_res,
         energy: [energy0, energy1],
+        energy_balance,
         path: integ.path(),
         model_seconds: 0.0,
         integrator_seconds: 0.0,

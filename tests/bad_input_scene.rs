@@ -168,6 +168,11 @@ const CASES: &[Case] = &[
         &["scheme.newton.max_iterations", "at least 1"],
     ),
     (
+        "negative energy excess",
+        &[("[time]\n", "[scheme]\nmax_energy_excess = -0.1\n[time]\n")],
+        &["scheme.max_energy_excess", "-0.1", "≥ 0"],
+    ),
+    (
         "zero history stride",
         &[("[time]\n", "[output]\nhistory_stride = 0\n[time]\n")],
         &["output.history_stride", "at least 1"],

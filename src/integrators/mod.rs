@@ -378,6 +378,13 @@ pub struct SchemeParams {
     /// on, instead of failing the run at the first one (default false: a cap hit means
     /// the step's solution is not the scheme's, and the run stops with exit code 1).
     pub allow_caps: bool,
+    /// Largest growth of the energy beyond the work that loads and prescribed motion
+    /// supplied, relative to the run's energy scale (`model::energy`), before the run is
+    /// stopped as failed (exit code 1; default 0.01). Every shipped scene and scheme stays
+    /// below 1e-12; what grows more is not the scheme's solution (an unconverged Newton
+    /// loop with caps allowed, or the Euclidean projection without feedback, which
+    /// reproduces Siconos and kicks the contact node). `inf` accepts any growth.
+    pub max_energy_excess: f64,
 }
 
 impl Default for SchemeParams {
@@ -397,6 +404,7 @@ impl Default for SchemeParams {
             max_active_rows: 0,
             friction: crate::solvers::friction::FrictionParams::default(),
             allow_caps: false,
+            max_energy_excess: 0.01,
         }
     }
 }
@@ -415,6 +423,13 @@ impl SchemeParams {
             1e300,
         )?;
         crate::error::require_in("newton.tol", self.newton.tol, 0.0, 1.0)?;
+        if self.max_energy_excess.is_nan() || self.max_energy_excess < 0.0 {
+            return Err(Error::invalid(
+                "max_energy_excess",
+                crate::error::num(self.max_energy_excess),
+                "must be a number ≥ 0 (inf accepts any growth)",
+            ));
+        }
         if self.newton.max_iterations == 0 {
             return Err(Error::invalid(
                 "newton.max_iterations",

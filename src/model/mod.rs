@@ -7,8 +7,10 @@
 //! the contact set; nonlinear internal forces (large strain, nonlinear materials) will
 //! add a tangent-returning variant of this type, with the same integrators.
 //!
-//! Submodules build systems: [`rod`] (P1 rod elements, eq. 71) and [`point_mass`].
+//! Submodules build systems: [`rod`] (P1 rod elements, eq. 71) and [`point_mass`];
+//! [`energy`] keeps a run's energy balance.
 
+pub mod energy;
 pub mod generate;
 pub mod geometry;
 pub mod ordering;
@@ -104,9 +106,53 @@ pub struct Prescribed {
     pub functions: Vec<TimeFunction>,
     /// The old (unreduced) dof of each prescribed dof.
     pub dofs: Vec<usize>,
+    /// `M_pp` (prescribed × prescribed), for the energy of the prescribed dofs.
+    pub mass_pp: SparseMatrix,
+    /// `K_pp`.
+    pub stiffness_pp: SparseMatrix,
+    /// The constant force on the prescribed dofs (gravity), `f_p`.
+    pub force: Vec<f64>,
 }
 
 impl Prescribed {
+    /// What the prescribed dofs add to the energy of the kept dofs at `(t, q, v)`:
+    /// `(vᵀ M_fp v_p + ½ v_pᵀ M_pp v_p, qᵀ K_fp u_p + ½ u_pᵀ K_pp u_p − f_pᵀ u_p)`, so that
+    /// the sums are the whole structure's kinetic and potential energy. `vp` and `up`
+    /// are scratch of one entry per prescribed dof.
+    pub fn energy(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        vp: &mut [f64],
+        up: &mut [f64],
+    ) -> (f64, f64) {
+        self.velocity_at(t, vp);
+        self.displacement_at(t, up);
+        let cross = |m: &SparseMatrix, x: &[f64], y: &[f64]| -> f64 {
+            let m = m.as_ref();
+            let mut s = 0.0;
+            for (j, &yj) in y.iter().enumerate() {
+                if yj != 0.0 {
+                    for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
+                        s += x[m.row_idx()[k]] * m.val()[k] * yj;
+                    }
+                }
+            }
+            s
+        };
+        let kinetic = cross(&self.mass, v, vp) + 0.5 * quadratic_form(self.mass_pp.as_ref(), vp);
+        let potential = cross(&self.stiffness, q, up)
+            + 0.5 * quadratic_form(self.stiffness_pp.as_ref(), up)
+            - self
+                .force
+                .iter()
+                .zip(up.iter())
+                .map(|(f, u)| f * u)
+                .sum::<f64>();
+        (kinetic, potential)
+    }
+
     /// `v_p(t)` into `out`.
     pub fn velocity_at(&self, t: f64, out: &mut [f64]) {
         for ((o, &w), &f) in out.iter_mut().zip(&self.velocity).zip(&self.function) {
@@ -398,6 +444,29 @@ impl LinearSystem {
             );
             SparseMatrix::new(sym, vals)
         };
+        // rows and columns of the prescribed dofs
+        let mut pos = vec![usize::MAX; self.ndof()];
+        for (a, &i) in pdofs.iter().enumerate() {
+            pos[i] = a;
+        }
+        let pp = |m: &SparseMatrix| {
+            let m = m.as_ref();
+            let mut col_ptr = vec![0];
+            let (mut rows, mut vals) = (Vec::new(), Vec::new());
+            for &j in &pdofs {
+                for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
+                    let a = pos[m.row_idx()[k]];
+                    if a != usize::MAX {
+                        rows.push(a);
+                        vals.push(m.val()[k]);
+                    }
+                }
+                col_ptr.push(rows.len());
+            }
+            let n = pdofs.len();
+            let sym = faer::sparse::SymbolicSparseColMat::new_checked(n, n, col_ptr, None, rows);
+            SparseMatrix::new(sym, vals)
+        };
         sys.prescribed = Some(Prescribed {
             mass: block(&self.mass),
             stiffness: block(&self.stiffness),
@@ -411,6 +480,9 @@ impl LinearSystem {
                 .map(|&i| prescribed[i].expect("prescribed").1)
                 .collect(),
             functions,
+            mass_pp: pp(&self.mass),
+            stiffness_pp: pp(&self.stiffness),
+            force: pdofs.iter().map(|&i| self.force[i]).collect(),
             dofs: pdofs,
         });
         (sys, map)
@@ -518,13 +590,33 @@ impl LinearSystem {
         self.mass.nrows()
     }
 
-    /// Kinetic energy `½ vᵀ M v` (J).
+    /// The whole structure's kinetic and potential energy at `(t, q, v)` (J): those of
+    /// the kept dofs ([`LinearSystem::kinetic_energy`], [`LinearSystem::potential_energy`])
+    /// plus what the prescribed dofs add ([`Prescribed::energy`]). `scratch` holds at
+    /// least twice [`LinearSystem::prescribed_dofs`] values.
+    pub fn energies(&self, t: f64, q: &[f64], v: &[f64], scratch: &mut [f64]) -> (f64, f64) {
+        let (mut ke, mut pe) = (self.kinetic_energy(v), self.potential_energy(q));
+        if let Some(p) = &self.prescribed {
+            let (vp, up) = scratch[..2 * p.velocity.len()].split_at_mut(p.velocity.len());
+            let (k, u) = p.energy(t, q, v, vp, up);
+            ke += k;
+            pe += u;
+        }
+        (ke, pe)
+    }
+
+    /// Number of prescribed (eliminated) dofs.
+    pub fn prescribed_dofs(&self) -> usize {
+        self.prescribed.as_ref().map_or(0, |p| p.velocity.len())
+    }
+
+    /// Kinetic energy of the kept dofs `½ vᵀ M v` (J).
     pub fn kinetic_energy(&self, v: &[f64]) -> f64 {
         0.5 * quadratic_form(self.mass.as_ref(), v)
     }
 
-    /// Potential energy `½ qᵀ K q − fᵀ q` (J): elastic energy plus the potential of the
-    /// constant external force.
+    /// Potential energy of the kept dofs `½ qᵀ K q − fᵀ q` (J): elastic energy plus the
+    /// potential of the constant external force.
     pub fn potential_energy(&self, q: &[f64]) -> f64 {
         0.5 * quadratic_form(self.stiffness.as_ref(), q)
             - self.force.iter().zip(q).map(|(f, x)| f * x).sum::<f64>()

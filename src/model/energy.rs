@@ -1,0 +1,224 @@
+//! The energy balance of a run: what the structure holds against what its loads and
+//! prescribed motion supplied, so that a run whose energy grows beyond that is stopped
+//! (DESIGN.md §9; issue 16 §2).
+//!
+//! The energy is the whole structure's, prescribed dofs included
+//! ([`LinearSystem::energies`]): kinetic, elastic, and the potential of the constant
+//! forces such as gravity. What enters it from outside is summed step by step on the
+//! kept dofs' displacement `Δq = q_{k+1} − q_k`, as the θ-method applies it:
+//!
+//! - the time-dependent loads (`[[forces]]`) at `t_{k+θ}`: `φ(t_{k+θ}) bᵀ Δq`;
+//! - the prescribed dofs through their coupling blocks, the force the scheme adds to the
+//!   kept dofs (`integrators::core`):
+//!   `h F_c = −M_fp (v_p(t_{k+1}) − v_p(t_k)) − h C_fp v_p(t_{k+θ}) − h K_fp u_p(t_{k+θ})`,
+//!   work `F_cᵀ Δq`; the supports then supply that work plus the change of the energy the
+//!   prescribed dofs add ([`super::Prescribed::energy`]), which is what
+//!   [`EnergyAudit::work`] reports.
+//!
+//! For the θ-method (eq. 18) with `q_{k+1} = q_k + h(θ v_{k+1} + (1 − θ) v_k)`, on the kept
+//! dofs, this is the discrete energy identity: `ΔE = W − (θ − ½)(ΔvᵀMΔv + ΔqᵀKΔq) −
+//! h v_θᵀ C v_θ +` the contact impulses' work, which is at most 0 for Newton's law with
+//! `e ≤ 1` and for Coulomb friction. So `E − E₀ − W` is at most round-off for θ = ½
+//! without contact, and negative otherwise, up to what the position projections of
+//! Algorithms 1 and 2 and the tolerances move: [`EnergyAudit::excess`] measures it
+//! against the run's energy scale. Written here because the balance is the scheme's own,
+//! not a library's.
+
+use super::LinearSystem;
+
+/// What [`EnergyAudit::excess`] measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Excess {
+    /// `(E − E₀ − W) / scale`.
+    pub relative: f64,
+    /// `E − E₀ − W` (J).
+    pub joules: f64,
+    /// Kinetic energy of the whole structure (J).
+    pub kinetic: f64,
+    /// Potential energy of the whole structure (J).
+    pub potential: f64,
+}
+
+/// The running balance of a run (module doc). Sized once; [`EnergyAudit::advance`]
+/// does not allocate.
+#[derive(Clone, Debug)]
+pub struct EnergyAudit {
+    /// The whole structure's energy at the start.
+    e0: f64,
+    /// What the prescribed dofs added to it at the start and at the last check.
+    extra0: f64,
+    extra: f64,
+    /// Work done on the kept dofs so far by loads and the prescribed dofs' coupling (J).
+    work: f64,
+    /// Sum of the absolute work increments (J): the scale of what went in and out.
+    work_abs: f64,
+    /// Largest `|E|` and kinetic energy met at the checks (J).
+    e_max: f64,
+    /// `q` at the last step, kept only on the dofs loaded or coupled to prescribed ones.
+    q_prev: Vec<f64>,
+    /// Those dofs.
+    rows: Vec<usize>,
+    /// Scratch over the prescribed dofs.
+    vp_a: Vec<f64>,
+    vp_b: Vec<f64>,
+    scratch: Vec<f64>,
+}
+
+impl EnergyAudit {
+    /// Starts the balance at `(t, q, v)`.
+    pub fn new(sys: &LinearSystem, t: f64, q: &[f64], v: &[f64]) -> Self {
+        let n = sys.ndof();
+        let mut touched = vec![false; n];
+        for l in &sys.loads {
+            for &d in &l.dofs {
+                touched[d] = true;
+            }
+        }
+        let np = sys.prescribed.as_ref().map_or(0, |p| p.velocity.len());
+        if let Some(p) = &sys.prescribed {
+            let mut mark = |m: &crate::linalg::SparseMatrix| {
+                for &r in m.as_ref().row_idx() {
+                    touched[r] = true;
+                }
+            };
+            mark(&p.mass);
+            mark(&p.stiffness);
+            if let Some(c) = &p.damping {
+                mark(c);
+            }
+        }
+        let rows: Vec<usize> = (0..n).filter(|&i| touched[i]).collect();
+        let mut q_prev = vec![0.0; n];
+        for &r in &rows {
+            q_prev[r] = q[r];
+        }
+        let mut scratch = vec![0.0; 2 * np];
+        let (ke, pe) = sys.energies(t, q, v, &mut scratch);
+        let e0 = ke + pe;
+        let extra0 = e0 - sys.kinetic_energy(v) - sys.potential_energy(q);
+        EnergyAudit {
+            e0,
+            extra0,
+            extra: extra0,
+            work: 0.0,
+            work_abs: 0.0,
+            e_max: e0.abs(),
+            q_prev,
+            rows,
+            vp_a: vec![0.0; np],
+            vp_b: vec![0.0; np],
+            scratch,
+        }
+    }
+
+    /// The energy at the start (J).
+    pub fn initial(&self) -> f64 {
+        self.e0
+    }
+
+    /// The work supplied so far by loads and prescribed motion (J), as of the last
+    /// [`EnergyAudit::excess`].
+    pub fn work(&self) -> f64 {
+        self.work + self.extra - self.extra0
+    }
+
+    /// Adds the work of the step from `t` to `t + h` (θ-method at `theta`) that ended at
+    /// `q`.
+    pub fn advance(&mut self, sys: &LinearSystem, t: f64, h: f64, theta: f64, q: &[f64]) {
+        let mut w = 0.0;
+        let tt = t + theta * h;
+        for l in &sys.loads {
+            let phi = l.time.eval(tt);
+            if phi != 0.0 {
+                for (&d, &b) in l.dofs.iter().zip(&l.values) {
+                    w += phi * b * (q[d] - self.q_prev[d]);
+                }
+            }
+        }
+        if let Some(p) = &sys.prescribed {
+            // h F_c = −M_fp Δv_p − h C_fp v_p(t_{k+θ}) − h K_fp u_p(t_{k+θ}), column by
+            // column, dotted with Δq on the rows it touches
+            p.velocity_at(t, &mut self.vp_a);
+            p.velocity_at(t + h, &mut self.vp_b);
+            for (b, a) in self.vp_b.iter_mut().zip(&self.vp_a) {
+                *b -= a;
+            }
+            let q_prev = &self.q_prev;
+            let dot = |m: &crate::linalg::SparseMatrix, x: &[f64], s: f64| -> f64 {
+                let m = m.as_ref();
+                let mut acc = 0.0;
+                for (j, &xj) in x.iter().enumerate() {
+                    if xj != 0.0 {
+                        for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
+                            let r = m.row_idx()[k];
+                            acc += m.val()[k] * xj * (q[r] - q_prev[r]);
+                        }
+                    }
+                }
+                s * acc
+            };
+            w += dot(&p.mass, &self.vp_b, -1.0 / h);
+            p.velocity_at(tt, &mut self.vp_a);
+            if let Some(c) = &p.damping {
+                w += dot(c, &self.vp_a, -1.0);
+            }
+            p.displacement_at(tt, &mut self.vp_a);
+            w += dot(&p.stiffness, &self.vp_a, -1.0);
+        }
+        for &r in &self.rows {
+            self.q_prev[r] = q[r];
+        }
+        self.work += w;
+        self.work_abs += w.abs();
+    }
+
+    /// `E − E₀ − W` at `(t, q, v)` (the end of the last [`EnergyAudit::advance`])
+    /// relative to the run's energy scale `max(|E| met, kinetic energy met, Σ|ΔW|)`;
+    /// positive: energy appeared that nothing supplied. Also returns the absolute excess
+    /// (J), the kinetic and the potential energy. Allocates nothing.
+    pub fn excess(&mut self, sys: &LinearSystem, t: f64, q: &[f64], v: &[f64]) -> Excess {
+        let (kinetic, potential) = sys.energies(t, q, v, &mut self.scratch);
+        let e = kinetic + potential;
+        self.extra = e - sys.kinetic_energy(v) - sys.potential_energy(q);
+        self.e_max = self.e_max.max(e.abs()).max(kinetic);
+        let scale = self
+            .e_max
+            .max(self.work_abs + (self.extra - self.extra0).abs())
+            .max(f64::MIN_POSITIVE);
+        let excess = e - self.e0 - self.work();
+        Excess {
+            relative: excess / scale,
+            joules: excess,
+            kinetic,
+            potential,
+        }
+    }
+
+    /// The sums a checkpoint keeps: `E₀`, what the prescribed dofs added at the start and
+    /// at the last check, the work, its absolute sum and the largest energy met.
+    pub fn save(&self) -> [f64; 6] {
+        [
+            self.e0,
+            self.extra0,
+            self.extra,
+            self.work,
+            self.work_abs,
+            self.e_max,
+        ]
+    }
+
+    /// Restores [`EnergyAudit::save`]'s sums at the restored `q` (the last step's end).
+    pub fn restore(&mut self, sums: [f64; 6], q: &[f64]) {
+        [
+            self.e0,
+            self.extra0,
+            self.extra,
+            self.work,
+            self.work_abs,
+            self.e_max,
+        ] = sums;
+        for &r in &self.rows {
+            self.q_prev[r] = q[r];
+        }
+    }
+}

@@ -1,0 +1,201 @@
+//! Issue 16 §2: a run whose energy grows beyond what its loads and prescribed motion
+//! supply stops as failed (exit code 1), as a non-finite state does; the balance counts
+//! the work of `[[forces]]` and of prescribed dofs (`model::energy`).
+//!
+//! Tolerances: for θ = ½ without contact the θ-method's discrete energy identity is exact,
+//! so the balance closes to round-off (1e-10 of the energy scale asserted; measured below
+//! 1e-12); with contacts, friction and damping the excess is at most round-off (every
+//! shipped scene and scheme measured at most 1.4e-13 of its scale; 1e-9 asserted).
+
+use signorini::Error;
+use signorini::checkpoint::IntegratorState;
+use signorini::contact::ContactJacobian;
+use signorini::integrators::{Integrator, State, StepStats};
+use signorini::model::LinearSystem;
+use signorini::model::energy::EnergyAudit;
+use signorini::run::{Quiet, run_scene};
+use signorini::scene::file::Scene;
+
+fn meshes(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("meshes")
+        .join(name)
+}
+
+/// A free elastic block (no contact, no gravity, undamped, θ = ½) pushed on one face by a
+/// `[[forces]]` ramp, or dragged by a prescribed velocity ramp on that face: the energy it
+/// holds at every step equals the work supplied, to round-off, and that work is positive.
+#[test]
+fn the_work_of_forces_and_prescribed_motion_closes_the_balance_of_a_free_block() {
+    let base = r#"
+[time]
+dt = 1e-4
+t_end = 0.05
+[scheme]
+kind = "combined-projection"
+[[bodies]]
+name = "block"
+mesh = { generator = "box", cell = "hex8", cells = [3, 3, 2], size = [0.1, 0.1, 0.05] }
+material = { young = 1e7, poisson = 0.3, density = 1000.0 }
+"#;
+    let drives = [
+        "[[forces]]\nbody = \"block\"\nnodes = \"x1\"\ntotal = [4.0, 1.0, 0.0]\ntime = [[0.0, 0.0], [0.02, 1.0], [0.03, 1.0], [0.04, 0.0]]\n",
+        "[[prescribed]]\nbody = \"block\"\nnodes = \"x0\"\nvelocity = [0.5, 0.0, 0.2]\ntime = [[0.0, 0.0], [0.02, 1.0], [0.05, 1.0]]\n",
+    ];
+    for drive in drives {
+        let scene = Scene::from_toml(&format!("{base}{drive}")).unwrap();
+        let (model, _) = scene.build().unwrap();
+        let mut integ = model.into_integrator(&scene.scheme, scene.time.dt).unwrap();
+        let s = integ.state();
+        let mut audit = EnergyAudit::new(integ.system(), s.time, &s.q, &s.v);
+        let h = integ.dt();
+        let mut worst: f64 = 0.0;
+        for _ in 0..scene.steps() {
+            integ.step().unwrap();
+            let (s, sys) = (integ.state(), integ.system());
+            audit.advance(sys, s.time - h, h, 0.5, &s.q);
+            let x = audit.excess(sys, s.time, &s.q, &s.v);
+            worst = worst.max(x.relative.abs());
+        }
+        eprintln!(
+            "{}: work {:.6e} J, largest |E − E0 − W| / scale {worst:.2e}",
+            drive.lines().next().unwrap(),
+            audit.work()
+        );
+        assert!(audit.work() > 1e-3, "{drive}: work {}", audit.work());
+        assert!(
+            worst <= 1e-10,
+            "{drive}: balance off by {worst:e} of the scale"
+        );
+    }
+}
+
+/// Every shipped scene that has loads, prescribed motion, contact or friction keeps its
+/// balance: the excess the run reports stays at round-off, far below the failure level.
+#[test]
+fn shipped_scenes_keep_their_energy_balance() {
+    for name in [
+        "pushed_block.toml",
+        "dragged_block.toml",
+        "sliding_block.toml",
+        "ball_drop.toml",
+        "block_on_cylinder.toml",
+    ] {
+        let scene = Scene::from_file(&meshes(name)).unwrap();
+        let r = run_scene(&scene, None, &mut Quiet).unwrap();
+        let b = r
+            .summary
+            .energy_balance
+            .expect("a θ-method run has a balance");
+        eprintln!(
+            "{name}: supplied {:.4e} J, excess {:.2e}",
+            b.supplied_work, b.excess_max
+        );
+        assert!(b.excess_max <= 1e-9, "{name}: {b:?}");
+        if name == "pushed_block.toml" || name == "dragged_block.toml" {
+            assert!(b.supplied_work > 0.0, "{name}: {b:?}");
+        }
+    }
+}
+
+/// A real way to gain energy: one Newton iteration per step on the curved obstacle of
+/// `meshes/block_on_cylinder.toml` (G(q) is not followed) with caps allowed. The run
+/// used to end with exit 0; it now fails with exit 1 at the first check past 1 % (step
+/// 500, 4.4 % measured), its history kept.
+#[test]
+fn an_unconverged_newton_loop_that_gains_energy_fails_the_run() {
+    let text = std::fs::read_to_string(meshes("block_on_cylinder.toml"))
+        .unwrap()
+        .replace("t_end = 0.3", "t_end = 0.05")
+        .replace(
+            "kind = \"combined-projection\"",
+            "kind = \"combined-projection\"\nnewton = { tol = 1e-12, max_iterations = 1 }\nallow_caps = true",
+        );
+    let scene = Scene::from_toml(&text).unwrap();
+    let Err(err) = run_scene(&scene, None, &mut Quiet) else {
+        panic!("the run that gains energy passed");
+    };
+    let msg = err.to_string();
+    assert_eq!(err.exit_code(), 1, "{msg}");
+    assert!(msg.contains("the energy grew by"), "{msg}");
+}
+
+/// An integrator that multiplies the velocity by 1.01 after step 100: energy from
+/// nowhere, which the run must refuse (exit code 1, [`Error::RunFailed`]) within the
+/// check stride, naming the energy and the work supplied.
+struct Leaky(Box<dyn Integrator>);
+
+impl Integrator for Leaky {
+    fn name(&self) -> &'static str {
+        self.0.name()
+    }
+    fn step(&mut self) -> Result<StepStats, Error> {
+        let st = self.0.step()?;
+        if self.0.state().step > 100 {
+            let mut s = self.0.save();
+            let v = s.vectors.get_mut("v").unwrap();
+            v.0.iter_mut().for_each(|x| *x *= 1.01);
+            self.0.restore(&s)?;
+        }
+        Ok(st)
+    }
+    fn state(&self) -> &State {
+        self.0.state()
+    }
+    fn system(&self) -> &LinearSystem {
+        self.0.system()
+    }
+    fn dt(&self) -> f64 {
+        self.0.dt()
+    }
+    fn path(&self) -> String {
+        self.0.path()
+    }
+    fn jacobian(&self) -> &ContactJacobian {
+        self.0.jacobian()
+    }
+    fn save(&self) -> IntegratorState {
+        self.0.save()
+    }
+    fn restore(&mut self, s: &IntegratorState) -> Result<(), Error> {
+        self.0.restore(s)
+    }
+}
+
+#[test]
+fn a_run_whose_energy_grows_from_nowhere_fails() {
+    let scene = Scene::from_file(&meshes("sliding_block.toml")).unwrap();
+    let (model, _) = scene.build().unwrap();
+    let size = model.geometry.size();
+    let mut integ = Leaky(model.into_integrator(&scene.scheme, scene.time.dt).unwrap());
+    let checks = signorini::run::RunChecks::new(&scene.scheme, size);
+    let Err(err) = signorini::run::run(
+        &mut integ,
+        scene.steps(),
+        1,
+        scene.scheme.theta,
+        &checks,
+        None,
+        serde_json::Value::Null,
+        None,
+        &mut Quiet,
+    ) else {
+        panic!("energy from nowhere was accepted");
+    };
+    let msg = err.to_string();
+    eprintln!("{msg}");
+    assert_eq!(err.exit_code(), 1, "{msg}");
+    assert!(
+        msg.contains("the energy grew by") && msg.contains("supplied by loads and prescribed"),
+        "{msg}"
+    );
+    // within one check stride of the first 1 % excess: 1.01² per step gains 2 % of the
+    // kinetic energy per step, so the check after step 128 already sees it
+    let Error::RunFailed { step, .. } = err else {
+        panic!("{err:?}")
+    };
+    assert!(
+        step <= 100 + 2 * signorini::run::ENERGY_CHECK_STRIDE,
+        "{step}"
+    );
+}
