@@ -335,19 +335,101 @@ fn each_bad_mesh_is_refused_with_its_file_and_place() {
             "2-component .vtu points",
             "pts2.vtu",
             text(&vtu(2, "0 0 1 0", 2, "0 1 0", "3")),
-            vec!["not a multiple of 3", "NumberOfComponents"],
+            vec![
+                "line 6",
+                "Points have 2 components",
+                "NumberOfComponents=\"3\"",
+            ],
         ),
         (
             "offsets past the connectivity",
             "offs.vtu",
             text(&vtu(3, "0 0 0 1 0 0 0 1 0", 3, "0 1 2", "9")),
-            vec!["VTK XML read error"],
+            vec!["piece 0, cell 0", "offset 9 is outside [0, 3]"],
         ),
         (
             "not XML",
             "garbage.vtu",
             text("garbage"),
-            vec!["VTK XML read error"],
+            vec!["no <VTKFile> element"],
+        ),
+        (
+            "fewer point coordinates than NumberOfPoints says",
+            "count.vtu",
+            text(&vtu(4, "0 0 0 1 0 0 0 1 0", 3, "0 1 2", "3")),
+            vec!["DataArray `", "9 values, expected 12"],
+        ),
+        (
+            "a coordinate that is not a number",
+            "nan.vtu",
+            text(&vtu(3, "0 0 0 1 x 0 0 1 0", 3, "0 1 2", "3")),
+            vec!["value 4 `x` is not a number"],
+        ),
+        (
+            "a point index that is not an integer",
+            "frac.vtu",
+            text(&vtu(3, "0 0 0 1 0 0 0 1 0", 3, "0 1.5 2", "3")),
+            vec!["piece 0, cell 0", "point index 1.5"],
+        ),
+        (
+            "an unknown value type",
+            "f16.vtu",
+            text(&vtu(3, "0 0 0 1 0 0 0 1 0", 3, "0 1 2", "3").replace("Float64", "Float16")),
+            vec!["type `Float16`", "Float32 or Float64"],
+        ),
+        (
+            "an LZ4-compressed file",
+            "lz4.vtu",
+            text(&vtu(3, "0 0 0 1 0 0 0 1 0", 3, "0 1 2", "3").replace(
+                "byte_order=",
+                "compressor=\"vtkLZ4DataCompressor\" byte_order=",
+            )),
+            vec!["compressor `vtkLZ4DataCompressor` is not supported"],
+        ),
+        (
+            "binary data that is not base64",
+            "b64.vtu",
+            text(&vtu(3, "@@@@", 3, "0 1 2", "3").replacen(
+                "format=\"ascii\"",
+                "format=\"binary\"",
+                1,
+            )),
+            vec!["DataArray `", "base64 data"],
+        ),
+        (
+            "a binary header that claims more bytes than present",
+            "short.vtu",
+            // UInt32 header 72 (9 f64), then only 8 bytes of data
+            text(&vtu(3, "SAAAAAAAAAAAAAAA", 3, "0 1 2", "3").replacen(
+                "format=\"ascii\"",
+                "format=\"binary\"",
+                1,
+            )),
+            vec!["header says 72 bytes, 8 present"],
+        ),
+        (
+            "a zlib header that claims a bomb",
+            "bomb.vtu",
+            // 1 block of 2³¹ bytes from 4 compressed bytes
+            text(
+                &vtu(3, "AQAAAAAAAIAAAACABAAAAA==eJwDAA==", 3, "0 1 2", "3")
+                    .replacen("format=\"ascii\"", "format=\"binary\"", 1)
+                    .replace(
+                        "byte_order=",
+                        "compressor=\"vtkZLibDataCompressor\" byte_order=",
+                    ),
+            ),
+            vec!["268435456 values: more than the 9 its piece can hold"],
+        ),
+        (
+            "appended data without AppendedData",
+            "app.vtu",
+            text(&vtu(3, "", 3, "0 1 2", "3").replacen(
+                "format=\"ascii\">",
+                "format=\"appended\" offset=\"0\">",
+                1,
+            )),
+            vec!["format=\"appended\" but the file has no AppendedData"],
         ),
     ];
     assert!(cases.len() >= 30);

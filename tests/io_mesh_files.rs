@@ -79,6 +79,47 @@ fn committed_meshes_have_the_counts_meshio_reports() {
     }
 }
 
+/// Every `.vtu` layout VTK and meshio write holds the same plate as `meshes/plate.vtu`
+/// (meshio's default: inline binary, zlib, UInt32 headers), read by our own reader:
+/// meshio's ascii and uncompressed binary; VTK's raw appended data (zlib with UInt64
+/// headers, and uncompressed), base64 appended data, big-endian inline binary with
+/// UInt64 headers, and ascii with `InformationKey`s inside the arrays
+/// (`tests/data/vtu/make.py` wrote them with VTK 9.x and meshio 5.3.5). Binary layouts
+/// hold the same doubles (equal bit for bit); ascii prints at least 11 significant
+/// digits (VTK: `0.20615528128`), so 1e-10 there.
+#[test]
+fn every_vtu_layout_reads_the_same_plate() {
+    let reference = read_mesh(&mesh_path("plate.vtu")).unwrap();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtu");
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().and_then(|x| x.to_str()) != Some("vtu") {
+            continue;
+        }
+        let name = p.file_name().unwrap().to_string_lossy().to_string();
+        let m = read_mesh(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(m.cells, reference.cells, "{name}: cells");
+        assert_eq!(
+            m.node_sets["bottom"], reference.node_sets["bottom"],
+            "{name}"
+        );
+        let tol = if name.contains("ascii") { 1e-10 } else { 0.0 };
+        let d = m
+            .points
+            .iter()
+            .zip(&reference.points)
+            .flat_map(|(p, q)| p.iter().zip(q).map(|(u, v)| (u - v).abs()))
+            .fold(0.0, f64::max);
+        assert!(
+            m.points.len() == reference.points.len() && d <= tol,
+            "{name}: coordinates differ by {d}"
+        );
+        n += 1;
+    }
+    assert_eq!(n, 7, "the seven layouts are found");
+}
+
 #[test]
 fn ball_mesh_has_the_mass_of_its_polyhedron() {
     let m = read_mesh(&mesh_path("ball.msh")).unwrap();

@@ -1,8 +1,9 @@
 //! Mesh input: Gmsh `.msh` (4.1 ASCII and binary through mshio; 2.2 ASCII and binary and the
 //! `$PhysicalNames` section, which mshio skips, by our own small parsers), VTK XML
-//! `.vtu` (through vtkio 0.7.0-rc2, which reads meshio's default binary + zlib files)
-//! and legacy `.vtk` (our parser: vtkio reads neither meshio's default legacy 5.1
-//! binary files nor their OFFSETS/CONNECTIVITY layout; DESIGN.md §6).
+//! `.vtu` (our reader on quick-xml, [`super::vtu`]: ascii, inline binary with or without
+//! zlib, raw and base64 appended data) and legacy `.vtk` (our parser: vtkio reads
+//! neither meshio's default legacy 5.1 binary files nor their OFFSETS/CONNECTIVITY
+//! layout; DESIGN.md §6).
 //!
 //! The cells of the highest dimension present (tet4/hex8, else tri3/quad4) become the
 //! mesh; lower-dimensional elements only define node sets. Node sets: Gmsh physical
@@ -827,109 +828,94 @@ fn vtk_kind(t: u8) -> (usize, Result<CellKind, String>) {
     }
 }
 
-/// Runs a third-party parser that may panic on malformed input (vtkio 0.7.0-rc2 indexes
-/// its buffers unchecked: fuzzing found panics within seconds) and turns a panic into
-/// `None`, with the panic message silenced: a bad file is an error, not a crash.
+thread_local! {
+    /// Set while [`guarded`] runs a third-party parser on this thread.
+    static GUARDED: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs a third-party parser that may panic on malformed input (mshio) and turns a
+/// panic into `None`: a bad file is an error, not a crash. The panic's message is
+/// silenced by a process-wide hook installed once, which stays quiet only for the
+/// thread inside `guarded` and hands every other panic to the hook it replaced (swapping
+/// the hook around each call raced with panics on other threads).
 fn guarded<T>(f: impl FnOnce() -> T + std::panic::UnwindSafe) -> Option<T> {
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
+    static INSTALL: std::sync::Once = std::sync::Once::new();
+    INSTALL.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !GUARDED.with(|g| g.get()) {
+                previous(info);
+            }
+        }));
+    });
+    GUARDED.with(|g| g.set(true));
     let r = std::panic::catch_unwind(f);
-    std::panic::set_hook(hook);
+    GUARDED.with(|g| g.set(false));
     r.ok()
 }
 
 fn read_vtu(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
-    guarded(|| read_vtu_unguarded(path, bytes)).unwrap_or_else(|| {
-        Err(bad(
-            path,
-            "VTK XML read error: the file is malformed (vtkio could not read it)",
-        ))
-    })
-}
-
-fn read_vtu_unguarded(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
-    use vtkio::model::{Attribute, DataSet, VertexNumbers};
-    let vtk = vtkio::Vtk::parse_xml(bytes)
-        .map_err(|e| bad(path, format!("VTK XML read error: {}", short_message(e))))?;
-    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
-        return Err(bad(path, "not an UnstructuredGrid"));
-    };
+    let pieces = super::vtu::read(path, bytes)?;
     let mut raw = RawMesh::default();
-    for (pi, piece) in pieces.into_iter().enumerate() {
-        let p = piece
-            .into_loaded_piece_data(Some(path))
-            .map_err(|e| bad(path, format!("piece {pi}: {}", short_message(e))))?;
+    for (pi, p) in pieces.into_iter().enumerate() {
         let base = raw.points.len();
-        let xyz: Vec<f64> = p
-            .points
-            .cast_into()
-            .ok_or_else(|| bad(path, format!("piece {pi}: points are not numeric")))?;
-        if !xyz.len().is_multiple_of(3) {
-            return Err(bad(
-                path,
-                format!(
-                    "piece {pi}: {} point coordinates, not a multiple of 3 (Points needs \
-                     NumberOfComponents=\"3\")",
-                    xyz.len()
-                ),
-            ));
-        }
-        raw.points.extend(xyz.chunks(3).map(|c| [c[0], c[1], c[2]]));
-        let (conn, offsets): (Vec<u64>, Vec<u64>) = match p.cells.cell_verts {
-            VertexNumbers::XML {
-                connectivity,
-                offsets,
-            } => (connectivity, offsets),
-            legacy => legacy.into_xml(),
+        raw.points
+            .extend(p.xyz.chunks_exact(3).map(|c| [c[0], c[1], c[2]]));
+        let index = |what: &str, c: usize, v: f64| -> Result<usize, Error> {
+            if v >= 0.0 && v.fract() == 0.0 && v < 9.0e15 {
+                Ok(v as usize)
+            } else {
+                Err(bad(
+                    path,
+                    format!("piece {pi}, cell {c}: {what} {v} is not a non-negative integer"),
+                ))
+            }
         };
-        let offs: &[u64] = if offsets.first() == Some(&0) {
-            &offsets[1..]
+        // VTK's offsets are the cells' end positions; some writers lead with a 0
+        let offs: &[f64] = if p.offsets.len() == p.cells + 1 && p.offsets.first() == Some(&0.0) {
+            &p.offsets[1..]
         } else {
-            &offsets
+            &p.offsets
         };
-        if offs.len() != p.cells.types.len() {
+        if offs.len() != p.types.len() {
             return Err(bad(
                 path,
                 format!(
                     "piece {pi}: {} cell offsets but {} cell types",
                     offs.len(),
-                    p.cells.types.len()
+                    p.types.len()
                 ),
             ));
         }
         let mut start = 0usize;
-        for (c, (t, &end)) in p.cells.types.iter().zip(offs).enumerate() {
-            let end = usize::try_from(end).unwrap_or(usize::MAX);
-            if end < start || end > conn.len() {
+        for (c, (&t, &end)) in p.types.iter().zip(offs).enumerate() {
+            let end = index("offset", c, end)?;
+            if end < start || end > p.connectivity.len() {
                 return Err(bad(
                     path,
                     format!(
                         "piece {pi}, cell {c}: offset {end} is outside [{start}, {}] (offsets \
                          must grow and stay within the connectivity)",
-                        conn.len()
+                        p.connectivity.len()
                     ),
                 ));
             }
-            let (d, kind) = vtk_kind(*t as u8);
-            let ns = conn[start..end]
-                .iter()
-                .map(|&v| base.saturating_add(usize::try_from(v).unwrap_or(usize::MAX)))
-                .collect();
+            let t = index("type", c, t)?;
+            let (d, kind) = vtk_kind(u8::try_from(t).unwrap_or(u8::MAX));
+            let mut ns = Vec::with_capacity(end - start);
+            for &v in &p.connectivity[start..end] {
+                ns.push(base.saturating_add(index("point index", c, v)?));
+            }
             raw.cells.push((d, kind, ns));
             start = end;
         }
-        for a in p.data.point {
-            if let Attribute::DataArray(da) = a
-                && let Some(vals) = da.data.cast_into::<f64>()
-                && vals.len() == xyz.len() / 3
-            {
-                let set = vals
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, v)| **v != 0.0)
-                    .map(|(i, _)| base + i);
-                raw.sets.entry(da.name.clone()).or_default().extend(set);
-            }
+        for (name, vals) in p.point_data {
+            let set = vals
+                .iter()
+                .enumerate()
+                .filter(|(_, v)| **v != 0.0)
+                .map(|(i, _)| base + i);
+            raw.sets.entry(name).or_default().extend(set);
         }
     }
     Ok(raw)

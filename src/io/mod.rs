@@ -11,6 +11,7 @@ pub mod frames;
 #[cfg(feature = "hdf5")]
 pub mod h5;
 pub mod mesh;
+pub(crate) mod vtu;
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
