@@ -1,18 +1,18 @@
 //! Sparse assembly: element matrices to global compressed-column matrices.
 //!
 //! Two assemblers behind one [`Accumulate`] trait:
-//! - [`Assembler`]: element contributions are pushed as triplets into a
-//!   `nalgebra_sparse::CooMatrix`, converted to CSC by nalgebra-sparse (which sorts and
-//!   sums duplicates; measured about 2× faster than faer's triplet constructor on a 40³
-//!   Laplacian, DESIGN.md §6), and the CSC arrays are moved into faer without copying.
-//!   Used for small and one-off matrices.
+//! - [`Assembler`]: element contributions are pushed as triplets and handed to faer's
+//!   triplet constructor (which sorts and sums duplicates). Used for small and one-off
+//!   matrices: the rod, point masses, linear combinations of unlike patterns.
+//!   (nalgebra-sparse's COO → CSC was measured about 2× faster on a 40³ Laplacian,
+//!   DESIGN.md §6, but meshes go through the pattern assembler below, and faer's
+//!   constructor removes a dependency.)
 //! - [`PatternAssembler`]: for meshes, the CSC pattern is built once from the node
 //!   adjacency and contributions are added in place (binary search in short sorted
 //!   columns). On a 98k-dof hex8 box the COO route spent 0.41 s pushing and 0.82 s
 //!   sorting per matrix.
 
-use faer::sparse::SymbolicSparseColMat;
-use nalgebra_sparse::{CooMatrix, CscMatrix};
+use faer::sparse::{SymbolicSparseColMat, Triplet};
 
 use crate::linalg::SparseMatrix;
 
@@ -35,7 +35,7 @@ pub trait Accumulate {
 
 impl Accumulate for Assembler {
     fn add(&mut self, i: usize, j: usize, v: f64) {
-        self.coo.push(i, j, v);
+        self.triplets.push(Triplet::new(i, j, v));
     }
 }
 
@@ -227,30 +227,25 @@ impl PatternAssembler {
 
 /// Collects element contributions for one global matrix.
 pub struct Assembler {
-    coo: CooMatrix<f64>,
+    n: usize,
+    triplets: Vec<Triplet<usize, usize, f64>>,
 }
 
 impl Assembler {
     /// An empty `n × n` matrix with room for `capacity` triplets.
     pub fn new(n: usize, capacity: usize) -> Self {
-        let mut coo = CooMatrix::new(n, n);
-        coo.reserve(capacity);
-        Assembler { coo }
+        Assembler {
+            n,
+            triplets: Vec::with_capacity(capacity),
+        }
     }
 
-    /// Sums duplicates and hands the CSC arrays to faer without copying.
+    /// Sums duplicates into faer's compressed columns.
     pub fn finish(self) -> SparseMatrix {
-        let csc = CscMatrix::from(&self.coo);
-        csc_into_faer(csc)
+        // the indices were pushed below n by the callers' own dof maps
+        SparseMatrix::try_new_from_triplets(self.n, self.n, &self.triplets)
+            .expect("triplet indices below the matrix size")
     }
-}
-
-/// Moves a nalgebra-sparse CSC matrix into a faer sparse matrix (no copy of the arrays).
-pub fn csc_into_faer(csc: CscMatrix<f64>) -> SparseMatrix {
-    let (nrows, ncols) = (csc.nrows(), csc.ncols());
-    let (col_ptr, row_idx, values) = csc.disassemble();
-    let sym = SymbolicSparseColMat::new_checked(nrows, ncols, col_ptr, None, row_idx);
-    SparseMatrix::new(sym, values)
 }
 
 /// `a·A + b·B + c·C` for square matrices of the same size (used once per time step
