@@ -14,24 +14,13 @@ pub fn tangents(n: &[f64]) -> [[f64; 3]; 2] {
             let k = (0..3)
                 .min_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs()))
                 .expect("three components");
-            let mut e = [0.0; 3];
-            e[k] = 1.0;
-            let t = cross([n[0], n[1], n[2]], e);
-            let l = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
-            let t1 = [t[0] / l, t[1] / l, t[2] / l];
-            let t2 = cross([n[0], n[1], n[2]], t1);
-            [t1, t2]
+            let nv = nalgebra::Vector3::new(n[0], n[1], n[2]);
+            let t1 = nv.cross(&nalgebra::Vector3::ith(k, 1.0)).normalize();
+            let t2 = nv.cross(&t1);
+            [t1.into(), t2.into()]
         }
         _ => [[0.0; 3]; 2],
     }
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }
 
 /// Writes the block of a nodal contact with unit normal `n` into the `d` columns of
