@@ -63,7 +63,9 @@ mod tests {
             ] {
                 assert!((dot(a, b) - want).abs() < 1e-15);
             }
-            let c = cross(t1, t2);
+            let c: [f64; 3] = nalgebra::Vector3::from(t1)
+                .cross(&nalgebra::Vector3::from(t2))
+                .into();
             assert!((dot(&c, &n) - 1.0).abs() < 1e-15, "right-handed");
         }
         let [t, _] = tangents(&[0.0, 1.0]);

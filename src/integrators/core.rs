@@ -986,6 +986,11 @@ impl ThetaCore {
                 .sum::<f64>()
                 .sqrt();
             let mu = self.mu[k];
+            // the buffers hold `cap` unknowns: a larger problem is not attempted (and
+            // must not grow them inside the step)
+            if cp.unknowns.len() + d > cp.cap || cp.cols.len() + d > cp.cols.capacity() {
+                return Ok(false);
+            }
             if d == 1 || mu == 0.0 || pt >= (1.0 - 1e-9) * mu * pn {
                 let mut u = Unknown {
                     row: o,
@@ -1017,6 +1022,9 @@ impl ThetaCore {
                 _ => false,
             };
             if eq || self.tau[a] > 0.0 {
+                if cp.unknowns.len() == cp.cap || cp.cols.len() == cp.cols.capacity() {
+                    return Ok(false);
+                }
                 cp.unknowns.push(Unknown {
                     row: a,
                     contact: k,
@@ -1027,7 +1035,7 @@ impl ThetaCore {
                 cp.cols.push(a);
             }
         }
-        if cp.unknowns.len() > cp.cap || !cp.unknowns.iter().any(|u| u.tau) {
+        if !cp.unknowns.iter().any(|u| u.tau) {
             return Ok(false);
         }
         cp.cols.sort_unstable();

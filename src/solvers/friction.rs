@@ -1145,7 +1145,8 @@ fn solve3(a: &[f64; 9], b: &[f64; 3]) -> Option<[f64; 3]> {
     let m = nalgebra::Matrix3::from_row_slice(a);
     let amax = m.amax();
     let lu = m.lu();
-    if lu.u().diagonal().iter().any(|p| !(p.abs() > 1e-14 * amax)) {
+    // a NaN pivot fails the test too
+    if !lu.u().diagonal().iter().all(|p| p.abs() > 1e-14 * amax) {
         return None;
     }
     let x = lu.solve(&nalgebra::Vector3::new(b[0], b[1], b[2]))?;
