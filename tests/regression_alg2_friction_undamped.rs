@@ -127,8 +127,8 @@ fn fine_steps_finish_without_caps_and_stop_at_v0_over_mu_g() {
 /// h = 1e-4, the case: every scheme finishes with no cap. Moreau–Jean stops
 /// within 0.14 % (1 % asserted); Algorithm 1, which chatters (the paper's sec. 4.4),
 /// within 0.8–1.1 % depending on its iterates' path (2 % asserted). Algorithm 2 slides
-/// 1.2–1.7 % too far depending on round-off (2 % asserted; 16–38 complementarity rounds
-/// in the run): undamped, it leaves 6 times more vibration energy in the
+/// 1.2 % too far (2 % asserted; 1.7 % with the roundings of another 3×3 solve; 38
+/// complementarity rounds in the run): undamped, it leaves 6 times more vibration energy in the
 /// block than Moreau–Jean (3.9e-5 J against 6.3e-6 J at 0.4 s), and the rocking lowers
 /// the mean friction; with θ = 0.6, whose dissipation damps that vibration, it stops at
 /// the closed form within 0.01 % (0.1 % asserted).
