@@ -1025,14 +1025,8 @@ pub fn run_checkpointed(
     let energy0 = match resume {
         Some(c) => c.run.energy0.0,
         None => {
-            let (s, sys) = (integ.state(), integ.system());
-            let (ke, pe) = sys.energies(
-                s.time,
-                &s.q,
-                &s.v,
-                &mut vec![0.0; 2 * sys.prescribed_dofs()],
-            );
-            ke + pe
+            let s = integ.state();
+            integ.system().total_energy(s.time, &s.q, &s.v)
         }
     };
     // held until the run returns: a second run into the same directory is refused
@@ -1195,15 +1189,7 @@ pub fn run_checkpointed(
     let wall = start.elapsed().as_secs_f64();
     let s = integ.state();
     let sys = integ.system();
-    let energy1 = {
-        let (ke, pe) = sys.energies(
-            s.time,
-            &s.q,
-            &s.v,
-            &mut vec![0.0; 2 * sys.prescribed_dofs()],
-        );
-        ke + pe
-    };
+    let energy1 = sys.total_energy(s.time, &s.q, &s.v);
     let contact = reference.map(|r| contact_summary(&tracker, h, sys, &s.v, r));
     let summary = Summary {
         scheme: integ.name().to_string(),

@@ -93,17 +93,23 @@ fn every_dat_problem_converges_with_every_solver() {
     }
 }
 
-/// Every `.dat` problem of `tests/data/fclib` (dense and sparse-block, 2-D and 3-D, from
-/// Siconos' test data: multibody, granular, finite-element, rover) is solved to 1e-8 by
-/// the default `auto` (issue 16 §3 target); the stage that finished is reported.
-#[test]
-fn every_dat_problem_is_solved_to_1e8_by_auto() {
+/// The `.dat` problems of `tests/data/fclib`, sorted.
+fn dat_names() -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(data(""))
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .filter(|n| n.ends_with(".dat"))
         .collect();
     names.sort();
+    names
+}
+
+/// Every `.dat` problem of `tests/data/fclib` (dense and sparse-block, 2-D and 3-D, from
+/// Siconos' test data: multibody, granular, finite-element, rover) is solved to 1e-8 by
+/// the default `auto` (issue 16 §3 target); the stage that finished is reported.
+#[test]
+fn every_dat_problem_is_solved_to_1e8_by_auto() {
+    let names = dat_names();
     assert!(names.len() >= 12, "{names:?}");
     for name in &names {
         let s = solved(name, FrictionSolverKind::Auto);
@@ -123,12 +129,7 @@ fn every_dat_problem_is_solved_to_1e8_by_auto() {
 fn every_dat_problem_is_solved_to_1e8_on_the_velocity_residual() {
     use signorini::delassus::DenseOperator;
     use signorini::solvers::friction::{Block, Measure, velocity_residual};
-    let mut names: Vec<String> = std::fs::read_dir(data(""))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".dat"))
-        .collect();
-    names.sort();
+    let names = dat_names();
     for name in &names {
         let p = fclib::read(&data(name)).unwrap();
         let params = params(FrictionSolverKind::Auto, 1e-8);

@@ -6,6 +6,15 @@
 //! (eq. 66) and repeat until the set is stable. The set only grows, so at most `m + 1`
 //! rounds run; the count is reported in [`StepStats::index_set_iterations`].
 //!
+//! Eq. 65 need not have a solution for an index set (rows with `P > 0` held at `g = 0`
+//! may need `τ < 0`, which makes their `P` vanish; as complementarity rows their `P` is
+//! positive again): the Newton loop then cycles to its cap, or ends with a row at
+//! `P = 0` and `τ < 0`. Such a round is redone with Algorithm 1's rule, `0 ≤ g ⊥ τ ≥ 0`
+//! on every active row (eq. 58), and counted in
+//! [`StepStats::complementarity_fallbacks`]: the step is then a direct-projection step,
+//! exact at position level with `τ ≥ 0` wherever `P = 0` (README, "Algorithm 2 with
+//! friction on undamped elastic bodies").
+//!
 //! `project_all_active = true` projects every active contact, as Siconos does (its
 //! `P > 0` test is commented out), so the two rules can be compared.
 
@@ -53,10 +62,11 @@ impl Integrator for CombinedProjection {
         loop {
             st.index_set_iterations += 1;
             c.pos_mask.copy_from_slice(&c.vel_mask);
-            let caps = st.caps_hit;
+            let (caps, friction_caps) = (st.caps_hit, st.friction_caps);
             c.newton(VelocityLaw::Impact, rule, &mut st)?;
             if st.caps_hit > caps || st.held_rows > 0 {
-                st.caps_hit = caps;
+                // the round is redone: its caps are not the step's
+                (st.caps_hit, st.friction_caps) = (caps, friction_caps);
                 st.held_rows = 0;
                 st.complementarity_fallbacks += 1;
                 c.newton(

@@ -605,6 +605,13 @@ impl LinearSystem {
         (ke, pe)
     }
 
+    /// [`LinearSystem::energies`] summed, with its own scratch (allocates: for the start
+    /// and end of a run, not per step).
+    pub fn total_energy(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        let (ke, pe) = self.energies(t, q, v, &mut vec![0.0; 2 * self.prescribed_dofs()]);
+        ke + pe
+    }
+
     /// Number of prescribed (eliminated) dofs.
     pub fn prescribed_dofs(&self) -> usize {
         self.prescribed.as_ref().map_or(0, |p| p.velocity.len())

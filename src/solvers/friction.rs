@@ -22,10 +22,13 @@
 //!
 //! * [`FrictionSolverKind::Newton`]: the same proximal loop around a global semismooth
 //!   Newton method on the Alart–Curnier function `Φ(r) = 0` of all blocks at once
-//!   (generalized Jacobian `J = A + B (W + σI)` with `A`, `B` block diagonal, dense LU,
-//!   Armijo line search on `½‖Φ‖²`), as Siconos' PROX with its inner Newton: quadratic
-//!   convergence where NSGS crawls. It forms an `n × n` matrix per iteration, so it is
-//!   for one-step problems (`signorini fclib`), not for the step loop.
+//!   (generalized Jacobian `J = A + B (W + σI)` with `A`, `B` block diagonal, Armijo
+//!   line search on `½‖Φ‖²`), as Siconos' PROX with its inner Newton: quadratic
+//!   convergence where NSGS crawls; [`FrictionSolverKind::Nsn`] is the plain Newton
+//!   method. One-step problems factor `J` sparse where `W` is; in the step loop they are
+//!   `auto`'s fallback on a dense `J` whose buffers are sized once (contact spaces up to
+//!   [`super::newton::STEP_NEWTON_ROWS`] rows), and are refused by name (their sparse
+//!   form allocates).
 //!
 //! Two residuals ([`Measure`]), each relative and with `u` recomputed from scratch as
 //! `W r + q`:
@@ -379,7 +382,8 @@ pub(super) fn velocity_residual_diag(
 }
 
 /// [`Measure::Velocity`]'s residual of `(r, u)` (`u = W r + q`) for the operator `w`:
-/// the form the step loop's solvers stop on ([`velocity_residual_diag`]).
+/// the form the step loop's solvers stop on ([`velocity_residual_diag`]). Allocates its
+/// diagonal: for checks outside the solvers.
 pub fn velocity_residual<W: DelassusOperator + ?Sized>(
     w: &W,
     blocks: &[Block],
