@@ -541,6 +541,17 @@ impl ThetaCore {
             let mut mem = crate::limits::MemoryEstimate::default();
             mem.add("dense one-step workspaces (4 × rows²)", cap * cap, 32);
             mem.add("coupled position problem (unknowns²)", cc * cc, 8);
+            // `auto`'s dense Newton fallback: W and J (solvers::newton::NewtonWork)
+            let fn_rows = if friction {
+                cap.min(crate::solvers::newton::STEP_NEWTON_ROWS as u64)
+            } else {
+                0
+            };
+            mem.add(
+                "friction Newton workspace (2 × rows²)",
+                fn_rows * fn_rows,
+                16,
+            );
             mem.check("scheme.max_active_rows", format!("{cap} rows"))?;
         }
         let mut core = ThetaCore {
