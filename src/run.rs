@@ -789,6 +789,8 @@ struct EnergyCheck {
     theta: f64,
     /// `scheme.max_energy_excess`.
     max: f64,
+    /// `scheme.allow_caps`: capped steps may be what added the energy.
+    caps_allowed: bool,
 }
 
 impl EnergyCheck {
@@ -817,11 +819,16 @@ impl EnergyCheck {
                     "the energy grew by {abs:.3e} J ({:.1} % of the run's energy scale) beyond \
                      the {:.3e} J supplied by loads and prescribed motion, more than \
                      scheme.max_energy_excess = {}: the solution is not the scheme's (lower \
-                     the time step or the tolerances, do not allow caps, or raise \
-                     scheme.max_energy_excess (--max-energy-excess) to accept it)",
+                     the time step or the tolerances{}, or raise scheme.max_energy_excess \
+                     (--max-energy-excess) to accept it)",
                     100.0 * rel,
                     self.audit.work(),
-                    self.max
+                    self.max,
+                    if self.caps_allowed {
+                        ", do not allow caps (capped steps are not the scheme's solution)"
+                    } else {
+                        ""
+                    }
                 ),
             });
         }
@@ -1141,6 +1148,7 @@ pub fn run_checkpointed(
                 audit: crate::model::energy::EnergyAudit::new(integ.system(), s.time, &s.q, &s.v),
                 theta,
                 max: checks.max_energy_excess,
+                caps_allowed: checks.allow_caps,
             }
         }),
     };

@@ -117,7 +117,11 @@ fn an_unconverged_newton_loop_that_gains_energy_fails_the_run() {
     };
     let msg = err.to_string();
     assert_eq!(err.exit_code(), 1, "{msg}");
-    assert!(msg.contains("the energy grew by"), "{msg}");
+    // the remedy names the caps the scene allowed
+    assert!(
+        msg.contains("the energy grew by") && msg.contains("do not allow caps"),
+        "{msg}"
+    );
 }
 
 /// An integrator that multiplies the velocity by 1.01 after step 100: energy from
@@ -185,8 +189,11 @@ fn a_run_whose_energy_grows_from_nowhere_fails() {
     let msg = err.to_string();
     eprintln!("{msg}");
     assert_eq!(err.exit_code(), 1, "{msg}");
+    // caps are not allowed there: no remedy about them
     assert!(
-        msg.contains("the energy grew by") && msg.contains("supplied by loads and prescribed"),
+        msg.contains("the energy grew by")
+            && msg.contains("supplied by loads and prescribed")
+            && !msg.contains("caps"),
         "{msg}"
     );
     // within one check stride of the first 1 % excess: 1.01² per step gains 2 % of the
