@@ -189,112 +189,94 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<Vec<Piece>, Error> {
                 ));
             }
         };
-        let (start, empty) = match ev {
-            Event::Start(e) => (Some(e), false),
-            Event::Empty(e) => (Some(e), true),
-            other => {
-                match other {
-                    Event::End(_) if skip > 0 => skip -= 1,
-                    Event::Text(_) | Event::CData(_) if skip > 0 => {}
-                    Event::Text(t) => {
-                        if let Some(a) = open.as_mut()
-                            && let Source::Ascii(s) | Source::Binary(s) = &mut a.source
-                        {
-                            s.push_str(&t);
-                        }
-                    }
-                    Event::CData(t) => {
-                        if let Some(a) = open.as_mut()
-                            && let Source::Ascii(s) | Source::Binary(s) = &mut a.source
-                        {
-                            s.push_str(&t);
-                        }
-                    }
-                    Event::End(e) => match e.name().as_ref() {
-                        "DataArray" => {
-                            if let Some(a) = open.take() {
-                                arrays.push(a);
-                            }
-                        }
-                        "Points" | "Cells" | "PointData" | "CellData" | "FieldData" => {
-                            section = Role::Ignored
-                        }
-                        _ => {}
-                    },
-                    Event::Eof => break,
-                    _ => {}
-                }
-                (None, false)
-            }
-        };
-        if let Some(e) = start {
-            if open.is_some() {
-                // metadata inside an array (`InformationKey`): skipped with its content
-                if name_of(&e) == "DataArray" {
-                    return Err(bad(path, line(pos), "a DataArray inside a DataArray"));
-                }
-                skip += usize::from(!empty);
+        let (e, empty) = match ev {
+            Event::Start(e) => (e, false),
+            Event::Empty(e) => (e, true),
+            Event::End(_) if skip > 0 => {
+                skip -= 1;
                 continue;
             }
-            {
-                match name_of(&e).as_str() {
-                    "VTKFile" => {
-                        let ty = attr(path, &e, "type")?.unwrap_or_default();
-                        if ty != "UnstructuredGrid" {
-                            return Err(bad(
-                                path,
-                                line(pos),
-                                format!(
-                                    "VTKFile type `{ty}`: expected UnstructuredGrid (a .vtu mesh)"
-                                ),
-                            ));
-                        }
-                        layout = Some(file_layout(path, &e, &line(pos))?);
-                    }
-                    "UnstructuredGrid" => grid = true,
-                    "Piece" if grid => {
-                        let count = |key: &str| -> Result<usize, Error> {
-                            let v = attr(path, &e, key)?.ok_or_else(|| {
-                                bad(path, line(pos), format!("Piece has no {key}"))
-                            })?;
-                            v.trim()
-                                .parse::<usize>()
-                                .ok()
-                                .filter(|&n| (n as u64) < MAX_VALUES)
-                                .ok_or_else(|| {
-                                    bad(
-                                        path,
-                                        line(pos),
-                                        format!(
-                                            "Piece {key} `{v}`: expected a count below {MAX_VALUES}"
-                                        ),
-                                    )
-                                })
-                        };
-                        pieces.push(Piece {
-                            points: count("NumberOfPoints")?,
-                            cells: count("NumberOfCells")?,
-                            ..Piece::default()
-                        });
-                    }
-                    "Points" => section = Role::Points,
-                    "Cells" => section = Role::Connectivity,
-                    "PointData" => section = Role::PointData,
-                    "CellData" | "FieldData" => section = Role::Ignored,
-                    "DataArray" => {
-                        let Some(piece) = pieces.len().checked_sub(1) else {
-                            // arrays outside a piece (FieldData of the file) are not ours
-                            continue;
-                        };
-                        let a = data_array(path, &e, piece, section, &line(pos))?;
-                        match (a, empty) {
-                            (a, true) => arrays.push(a),
-                            (a, false) => open = Some(a),
-                        }
+            Event::Text(t) if skip == 0 => {
+                push_text(&mut open, &t);
+                continue;
+            }
+            Event::CData(t) if skip == 0 => {
+                push_text(&mut open, &t);
+                continue;
+            }
+            Event::End(e) => {
+                match e.name().as_ref() {
+                    "DataArray" => arrays.extend(open.take()),
+                    "Points" | "Cells" | "PointData" | "CellData" | "FieldData" => {
+                        section = Role::Ignored
                     }
                     _ => {}
                 }
+                continue;
             }
+            Event::Eof => break,
+            _ => continue,
+        };
+        if open.is_some() {
+            // metadata inside an array (`InformationKey`): skipped with its content
+            if name_of(&e) == "DataArray" {
+                return Err(bad(path, line(pos), "a DataArray inside a DataArray"));
+            }
+            skip += usize::from(!empty);
+            continue;
+        }
+        match name_of(&e).as_str() {
+            "VTKFile" => {
+                let ty = attr(path, &e, "type")?.unwrap_or_default();
+                if ty != "UnstructuredGrid" {
+                    return Err(bad(
+                        path,
+                        line(pos),
+                        format!("VTKFile type `{ty}`: expected UnstructuredGrid (a .vtu mesh)"),
+                    ));
+                }
+                layout = Some(file_layout(path, &e, &line(pos))?);
+            }
+            "UnstructuredGrid" => grid = true,
+            "Piece" if grid => {
+                let count = |key: &str| -> Result<usize, Error> {
+                    let v = attr(path, &e, key)?
+                        .ok_or_else(|| bad(path, line(pos), format!("Piece has no {key}")))?;
+                    v.trim()
+                        .parse::<usize>()
+                        .ok()
+                        .filter(|&n| (n as u64) < MAX_VALUES)
+                        .ok_or_else(|| {
+                            bad(
+                                path,
+                                line(pos),
+                                format!("Piece {key} `{v}`: expected a count below {MAX_VALUES}"),
+                            )
+                        })
+                };
+                pieces.push(Piece {
+                    points: count("NumberOfPoints")?,
+                    cells: count("NumberOfCells")?,
+                    ..Piece::default()
+                });
+            }
+            "Points" => section = Role::Points,
+            "Cells" => section = Role::Connectivity,
+            "PointData" => section = Role::PointData,
+            "CellData" | "FieldData" => section = Role::Ignored,
+            "DataArray" => {
+                let Some(piece) = pieces.len().checked_sub(1) else {
+                    // arrays outside a piece (FieldData of the file) are not ours
+                    continue;
+                };
+                let a = data_array(path, &e, piece, section, &line(pos))?;
+                if empty {
+                    arrays.push(a);
+                } else {
+                    open = Some(a);
+                }
+            }
+            _ => {}
         }
     }
     let layout = layout.ok_or_else(|| bad(path, "", "no <VTKFile> element: not a VTK XML file"))?;
@@ -371,6 +353,15 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<Vec<Piece>, Error> {
         }
     }
     Ok(pieces)
+}
+
+/// Appends the text of a `DataArray` to the open one (data formats keep text).
+fn push_text(open: &mut Option<ArrayRef>, t: &str) {
+    if let Some(a) = open.as_mut()
+        && let Source::Ascii(s) | Source::Binary(s) = &mut a.source
+    {
+        s.push_str(t);
+    }
 }
 
 fn name_of(e: &BytesStart<'_>) -> String {

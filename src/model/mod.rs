@@ -595,14 +595,27 @@ impl LinearSystem {
     /// plus what the prescribed dofs add ([`Prescribed::energy`]). `scratch` holds at
     /// least twice [`LinearSystem::prescribed_dofs`] values.
     pub fn energies(&self, t: f64, q: &[f64], v: &[f64], scratch: &mut [f64]) -> (f64, f64) {
-        let (mut ke, mut pe) = (self.kinetic_energy(v), self.potential_energy(q));
-        if let Some(p) = &self.prescribed {
-            let (vp, up) = scratch[..2 * p.velocity.len()].split_at_mut(p.velocity.len());
-            let (k, u) = p.energy(t, q, v, vp, up);
-            ke += k;
-            pe += u;
+        let (k, u) = self.prescribed_energy(t, q, v, scratch);
+        (self.kinetic_energy(v) + k, self.potential_energy(q) + u)
+    }
+
+    /// What the prescribed dofs add to the kept dofs' kinetic and potential energy at
+    /// `(t, q, v)` ([`Prescribed::energy`]; `(0, 0)` without them). `scratch` as for
+    /// [`LinearSystem::energies`].
+    pub fn prescribed_energy(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        scratch: &mut [f64],
+    ) -> (f64, f64) {
+        match &self.prescribed {
+            Some(p) => {
+                let (vp, up) = scratch[..2 * p.velocity.len()].split_at_mut(p.velocity.len());
+                p.energy(t, q, v, vp, up)
+            }
+            None => (0.0, 0.0),
         }
-        (ke, pe)
     }
 
     /// [`LinearSystem::energies`] summed, with its own scratch (allocates: for the start
