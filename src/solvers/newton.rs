@@ -47,8 +47,12 @@ pub enum NewtonMode {
     Proximal,
 }
 
-/// Blocks of `W` that are non-zero, at most this fraction, make `J` sparse.
-const SPARSE_FRACTION: f64 = 0.25;
+/// Blocks of `W` that are non-zero, at most this fraction, make `J` sparse. Measured on
+/// the FCLIB files (`signorini fclib --solver newton`): at 0.22–0.24 (BoxesStack1,
+/// local_problem_test, the LMGC90 polyhedra, 144–180 rows) the sparse LU's fill made an
+/// iteration 1.5–2.5× dearer than the dense LU; at 0.006–0.036 (spheres, capsules, the
+/// 2-D granular 00071, Box_Stacks, 178–1 068 rows) the sparse one was 3–4× cheaper.
+const SPARSE_FRACTION: f64 = 0.1;
 /// The plain method stops after this many iterations without a new best residual, or
 /// when this many iterations did not divide the best residual by 10.
 const STALL: usize = 60;
@@ -160,7 +164,6 @@ pub(super) struct NewtonWork {
     /// The dense `J`'s LU scratch (the step loop); `None`: faer's one-shot LU with
     /// its own scratch (one-step problems, multithreaded above 512 rows).
     lu: Option<crate::linalg::DenseLu>,
-    block_of_row: Vec<usize>,
     bufs: Buffers,
     best: Vec<f64>,
     qt: Vec<f64>,
@@ -193,7 +196,6 @@ impl NewtonWork {
             b: vec![[0.0; 9]; c],
             jac: Jacobian::Dense(if own_lu { vec![0.0; c * c] } else { Vec::new() }),
             lu: own_lu.then(|| crate::linalg::DenseLu::with_capacity(c)),
-            block_of_row: vec![0; c],
             bufs: Buffers::new(c),
             best: vec![0.0; c],
             qt: vec![0.0; c],
@@ -225,7 +227,6 @@ impl NewtonWork {
         let blocks = prob.blocks;
         for (bi, b) in blocks.iter().enumerate() {
             self.rho[bi] = block_rho(wd, k, b, mode);
-            self.block_of_row[b.offset..b.offset + b.dim].fill(bi);
         }
         self.bufs.reset();
         if !allow_sparse {
@@ -342,30 +343,46 @@ impl NewtonWork {
             b,
             jac,
             lu,
-            block_of_row,
             ..
         } = self;
         let k = *k;
-        // J[row, c] for row o_α + i of block α: Σ_l B_α[i,l] (W + σI)[o_α+l, c] +
-        // A_α[i, c − o_α]
-        let entry = |al: usize, i: usize, c: usize| {
+        // J[o_α + i, c] = Σ_l B_α[i,l] (W + σI)[o_α + l, c] + A_α[i, c − o_α], filled
+        // one block (α, column c) at a time: W's column c is contiguous
+        let fill = |al: usize, c: usize, out: &mut [f64]| {
             let (o, d) = (blocks[al].offset, blocks[al].dim);
-            let mut v = 0.0;
-            for l in 0..d {
-                let wv = wd[o + l + c * k] + if o + l == c { sigma } else { 0.0 };
-                v += b[al][i * d + l] * wv;
-            }
+            let (ba, aa) = (&b[al], &a[al]);
+            let wc = &wd[o + c * k..o + d + c * k];
             if c >= o && c < o + d {
-                v += a[al][i * d + (c - o)];
+                for (i, v) in out[..d].iter_mut().enumerate() {
+                    let mut s = 0.0;
+                    for (l, &w) in wc.iter().enumerate() {
+                        let wv = w + if o + l == c { sigma } else { 0.0 };
+                        s += ba[i * d + l] * wv;
+                    }
+                    *v = s + aa[i * d + (c - o)];
+                }
+            } else if d == 3 {
+                // the common case, unrolled (same sums in the same order)
+                let (w0, w1, w2) = (wc[0], wc[1], wc[2]);
+                for (i, v) in out[..3].iter_mut().enumerate() {
+                    *v = 0.0 + ba[3 * i] * w0 + ba[3 * i + 1] * w1 + ba[3 * i + 2] * w2;
+                }
+            } else {
+                for (i, v) in out[..d].iter_mut().enumerate() {
+                    let mut s = 0.0;
+                    for (l, &w) in wc.iter().enumerate() {
+                        s += ba[i * d + l] * w;
+                    }
+                    *v = s;
+                }
             }
-            v
         };
         match jac {
             Jacobian::Dense(j) => {
                 for c in 0..k {
-                    for row in 0..k {
-                        let al = block_of_row[row];
-                        j[row + c * k] = entry(al, row - blocks[al].offset, c);
+                    let col = &mut j[c * k..(c + 1) * k];
+                    for (al, blk) in blocks.iter().enumerate() {
+                        fill(al, c, &mut col[blk.offset..blk.offset + blk.dim]);
                     }
                 }
                 match lu {
@@ -382,10 +399,9 @@ impl NewtonWork {
                 for (be, bb) in blocks.iter().enumerate() {
                     for c in bb.offset..bb.offset + bb.dim {
                         for &al in &sp.block_rows[be] {
-                            for i in 0..blocks[al].dim {
-                                sp.values[pos] = entry(al, i, c);
-                                pos += 1;
-                            }
+                            let d = blocks[al].dim;
+                            fill(al, c, &mut sp.values[pos..pos + d]);
+                            pos += d;
                         }
                     }
                 }
