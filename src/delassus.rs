@@ -148,6 +148,10 @@ impl DelassusOperator for DenseOperator<'_> {
 pub enum DelassusKind {
     /// Dense while the blocks fit in 2 GiB and `G` is constant (or the contacts are
     /// at most [`AUTO_DENSE_MAX_CONTACTS`]); per-active-column otherwise (default).
+    #[value(
+        help = "Dense while the blocks fit in 2 GiB and G is constant (or the contacts \
+                    are at most 64); per-active-column otherwise (default)"
+    )]
     #[default]
     Auto,
     /// Dense `n × m` blocks `Â⁻¹G`, computed once per linearization.

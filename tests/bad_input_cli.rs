@@ -98,3 +98,31 @@ fn example_names_are_values_not_toml() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// `--help` is read by users, not rustdoc: no intra-doc link (`` [`…`] ``) of a doc
+/// comment may leak into it (the solver and Delassus choices printed
+/// `[`super::newton::STEP_NEWTON_ROWS`]`), and the figures written out in their place
+/// are the constants'.
+#[test]
+fn help_texts_carry_no_rustdoc_links() {
+    let mut all = String::new();
+    for cmd in [
+        "bar", "run", "check", "example", "study", "resume", "plot", "fclib",
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_signorini"))
+            .args([cmd, "--help"])
+            .output()
+            .expect("binary runs");
+        assert_eq!(out.status.code(), Some(0), "{cmd} --help");
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        assert!(
+            !text.contains("[`"),
+            "{cmd} --help shows a rustdoc link:\n{text}"
+        );
+        all.push_str(&text);
+    }
+    let rows = signorini::solvers::newton::STEP_NEWTON_ROWS;
+    assert!(all.contains(&format!("up to {rows} contact rows")), "{all}");
+    let dense = signorini::delassus::AUTO_DENSE_MAX_CONTACTS;
+    assert!(all.contains(&format!("are at most {dense})")), "{all}");
+}

@@ -192,6 +192,11 @@ fn bad_scenes_name_the_key() {
         (
             GOOD.replace(r#"material = {"#, "fixed = [\"x0\"]\nmaterial = {"),
             "fixed and cannot be a contact node",
+        ), // the same node against the same obstacle through two contacts: two equal rows
+        // of G (Algorithm 2 broke down on them: "equality block not positive definite")
+        (
+            format!("{GOOD}[[contacts]]\nbody = \"b\"\nnodes = \"x0\"\nobstacle = \"wall\"\n"),
+            "contacts[1].nodes`: node 0 (already meets obstacle \"wall\" through contacts[0]",
         ),
     ];
     for (text, needle) in cases {

@@ -661,6 +661,8 @@ impl Scene {
             // contact nodes of this body (for the redistributed mass): the same nodes
             // as the contacts below, `boundary`, `all` and `within` included
             let mut contact_nodes = Vec::new();
+            // (obstacle, node) → the contact that first listed it
+            let mut first_of = std::collections::HashMap::new();
             for (ci, c) in self
                 .contacts
                 .iter()
@@ -670,6 +672,24 @@ impl Scene {
                 nodes_of[ci] = self
                     .contact_nodes(&mesh, c, dim)
                     .map_err(|e| prefix(&format!("contacts[{ci}]"), e))?;
+                for &v in &nodes_of[ci] {
+                    // the same constraint twice makes two equal rows of G: a singular
+                    // contact problem that the solvers report only as a breakdown
+                    if let Some(first) = first_of.insert((c.obstacle.as_str(), v), ci) {
+                        return Err(prefix(
+                            &format!("contacts[{ci}]"),
+                            Error::invalid(
+                                "nodes",
+                                format!("node {v}"),
+                                &format!(
+                                    "already meets obstacle \"{}\" through contacts[{first}]; \
+                                     list each node once per obstacle",
+                                    c.obstacle
+                                ),
+                            ),
+                        ));
+                    }
+                }
                 contact_nodes.extend_from_slice(&nodes_of[ci]);
             }
             contact_nodes.sort_unstable();
