@@ -26,7 +26,6 @@
 
 pub mod analytic;
 pub mod assembly;
-pub mod checkpoint;
 pub mod contact;
 pub mod delassus;
 pub mod error;

@@ -47,7 +47,7 @@ pub type SparseMatrix = SparseColMat<usize, f64>;
 /// Cholesky factor of a symmetric positive definite sparse matrix.
 ///
 /// Two backends, chosen by the matrix:
-/// - tridiagonal (the 1-D bar): our `L D Lᵀ` ([`Tridiagonal`]'s doc says why);
+/// - tridiagonal (the 1-D bar): our `L D Lᵀ` (`Tridiagonal`'s doc says why);
 /// - anything else: faer's sparse Cholesky with AMD ordering. The symbolic analysis is
 ///   done once in [`SpdFactor::new`]; [`SpdFactor::refactor`] recomputes the numeric
 ///   values for the same pattern (a new `h`, a new tangent). Simplicial factors are

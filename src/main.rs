@@ -544,7 +544,7 @@ fn run_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
 }
 
 fn run_example(name: &str, out: Option<PathBuf>, quiet: bool) -> Result<(), signorini::Error> {
-    let scene = signorini::scene::example::builtin_scene(name)?;
+    let scene = signorini::scene::builtin_scene(name)?;
     let out = out.unwrap_or_else(|| PathBuf::from("out").join(name));
     let o = run::Output {
         dir: &out,

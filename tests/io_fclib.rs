@@ -127,8 +127,8 @@ fn every_dat_problem_is_solved_to_1e8_by_auto() {
 /// (the two differ only by the summation order of `W r`).
 #[test]
 fn every_dat_problem_is_solved_to_1e8_on_the_velocity_residual() {
-    use signorini::delassus::DenseOperator;
     use signorini::solvers::friction::{Block, Measure, velocity_residual};
+    use signorini::solvers::operator::DenseOperator;
     let names = dat_names();
     for name in &names {
         let p = fclib::read(&data(name)).unwrap();
@@ -160,8 +160,8 @@ fn every_dat_problem_is_solved_to_1e8_on_the_velocity_residual() {
 /// must find it, none may report "converged" at `r = 0`.
 #[test]
 fn no_solver_stops_at_a_take_off_with_a_negative_normal_velocity() {
-    use signorini::delassus::DenseOperator;
     use signorini::solvers::friction::{Block, FrictionProblem, FrictionSolver};
+    use signorini::solvers::operator::DenseOperator;
     let w = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
     let q = [-1.0, 10.0, 0.0];
     let op = DenseOperator::new(3, &w);

@@ -16,11 +16,11 @@
 //!   `u` is unique for small μ; the tolerance allows the 1e-10 residuals to differ).
 
 use proptest::prelude::*;
-use signorini::delassus::DenseOperator;
 use signorini::solvers::friction::{
     Block, FrictionParams, FrictionProblem, FrictionSolver, FrictionSolverKind, Measure, residual,
     velocity_residual,
 };
+use signorini::solvers::operator::DenseOperator;
 
 fn spd(k: usize, a: &[f64]) -> Vec<f64> {
     let mut m = vec![0.0; k * k];

@@ -8,8 +8,8 @@
 //! shipped scene and scheme measured at most 1.4e-13 of its scale; 1e-9 asserted).
 
 use signorini::Error;
-use signorini::checkpoint::IntegratorState;
 use signorini::contact::ContactJacobian;
+use signorini::integrators::saved::IntegratorState;
 use signorini::integrators::{Integrator, State, StepStats};
 use signorini::model::LinearSystem;
 use signorini::model::energy::EnergyAudit;

@@ -61,7 +61,6 @@
 use super::{Forecast, NewtonParams, SchemeParams, State, StepStats};
 use crate::assembly::linear_combination;
 use crate::contact::{ContactJacobian, ContactSet, ContactStatus};
-use crate::delassus::DenseOperator;
 use crate::delassus::{Delassus, Op};
 use crate::error::Error;
 use crate::linalg::{SparseMatrix, SpdFactor, spmv_add, sym_spmv_add};
@@ -71,6 +70,7 @@ use crate::solvers::friction::{
 };
 use crate::solvers::lcp::LcpSolver;
 use crate::solvers::mlcp::Mlcp;
+use crate::solvers::operator::DenseOperator;
 use crate::solvers::{SolveError, SolveInfo};
 
 /// What the position step enforces (eq. 58 for Algorithm 1, eq. 68 for Algorithm 2).
@@ -378,12 +378,12 @@ macro_rules! delegate_to_core {
         fn jacobian(&self) -> &$crate::contact::ContactJacobian {
             &self.core.del.jac
         }
-        fn save(&self) -> $crate::checkpoint::IntegratorState {
+        fn save(&self) -> $crate::integrators::saved::IntegratorState {
             self.core.state.save(self.name())
         }
         fn restore(
             &mut self,
-            s: &$crate::checkpoint::IntegratorState,
+            s: &$crate::integrators::saved::IntegratorState,
         ) -> Result<(), $crate::error::Error> {
             let name = self.name();
             self.core.restore(name, s)
@@ -1319,7 +1319,7 @@ impl ThetaCore {
     pub fn restore(
         &mut self,
         scheme: &str,
-        s: &crate::checkpoint::IntegratorState,
+        s: &crate::integrators::saved::IntegratorState,
     ) -> Result<(), Error> {
         self.state.restore(scheme, s)?;
         self.evaluate_at_state();

@@ -27,6 +27,7 @@ pub mod combined_projection;
 pub mod core;
 pub mod direct_projection;
 pub mod moreau_jean;
+pub mod saved;
 pub mod schatzman_paoli;
 pub mod trapezoid;
 
@@ -172,17 +173,17 @@ pub trait Integrator {
     /// for nonlinear gaps, at the last Newton iterate), for the output of `G P / h`.
     fn jacobian(&self) -> &crate::contact::ContactJacobian;
     /// What the next step reads beyond the model, for a checkpoint
-    /// ([`crate::checkpoint`]).
-    fn save(&self) -> crate::checkpoint::IntegratorState;
+    /// ([`crate::run::checkpoint`]).
+    fn save(&self) -> crate::integrators::saved::IntegratorState;
     /// Restores a state saved by an integrator built from the same model and parameters;
     /// the gaps, Jacobians and Delassus data are evaluated again at the restored `q`.
-    fn restore(&mut self, s: &crate::checkpoint::IntegratorState) -> Result<(), Error>;
+    fn restore(&mut self, s: &crate::integrators::saved::IntegratorState) -> Result<(), Error>;
 }
 
 impl State {
     /// The vectors every scheme's state holds, for a checkpoint.
-    pub fn save(&self, scheme: &str) -> crate::checkpoint::IntegratorState {
-        use crate::checkpoint::{Bits, Floats};
+    pub fn save(&self, scheme: &str) -> crate::integrators::saved::IntegratorState {
+        use crate::integrators::saved::{Bits, Floats};
         let mut vectors = std::collections::BTreeMap::new();
         for (name, v) in [
             ("q", &self.q),
@@ -196,7 +197,7 @@ impl State {
         ] {
             vectors.insert(name.to_string(), Floats(v.clone()));
         }
-        crate::checkpoint::IntegratorState {
+        crate::integrators::saved::IntegratorState {
             scheme: scheme.to_string(),
             step: self.step,
             time: Bits(self.time),
@@ -209,7 +210,7 @@ impl State {
     pub fn restore(
         &mut self,
         scheme: &str,
-        s: &crate::checkpoint::IntegratorState,
+        s: &crate::integrators::saved::IntegratorState,
     ) -> Result<(), Error> {
         if s.scheme != scheme {
             return Err(Error::invalid(

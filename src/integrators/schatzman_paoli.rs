@@ -256,21 +256,23 @@ impl Integrator for SchatzmanPaoli {
     fn state(&self) -> &State {
         &self.state
     }
-    fn save(&self) -> crate::checkpoint::IntegratorState {
+    fn save(&self) -> crate::integrators::saved::IntegratorState {
         let mut s = self.state.save(self.name());
         for (name, v) in [
             ("q_prev", &self.q_prev),
             ("g_prev", &self.g_prev),
             ("q_lin", &self.q_lin),
         ] {
-            s.vectors
-                .insert(name.to_string(), crate::checkpoint::Floats(v.clone()));
+            s.vectors.insert(
+                name.to_string(),
+                crate::integrators::saved::Floats(v.clone()),
+            );
         }
         s
     }
     /// Restores `q`, `q_{k−1}`, the previous gaps and the last linearization point (the
     /// Delassus data of a nonlinear contact set were formed there).
-    fn restore(&mut self, s: &crate::checkpoint::IntegratorState) -> Result<(), Error> {
+    fn restore(&mut self, s: &crate::integrators::saved::IntegratorState) -> Result<(), Error> {
         self.state.restore(self.name(), s)?;
         let (n, m) = (self.n, self.m);
         self.q_prev.copy_from_slice(s.vector("q_prev", n)?);

@@ -732,8 +732,8 @@ fn solve_once(
     measure: Measure,
     warm: bool,
 ) -> Result<Solution, Error> {
-    use crate::delassus::DenseOperator;
     use crate::solvers::friction::{Block, FrictionProblem, FrictionSolver};
+    use crate::solvers::operator::DenseOperator;
     let n = prob.rows();
     let blocks: Vec<Block> = prob
         .mu

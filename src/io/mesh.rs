@@ -1,6 +1,6 @@
 //! Mesh input: Gmsh `.msh` (4.1 ASCII and binary through mshio; 2.2 ASCII and binary and the
 //! `$PhysicalNames` section, which mshio skips, by our own small parsers), VTK XML
-//! `.vtu` (our reader on quick-xml, [`super::vtu`]: ascii, inline binary with or without
+//! `.vtu` (our reader on quick-xml, `io::vtu`: ascii, inline binary with or without
 //! zlib, raw and base64 appended data) and legacy `.vtk` (our parser: vtkio reads
 //! neither meshio's default legacy 5.1 binary files nor their OFFSETS/CONNECTIVITY
 //! layout; DESIGN.md §6).

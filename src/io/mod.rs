@@ -498,7 +498,7 @@ pub struct OutputOptions {
     /// the `hdf5` feature, and asking for it without the feature is an error.
     #[serde(default)]
     pub hdf5: Option<bool>,
-    /// Write a checkpoint (`checkpoint.json`, [`crate::checkpoint`]) every this many
+    /// Write a checkpoint (`checkpoint.json`, [`crate::run::checkpoint`]) every this many
     /// steps (default 0: none); `signorini resume DIR` finishes a killed run from it.
     #[serde(default)]
     pub checkpoint_every: usize,

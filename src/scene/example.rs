@@ -207,20 +207,3 @@ fn on_the_line(
         geometry: Geometry::default(),
     })
 }
-
-/// The built-in example scene `name` (`bouncing-ball`, `oscillator`, `rocking-block`):
-/// the same as `meshes/<name>.toml` (Algorithm 2, the paper's parameters; h = 1e-3 s to
-/// T = 5 s, 1e-3 s to 3 s, and 1e-2 s to 2 s).
-pub fn builtin_scene(name: &str) -> Result<crate::scene::file::Scene, Error> {
-    let spec = ExampleSpec::named(name)?;
-    let (dt, t_end) = match spec {
-        ExampleSpec::BouncingBall { .. } => (1e-3, 5.0),
-        ExampleSpec::Oscillator { .. } => (1e-3, 3.0),
-        ExampleSpec::RockingBlock { .. } => (1e-2, 2.0),
-    };
-    // `name` is one of the three kinds here (checked by `named`)
-    crate::scene::file::Scene::from_toml(&format!(
-        "[example]\nkind = {}\n[time]\ndt = {dt:e}\nt_end = {t_end:e}\n",
-        toml::Value::String(name.to_string())
-    ))
-}

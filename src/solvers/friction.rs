@@ -59,7 +59,7 @@ use serde::{Deserialize, Serialize};
 
 use super::SolveError;
 use super::newton::NewtonMode;
-use crate::delassus::DelassusOperator;
+use super::operator::DelassusOperator;
 
 /// One contact block of a friction problem.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -393,7 +393,7 @@ pub(super) fn velocity_residual_diag(
 }
 
 /// [`Measure::Velocity`]'s residual of `(r, u)` (`u = W r + q`) for the operator `w`:
-/// the form the step loop's solvers stop on ([`velocity_residual_diag`]). Allocates its
+/// the form the step loop's solvers stop on (`velocity_residual_diag`). Allocates its
 /// diagonal: for checks outside the solvers.
 pub fn velocity_residual<W: DelassusOperator + ?Sized>(
     w: &W,
@@ -411,7 +411,7 @@ pub fn velocity_residual<W: DelassusOperator + ?Sized>(
 }
 
 /// The velocity accuracy of a solution, in m/s: the largest over the blocks of
-/// `‖Φ_α‖ / ρ` with [`ac_map2`]'s Alart–Curnier map at `ρ = 1/W_NN` of the block, so
+/// `‖Φ_α‖ / ρ` with `ac_map2`'s Alart–Curnier map at `ρ = 1/W_NN` of the block, so
 /// that an impulse error counts by the velocity it makes. Unlike [`residual`], which
 /// adds impulses and velocities, it means the same for a 10 kg body and a 1 mg node,
 /// and μ does not amplify it; the step loop derives its Newton stopping floor from it
@@ -1195,7 +1195,7 @@ fn solve3(a: &[f64; 9], b: &[f64; 3]) -> Option<[f64; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::delassus::DenseOperator;
+    use crate::solvers::operator::DenseOperator;
 
     /// Issue 16 §6: the local solvers report what they cannot solve. An indefinite 2-D
     /// block `W = [[1, 2], [2, 1]]`, `q = (−1, 0.5)`, μ = 0.5 has no consistent case

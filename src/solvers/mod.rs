@@ -19,6 +19,7 @@ pub mod friction;
 pub mod lcp;
 pub mod mlcp;
 pub mod newton;
+pub mod operator;
 
 /// What a one-step solve reports.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

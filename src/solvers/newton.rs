@@ -6,7 +6,7 @@
 //!
 //! whose zeros are the solutions (Alart and Curnier 1991; Coulomb's law, not De Saxcé's
 //! modified velocity, but the same solution set). An element of the generalized Jacobian
-//! is `J = A + B (W + σI)` with `A`, `B` block diagonal ([`ac_block`]), so `J` has the
+//! is `J = A + B (W + σI)` with `A`, `B` block diagonal (`ac_block`), so `J` has the
 //! block pattern of `W`. Two methods share the loop:
 //!
 //! * [`NewtonMode::Plain`] (`nsn`): Newton on `Φ(r) = 0` with `ρ = 1/‖W_αα‖₂` per block,
@@ -28,7 +28,7 @@
 //!
 //! One-step problems (`signorini fclib`) build the workspace per solve, sparse where `W`
 //! is. The step loop's `auto` fallback uses a workspace sized once at set-up
-//! ([`NewtonWork`]: dense `W` and `J`, the LU's scratch; contact spaces up to
+//! (`NewtonWork`: dense `W` and `J`, the LU's scratch; contact spaces up to
 //! [`STEP_NEWTON_ROWS`] rows), so a step does not allocate; `nsn` and `newton` by name
 //! stay refused in scenes.
 
@@ -36,7 +36,7 @@ use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 
 use super::friction::{Block, FrictionInfo, FrictionParams, FrictionProblem, FrictionSolver, norm};
-use crate::delassus::DelassusOperator;
+use super::operator::DelassusOperator;
 
 /// Which Newton method runs (module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -7,18 +7,21 @@
 //! works in its own buffers, the contact measurement keeps the first contact interval
 //! only (and the per-step force up to [`FORCE_TRACE_MAX_STEPS`], reserved once).
 
+pub mod checkpoint;
+
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde::Serialize;
 
 use crate::analytic::ImpactingBar;
-use crate::checkpoint::{Bits, Checkpoint, Floats, RunSource, RunState};
 use crate::error::Error;
+use crate::integrators::saved::{Bits, Floats};
 use crate::integrators::{Forecast, Integrator, StepStats};
 use crate::io::frames::{FrameStream, FrameWriter, Geometry};
 use crate::io::{HistoryWriter, OutputOptions, write_atomic};
 use crate::scene::bar::BarScene;
+use checkpoint::{Checkpoint, RunSource, RunState};
 
 /// Snapshots in flight between the run and the frame writer thread: two lets the
 /// writer encode one frame while the run fills the next.
@@ -418,7 +421,7 @@ fn run_scene_from(
 }
 
 /// Finishes the killed run in `dir` from its `checkpoint.json` (see
-/// [`crate::checkpoint`]): rebuilds the model from the scene the checkpoint holds,
+/// [`crate::run::checkpoint`]): rebuilds the model from the scene the checkpoint holds,
 /// restores the state and the outputs' cursors, and steps to the end, writing the same
 /// files an uninterrupted run writes.
 pub fn resume(dir: &Path, progress: &mut dyn Progress) -> Result<RunResult, Error> {
@@ -428,7 +431,7 @@ pub fn resume(dir: &Path, progress: &mut dyn Progress) -> Result<RunResult, Erro
         dir,
         options: &c.output,
     };
-    let file = dir.join(crate::checkpoint::FILE);
+    let file = dir.join(checkpoint::FILE);
     match &c.source {
         RunSource::Bar { scene } => {
             scene.validate().map_err(|e| e.in_file(&file))?;
@@ -761,7 +764,7 @@ struct CheckpointPlan {
     energy0: f64,
     /// The run's input files at its start, and its directory (canonical), for
     /// [`Checkpoint::verify`].
-    inputs: Vec<crate::checkpoint::InputFile>,
+    inputs: Vec<checkpoint::InputFile>,
     out_dir: PathBuf,
     /// Test hook (`SIGNORINI_ABORT_AFTER_STEP`): abort the process right after this
     /// step's checkpoint and output, as a SIGKILL would, to test `resume`.
@@ -913,15 +916,15 @@ impl RunObserver {
             closed_before: self.writers.closed_before,
         };
         Checkpoint {
-            format: crate::checkpoint::FORMAT.to_string(),
-            version: crate::checkpoint::VERSION,
+            format: checkpoint::FORMAT.to_string(),
+            version: checkpoint::VERSION,
             source: p.source.clone(),
             output: p.output.clone(),
             every: p.every,
             steps: p.steps,
             integrator: integ.save(),
             run,
-            build: crate::checkpoint::build_id(),
+            build: checkpoint::build_id(),
             out_dir: p.out_dir.clone(),
             inputs: p.inputs.clone(),
         }
@@ -1188,7 +1191,7 @@ pub fn run_checkpointed(
     };
     // the run is complete: its checkpoint would only resume a finished run
     if let Some(p) = plan {
-        let path = p.dir.join(crate::checkpoint::FILE);
+        let path = p.dir.join(checkpoint::FILE);
         if path.exists() {
             std::fs::remove_file(&path).map_err(|e| Error::write(&path, e))?;
         }

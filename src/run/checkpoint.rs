@@ -30,13 +30,12 @@
 //! values; JSON keeps the rest readable. Why our own format: the state is a few named
 //! arrays; a general serialization format would not keep the floats' bits readable.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use base64::Engine as _;
 use serde::{Deserialize, Serialize};
 
 use crate::error::Error;
+use crate::integrators::saved::{Bits, Floats, IntegratorState};
 
 /// The format name in every checkpoint.
 pub const FORMAT: &str = "signorini-checkpoint";
@@ -44,95 +43,6 @@ pub const FORMAT: &str = "signorini-checkpoint";
 pub const VERSION: u32 = 4;
 /// The checkpoint's file name in a run directory.
 pub const FILE: &str = "checkpoint.json";
-
-/// An `f64` stored as its bits (`"0x3ff0000000000000"`), so it reads back exactly,
-/// NaN and infinities included.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Bits(pub f64);
-
-impl Serialize for Bits {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(&format!("{:#018x}", self.0.to_bits()))
-    }
-}
-
-impl<'de> Deserialize<'de> for Bits {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let s = String::deserialize(d)?;
-        u64::from_str_radix(s.trim_start_matches("0x"), 16)
-            .map(|b| Bits(f64::from_bits(b)))
-            .map_err(|_| serde::de::Error::custom(format!("`{s}` is not 0x + 16 hex digits")))
-    }
-}
-
-/// A vector of `f64` stored as base64 of its little-endian bytes.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Floats(pub Vec<f64>);
-
-impl Serialize for Floats {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let bytes: Vec<u8> = self.0.iter().flat_map(|x| x.to_le_bytes()).collect();
-        s.serialize_str(&base64::engine::general_purpose::STANDARD.encode(bytes))
-    }
-}
-
-impl<'de> Deserialize<'de> for Floats {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let s = String::deserialize(d)?;
-        let bytes = base64::engine::general_purpose::STANDARD
-            .decode(s.as_bytes())
-            .map_err(|e| serde::de::Error::custom(format!("not base64: {e}")))?;
-        if bytes.len() % 8 != 0 {
-            return Err(serde::de::Error::custom(format!(
-                "{} bytes is not a whole number of f64",
-                bytes.len()
-            )));
-        }
-        Ok(Floats(
-            bytes
-                .chunks_exact(8)
-                .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
-                .collect(),
-        ))
-    }
-}
-
-/// What an integrator carries from one step to the next (module doc).
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct IntegratorState {
-    /// The scheme's name (a checkpoint resumes with the scheme that wrote it).
-    pub scheme: String,
-    /// Steps taken.
-    pub step: usize,
-    /// Time (s).
-    pub time: Bits,
-    /// Named vectors: `q`, `v`, `impulse`, `projection`, `impulse_rows`,
-    /// `local_velocity`, `tangent_velocity`, `tangent_impulse`, and a scheme's own.
-    pub vectors: BTreeMap<String, Floats>,
-    /// Contact status codes (frictional scenes: 0 open, 1 stick, 2 slip, 3 closed
-    /// without friction).
-    pub status: Vec<u8>,
-}
-
-impl IntegratorState {
-    /// The vector `name`, which must have `len` entries; the error names the checkpoint.
-    pub fn vector(&self, name: &str, len: usize) -> Result<&[f64], Error> {
-        match self.vectors.get(name) {
-            Some(v) if v.0.len() == len => Ok(&v.0),
-            Some(v) => Err(Error::invalid(
-                &format!("checkpoint integrator.vectors.{name}"),
-                format!("{} values", v.0.len()),
-                &format!("the model has {len} (was the mesh or the scene changed?)"),
-            )),
-            None => Err(Error::invalid(
-                &format!("checkpoint integrator.vectors.{name}"),
-                "(missing)",
-                "a checkpoint of this scheme holds it",
-            )),
-        }
-    }
-}
 
 /// What to rebuild on resume.
 #[derive(Clone, Debug, Serialize, Deserialize)]
