@@ -52,7 +52,8 @@ use crate::solvers::SolveError;
 use faer::sparse::SparseColMatRef;
 
 /// Position projection metric `N` (eq. 58 and remark 3, eq. 59–60).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum Metric {
     /// `N = I`: `q ← q + G τ` (eq. 58). Kicks only the contact dofs.
@@ -72,14 +73,18 @@ impl Metric {
 }
 
 /// How the Delassus data are stored (DESIGN.md §4).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum DelassusKind {
     /// Dense while the blocks fit in 2 GiB and `G` is constant (or the contacts are
     /// at most [`AUTO_DENSE_MAX_CONTACTS`]); per-active-column otherwise (default).
-    #[value(
-        help = "Dense while the blocks fit in 2 GiB and G is constant (or the contacts \
+    #[cfg_attr(
+        feature = "cli",
+        value(
+            help = "Dense while the blocks fit in 2 GiB and G is constant (or the contacts \
                     are at most 64); per-active-column otherwise (default)"
+        )
     )]
     #[default]
     Auto,

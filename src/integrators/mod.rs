@@ -253,7 +253,8 @@ impl State {
 }
 
 /// Which scheme to run (also the CLI's `--scheme` values).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum SchemeKind {
     /// Moreau–Jean (eq. 18).

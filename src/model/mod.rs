@@ -21,9 +21,8 @@ pub mod solid;
 use crate::linalg::{SparseMatrix, quadratic_form};
 
 /// How the element mass matrices are formed.
-#[derive(
-    Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
-)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum MassKind {
     /// Consistent mass, `∫ ρ Nᵀ N` (eq. 71 for the rod).

@@ -73,17 +73,21 @@ pub struct Block {
 }
 
 /// Which friction solver runs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
 pub enum FrictionSolverKind {
     /// NSGS first, then the robust methods on what it leaves (default): the plain Newton
     /// method and then proximal Newton (in the step loop on a dense workspace sized at
     /// set-up, up to [`super::newton::STEP_NEWTON_ROWS`] rows; PROX above).
     /// [`FrictionInfo::solver`] says which one finished.
-    #[value(
-        help = "NSGS first, then the robust methods on what it leaves (default): the \
+    #[cfg_attr(
+        feature = "cli",
+        value(
+            help = "NSGS first, then the robust methods on what it leaves (default): the \
                     plain Newton method, then proximal Newton (in the step loop up to 1024 \
                     contact rows; PROX above); the output names the one that finished"
+        )
     )]
     #[default]
     Auto,
@@ -93,14 +97,20 @@ pub enum FrictionSolverKind {
     Prox,
     /// Global semismooth Newton on Alart–Curnier, no regularization (Siconos' NSN_AC;
     /// [`super::newton`]; allocates, so not in the step loop).
-    #[value(help = "Global semismooth Newton on Alart–Curnier, no regularization \
-                    (Siconos' NSN_AC; one-step problems only)")]
+    #[cfg_attr(
+        feature = "cli",
+        value(help = "Global semismooth Newton on Alart–Curnier, no regularization \
+                    (Siconos' NSN_AC; one-step problems only)")
+    )]
     Nsn,
     /// Proximal point with the global Newton inside (Siconos' PROX with its Newton inner
     /// solver; [`super::newton`]; allocates, so not in the step loop).
-    #[value(
-        help = "Proximal point with the global Newton inside (Siconos' PROX with its \
+    #[cfg_attr(
+        feature = "cli",
+        value(
+            help = "Proximal point with the global Newton inside (Siconos' PROX with its \
                     Newton inner solver; one-step problems only)"
+        )
     )]
     Newton,
 }
