@@ -1,0 +1,263 @@
+//! What a run reports: the [`Summary`] written to `summary.json` (iterations, caps,
+//! friction, contact measurement against the analytic reference, energy balance) and
+//! the first-contact-interval measurement behind it.
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use crate::analytic::ImpactingBar;
+use crate::error::Error;
+use crate::integrators::Forecast;
+use crate::io::write_atomic;
+
+use super::observers::ContactTracker;
+
+/// Mean and maximum of a per-step count.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct MeanMax {
+    /// Mean over the steps.
+    pub mean: f64,
+    /// Maximum over the steps.
+    pub max: usize,
+}
+
+/// Iteration statistics over the run (the paper's Table 3 columns).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Iterations {
+    /// Newton iterations per step.
+    pub newton: MeanMax,
+    /// Projection iterations per step.
+    pub projection: MeanMax,
+    /// Index-set rounds per step (Algorithm 2).
+    pub index_set: MeanMax,
+    /// LCP pivots or sweeps per step.
+    pub lcp: MeanMax,
+}
+
+/// Friction solver statistics over the run (frictional scenes only).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct FrictionSummary {
+    /// Friction problems solved (over all steps, Newton iterations and index-set rounds).
+    pub solves: usize,
+    /// NSGS sweeps per solve: mean and maximum.
+    pub sweeps_mean: f64,
+    /// Largest sweeps of one step.
+    pub sweeps_max_per_step: usize,
+    /// Mean over the steps with a friction solve of the step's largest final residual.
+    pub residual_mean: f64,
+    /// Largest final residual (the velocity residual of `solvers::friction`).
+    pub residual_max: f64,
+    /// Solves that hit the sweep cap (counted in `caps_hit` too).
+    pub caps_hit: usize,
+    /// Solves NSGS did not finish (finished by `auto`'s Newton or PROX fallback).
+    pub fallbacks: usize,
+}
+
+/// Measured contact response with its analytic counterpart.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct ContactSummary {
+    /// Mean force over the middle 80 % of the first contact interval (N).
+    pub plateau_force: f64,
+    /// Standard deviation of the force over the same window (N).
+    pub plateau_std: f64,
+    /// `E S |v0| / c0` (N).
+    pub analytic_force: f64,
+    /// Width of the first contact interval at half the plateau force (s).
+    pub duration: f64,
+    /// Whole length of the first closed interval, first to last positive impulse (s).
+    pub closed_duration: f64,
+    /// `2 L / c0` (s).
+    pub analytic_duration: f64,
+    /// Start of the first step with a positive impulse (s).
+    pub first_contact_time: f64,
+    /// Centre-of-mass velocity at the end of the run (m/s).
+    pub release_velocity: f64,
+    /// `−v0` (m/s).
+    pub analytic_release_velocity: f64,
+    /// Sum of all contact impulses over the run (N·s).
+    pub total_impulse: f64,
+    /// `2 ρ S L |v0|` (N·s).
+    pub analytic_total_impulse: f64,
+}
+
+/// How the Newton loops of a run ended, beyond convergence at the tolerance
+/// (`StepStats::coupled_solves`, `newton_stalls`, `held_rows`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct NewtonLoops {
+    /// Coupled position solves (eq. 52–55) taken where the decoupled loop crawled.
+    pub coupled_solves: usize,
+    /// Loops ended by stagnation within √tol (counted as converged).
+    pub stalls: usize,
+    /// Steps that ended with a row held at g = 0 with P = 0 and τ < 0.
+    pub steps_with_held_rows: usize,
+    /// Algorithm 2: index-set rounds redone with Algorithm 1's position rule because
+    /// the combined rule capped or held rows (`StepStats::complementarity_fallbacks`).
+    pub complementarity_fallbacks: usize,
+}
+
+/// A run's energy balance ([`Summary::energy_balance`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct EnergyBalance {
+    /// Work supplied by the time-dependent loads and the prescribed motion (J).
+    pub supplied_work: f64,
+    /// Largest `(E − E₀ − W) / scale` met at the checks (0 when it never was positive); above
+    /// `scheme.max_energy_excess` the run fails.
+    pub excess_max: f64,
+}
+
+/// Everything a run reports (`summary.json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    /// Scheme name.
+    pub scheme: String,
+    /// Number of elements (cells).
+    pub elements: usize,
+    /// Degrees of freedom integrated.
+    pub dofs: usize,
+    /// Time step (s).
+    pub dt: f64,
+    /// θ.
+    pub theta: f64,
+    /// Steps run.
+    pub steps: usize,
+    /// Final time (s).
+    pub t_end: f64,
+    /// Wall-clock time of the step loop including output (s).
+    pub wall_seconds: f64,
+    /// `wall_seconds / steps`.
+    pub seconds_per_step: f64,
+    /// Seconds the step loop spent on output (included in `wall_seconds`): history rows
+    /// with their energies, copying states for the frame writer, waiting for it when
+    /// its snapshots were all in flight, and waiting at the end for the last frames.
+    pub output_seconds: f64,
+    /// Seconds the background frame writer spent computing, encoding and writing
+    /// frames (overlapped with the steps; not part of `output_seconds`).
+    pub frame_seconds: f64,
+    /// Part of `output_seconds` spent waiting for a free snapshot (the writer fell
+    /// behind: raise `stride` to write fewer frames).
+    pub frame_wait_seconds: f64,
+    /// Field frames written (`fields.pvd`).
+    pub frames: usize,
+    /// Largest penetration over the run (m, ≥ 0).
+    pub max_violation: f64,
+    /// Contact response vs analytic (bar scenes).
+    pub contact: Option<ContactSummary>,
+    /// Iteration statistics.
+    pub iterations: Iterations,
+    /// Total iteration caps hit.
+    pub caps_hit: usize,
+    /// How the Newton loops of the projection schemes ended
+    /// ([`crate::integrators::core`]).
+    pub newton_loops: NewtonLoops,
+    /// Friction solver statistics (absent in a frictionless scene).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<FrictionSummary>,
+    /// Largest LCP complementarity residual met.
+    pub max_lcp_residual: f64,
+    /// Energy (kinetic + potential) at the start and at the end (J).
+    pub energy: [f64; 2],
+    /// The energy balance (`model::energy`): work supplied by loads and prescribed
+    /// motion, and the largest excess met relative to the run's energy scale (`None` for
+    /// Schatzman–Paoli, whose discrete energy is not the θ-method's).
+    pub energy_balance: Option<EnergyBalance>,
+    /// Linear-algebra path taken.
+    pub path: String,
+    /// Seconds to build the model (mesh, parallel assembly of `M` and `K`, contacts).
+    pub model_seconds: f64,
+    /// Seconds to build the integrator (factorization of `M̂`, Delassus data).
+    pub integrator_seconds: f64,
+    /// The scene parameters as run.
+    pub parameters: serde_json::Value,
+}
+
+/// What [`run_bar`](super::run_bar) returns: the summary and the per-step contact force.
+pub struct RunResult {
+    /// The run summary.
+    pub summary: Summary,
+    /// Total contact force `Σ P / h` at each step (N); empty for runs that write
+    /// checkpoints (a checkpoint does not grow with the run) and beyond
+    /// [`FORCE_TRACE_MAX_STEPS`](super::FORCE_TRACE_MAX_STEPS).
+    pub force: Vec<f64>,
+}
+
+/// Writes `summary.json` into `dir` atomically.
+pub fn write_summary(summary: &Summary, dir: &Path) -> Result<(), Error> {
+    let json = serde_json::to_string_pretty(summary).expect("summary serializes");
+    write_atomic(&dir.join("summary.json"), json.as_bytes())
+}
+
+/// Measures the first contact interval.
+///
+/// The interval is the first run of steps that are closed (positive impulse, or
+/// gap ≤ 0) and contain a positive impulse. Sample `k` (0-based) is the mean force
+/// over `[k h, (k+1) h]`, placed at its midpoint. The plateau is the mean over the
+/// middle 80 % of the interval's steps. The duration is measured between the
+/// half-plateau crossings (linear interpolation between samples, zero force before
+/// the first sample): the release front of a space-discretized bar is smeared over a
+/// few steps by dispersion, and the half-height width is the time its centre takes,
+/// independent of how far the tails reach. `closed_duration` counts the whole run.
+pub(super) fn contact_summary(
+    tracker: &ContactTracker,
+    h: f64,
+    sys: &crate::model::LinearSystem,
+    v: &[f64],
+    r: ImpactingBar,
+) -> ContactSummary {
+    let (force, min_gap) = (&tracker.force, &tracker.min_gap);
+    let mut c = ContactSummary {
+        analytic_force: r.contact_force(),
+        analytic_duration: r.contact_duration(),
+        first_contact_time: f64::NAN,
+        release_velocity: sys.momentum(v) / sys.total_mass(),
+        analytic_release_velocity: r.release_velocity(),
+        total_impulse: tracker.total_force * h,
+        analytic_total_impulse: r.total_impulse(),
+        ..ContactSummary::default()
+    };
+    // the tracker's window starts at the first positive impulse, step `first`
+    let (Some(first), Some(i0)) = (tracker.first, force.iter().position(|&f| f > 0.0)) else {
+        return c;
+    };
+    let mut last = i0;
+    let mut k = i0;
+    while k < force.len() && (force[k] > 0.0 || min_gap[k] <= 0.0) {
+        if force[k] > 0.0 {
+            last = k;
+        }
+        k += 1;
+    }
+    let len = last + 1 - i0;
+    let lo = i0 + len / 10;
+    let hi = (last + 1 - len / 10).max(lo + 1);
+    let win = &force[lo..hi];
+    let plateau = win.iter().sum::<f64>() / win.len() as f64;
+    c.plateau_force = plateau;
+    c.plateau_std =
+        (win.iter().map(|f| (f - plateau).powi(2)).sum::<f64>() / win.len() as f64).sqrt();
+    c.closed_duration = len as f64 * h;
+    c.first_contact_time = (first + i0) as f64 * h;
+    let half = 0.5 * plateau;
+    let at = |j: usize| if j < force.len() { force[j] } else { 0.0 };
+    // rising crossing: first sample ≥ half, interpolated from the previous one
+    let up = (i0..=last).find(|&j| force[j] >= half).unwrap_or(i0);
+    let prev = if up > 0 { force[up - 1] } else { 0.0 };
+    let t_up = (up as f64 - 0.5) * h + h * (half - prev) / (force[up] - prev);
+    // falling crossing: last sample ≥ half, interpolated to the next one
+    let down = (i0..=last)
+        .rev()
+        .find(|&j| force[j] >= half)
+        .unwrap_or(last);
+    let next = at(down + 1);
+    let t_down = (down as f64 + 0.5) * h + h * (force[down] - half) / (force[down] - next);
+    c.duration = t_down - t_up;
+    c
+}
+
+/// The forecast as a short string for printing.
+pub fn forecast_name(f: Forecast) -> String {
+    match f {
+        Forecast::Explicit { gamma } => format!("explicit (γ = {gamma})"),
+        Forecast::Free => "free".to_string(),
+    }
+}
