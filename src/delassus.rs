@@ -47,7 +47,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::contact::ContactJacobian;
 use crate::error::Error;
-use crate::linalg::{SOLVE_BLOCK, SparseMatrix, SpdFactor, spmv};
+use crate::linalg::{LinearSolver, SOLVE_BLOCK, SparseMatrix, spmv};
 use crate::solvers::SolveError;
 use faer::sparse::SparseColMatRef;
 
@@ -128,8 +128,8 @@ pub enum Op {
 /// The factored step matrix with the Delassus data of one linearization of `G`.
 #[derive(Debug)]
 pub struct Delassus {
-    /// The factored step matrix `Â`.
-    pub factor: SpdFactor,
+    /// The factored step matrix `Â` (any backend of [`crate::linalg::solver`]).
+    pub factor: Box<dyn LinearSolver>,
     /// The contact Jacobian `G` at the current linearization point.
     pub jac: ContactJacobian,
     n: usize,
@@ -170,7 +170,7 @@ impl Delassus {
     /// (0: as many as fit in 2 GiB). Columns are computed by [`Delassus::refresh`] and
     /// [`Delassus::ensure`].
     pub fn new(
-        factor: SpdFactor,
+        factor: Box<dyn LinearSolver>,
         jac: ContactJacobian,
         n: usize,
         (kind, pool): (DelassusKind, usize),
@@ -302,7 +302,7 @@ impl Delassus {
             col.iter_mut().for_each(|x| *x = 0.0);
             self.jac.axpy(a, 1.0, col);
         }
-        solve_columns(&mut self.factor, &mut self.cg, m, self.linear);
+        solve_columns(self.factor.as_mut(), &mut self.cg, m, self.linear);
         self.column_solves += m;
         for b in 0..m {
             for a in 0..m {
@@ -342,7 +342,7 @@ impl Delassus {
                 column(b, d);
             }
         }
-        solve_columns(&mut self.factor, &mut self.d, m, self.linear);
+        solve_columns(self.factor.as_mut(), &mut self.d, m, self.linear);
         self.column_solves += m;
         for b in 0..m {
             for a in 0..m {
@@ -651,7 +651,7 @@ impl Delassus {
 /// Solves the `m` columns of a dense `n × m` block of [`Delassus::refresh`]: on every
 /// thread when `G` is constant (`refresh` then runs once, at construction), otherwise
 /// sequentially and without allocating (`refresh` runs inside the step loop).
-fn solve_columns(factor: &mut SpdFactor, x: &mut [f64], m: usize, once: bool) {
+fn solve_columns(factor: &mut dyn LinearSolver, x: &mut [f64], m: usize, once: bool) {
     if once {
         factor.solve_block_in_place_par(x, m);
     } else {

@@ -231,3 +231,55 @@ fn large_friction_fallbacks_do_not_allocate() {
         }
     }
 }
+
+/// The linear-solver backends refactor and solve without allocating after their set-up
+/// (the Newton loop of nonlinear scenes will refactor `M̂ⁿ` inside the step): Cholesky
+/// (simplicial and tridiagonal), LDLᵀ and dense LU. The sparse LU is left out on
+/// purpose: its fill depends on the pivots (`linalg::solver` module doc).
+#[test]
+fn linear_solver_refactors_and_solves_do_not_allocate() {
+    use signorini::linalg::SparseMatrix;
+    use signorini::linalg::solver::{SolverKind, factor};
+    let n = 60;
+    // a Laplacian with a far coupling (not tridiagonal), and a tridiagonal one
+    let matrix = |shift: f64, far: bool| {
+        let mut t = Vec::new();
+        for i in 0..n {
+            t.push(faer::sparse::Triplet::new(i, i, 2.0 + shift));
+            if i + 1 < n {
+                t.push(faer::sparse::Triplet::new(i, i + 1, -1.0));
+                t.push(faer::sparse::Triplet::new(i + 1, i, -1.0));
+            }
+            if far && i + 7 < n {
+                t.push(faer::sparse::Triplet::new(i, i + 7, 0.1));
+                t.push(faer::sparse::Triplet::new(i + 7, i, 0.1));
+            }
+        }
+        SparseMatrix::try_new_from_triplets(n, n, &t).unwrap()
+    };
+    for (kind, far, s1, s2) in [
+        (SolverKind::Cholesky, true, 0.5, 0.7),
+        (SolverKind::Cholesky, false, 0.5, 0.7),
+        (SolverKind::Ldlt, true, -2.5, -2.3),
+        (SolverKind::Dense, true, -2.5, 0.3),
+    ] {
+        let (a1, a2) = (matrix(s1, far), matrix(s2, far));
+        let mut f = factor(a1.as_ref(), "M̂", kind, None).unwrap();
+        let mut x = vec![1.0; n];
+        let mut block = vec![1.0; 4 * n];
+        let before = ALLOCS.with(|c| c.get());
+        for a in [&a2, &a1, &a2] {
+            f.refactor(a.as_ref(), "M̂").unwrap();
+            f.solve_in_place(&mut x);
+            f.solve_block_in_place(&mut block, 4);
+            f.solve_columns_independently(&mut block, 4);
+        }
+        let n_alloc = ALLOCS.with(|c| c.get()) - before;
+        assert_eq!(
+            n_alloc,
+            0,
+            "{kind:?} ({}) allocated {n_alloc} times",
+            f.backend_name()
+        );
+    }
+}

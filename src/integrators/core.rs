@@ -63,7 +63,7 @@ use crate::assembly::linear_combination;
 use crate::contact::{ContactJacobian, ContactSet, ContactStatus};
 use crate::delassus::{Delassus, Op};
 use crate::error::Error;
-use crate::linalg::{SparseMatrix, SpdFactor, spmv_add, sym_spmv_add};
+use crate::linalg::{LinearSolver, SolverKind, SparseMatrix, spmv_add, sym_spmv_add};
 use crate::model::LinearSystem;
 use crate::solvers::friction::{
     Block, FrictionParams, FrictionProblem, FrictionSolver, FrictionSolverKind,
@@ -342,7 +342,7 @@ pub(crate) fn factor_step_matrix(
     h: f64,
     (a, b): (f64, f64),
     what: &str,
-) -> Result<SpdFactor, Error> {
+) -> Result<Box<dyn LinearSolver>, Error> {
     params.validate()?;
     crate::error::require_positive("dt", h)?;
     let n = sys.ndof();
@@ -352,9 +352,10 @@ pub(crate) fn factor_step_matrix(
     if let Some(c) = &sys.damping {
         terms.push((b, c));
     }
-    SpdFactor::with_ordering(
+    crate::linalg::solver::factor(
         linear_combination(&terms).as_ref(),
         what,
+        SolverKind::Cholesky,
         sys.ordering.as_deref(),
     )
 }

@@ -1,6 +1,8 @@
 //! Sparse and small dense linear algebra used by the integrators.
 //!
 //! Owns:
+//! - [`solver`]: the [`LinearSolver`] trait of the iteration matrix and its backends
+//!   (Cholesky, LDLᵀ, sparse LU, dense LU);
 //! - [`SpdFactor`]: the Cholesky factorization of the iteration matrix
 //!   `M̂ = M + hθC + h²θ²K` (eq. 47): faer's sparse Cholesky (AMD ordering, symbolic
 //!   analysis once, numeric factorization into a buffer we own), or our tridiagonal
@@ -15,6 +17,10 @@
 //!   one-step problems (the active sub-blocks `W_αα` of the Delassus operator, at
 //!   most a few hundred rows). It works on caller-owned buffers, so the MLCP solver
 //!   does not allocate inside the step loop.
+
+pub mod solver;
+
+pub use solver::{LinearSolver, SolverKind};
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -105,28 +111,41 @@ impl Tridiagonal {
     /// Factors a tridiagonal `a`; `Err(i)` if pivot `i` is not positive.
     fn factor(a: SparseColMatRef<'_, usize, f64>) -> Result<Self, usize> {
         let n = a.nrows();
+        let mut t = Tridiagonal {
+            l: vec![0.0; n],
+            dinv: vec![0.0; n],
+        };
+        t.refactor(a)?;
+        Ok(t)
+    }
+
+    /// Factors `a` (of the order this factor was built for) into the buffers it owns,
+    /// without allocating: `dinv` first holds the diagonal and `l` the subdiagonal.
+    fn refactor(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), usize> {
+        let n = a.nrows();
         let (cp, ri, v) = (a.col_ptr(), a.row_idx(), a.val());
-        let mut diag = vec![0.0; n];
-        let mut sub = vec![0.0; n];
+        let (l, dinv) = (&mut self.l, &mut self.dinv);
+        debug_assert_eq!(l.len(), n);
+        l.fill(0.0);
+        dinv.fill(0.0);
         for j in 0..n {
             for k in cp[j]..cp[j + 1] {
                 let i = ri[k];
                 if i == j {
-                    diag[j] += v[k];
+                    dinv[j] += v[k];
                 } else if i == j + 1 {
-                    sub[i] += v[k];
+                    l[i] += v[k];
                 }
             }
         }
-        let mut l = vec![0.0; n];
-        let mut dinv = vec![0.0; n];
         let mut d_prev = 0.0;
         for i in 0..n {
             let d = if i == 0 {
-                diag[0]
+                dinv[0]
             } else {
-                l[i] = sub[i] / d_prev;
-                diag[i] - l[i] * sub[i]
+                let sub = l[i];
+                l[i] = sub / d_prev;
+                dinv[i] - l[i] * sub
             };
             if !(d > 0.0 && d.is_finite()) {
                 return Err(i);
@@ -134,7 +153,7 @@ impl Tridiagonal {
             dinv[i] = 1.0 / d;
             d_prev = d;
         }
-        Ok(Tridiagonal { l, dinv })
+        Ok(())
     }
 
     fn solve(&self, x: &mut [f64]) {
@@ -314,7 +333,7 @@ impl SpdFactor {
     ) -> Result<(), Error> {
         let f = match &mut self.backend {
             Backend::Tridiagonal(t) => {
-                *t = Tridiagonal::factor(a)
+                t.refactor(a)
                     .map_err(|i| not_spd(what, format!("pivot {i} of its LDLᵀ is not positive")))?;
                 return Ok(());
             }
@@ -331,16 +350,23 @@ impl SpdFactor {
                 Default::default(),
             )
             .map_err(|e| not_spd(what, format!("Cholesky failed: {e:?}")))?;
+        // the simplicial copy reuses its buffers after the first factorization: a
+        // refactorization (the Newton loop's `M̂ⁿ`) does not allocate
+        let previous = f.simplicial.take();
         f.simplicial = match f.symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(sym) => {
                 let (cp, ri) = (sym.col_ptr(), sym.row_idx());
                 let n = self.n;
-                let mut s = SimplicialSolve {
+                let mut s = previous.unwrap_or_else(|| SimplicialSolve {
                     dinv: Vec::with_capacity(n),
                     ptr: Vec::with_capacity(n + 1),
                     row: Vec::with_capacity(ri.len() - n),
                     val: Vec::with_capacity(ri.len() - n),
-                };
+                });
+                s.dinv.clear();
+                s.ptr.clear();
+                s.row.clear();
+                s.val.clear();
                 s.ptr.push(0);
                 for j in 0..n {
                     let r = cp[j]..cp[j + 1];
