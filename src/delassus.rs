@@ -125,6 +125,19 @@ pub enum Op {
     Wn,
 }
 
+/// When the Delassus data are being formed: at set-up (before the first step, where
+/// blocked solves may run on several threads and allocate their scratch) or inside the
+/// step loop (sequential, allocation-free). Separate from whether `G` is constant: a
+/// nonlinear structure with a constant `G` re-forms `W` in the step loop when `M̂ⁿ`
+/// changes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    /// Building the integrator.
+    Setup,
+    /// Stepping.
+    Step,
+}
+
 /// The factored step matrix with the Delassus data of one linearization of `G`.
 #[derive(Debug)]
 pub struct Delassus {
@@ -138,7 +151,11 @@ pub struct Delassus {
     with_d: bool,
     metric: Metric,
     /// `G` constant: [`Delassus::refresh`] runs once, at construction.
-    linear: bool,
+    /// `G` does not depend on `q`: its blocks are condensed once, at set-up.
+    g_constant: bool,
+    /// Set-up or step loop ([`Delassus::start_stepping`]): the set-up may spread its
+    /// blocked solves over threads (allocating), the step loop may not.
+    phase: Phase,
     // dense path: Â⁻¹G and Â⁻¹K N G (n × m), W_N (m × m)
     cg: Vec<f64>,
     d: Vec<f64>,
@@ -165,6 +182,18 @@ pub struct Delassus {
 }
 
 impl Delassus {
+    /// Marks the end of the set-up: from now on the blocks are formed by sequential,
+    /// allocation-free solves ([`Phase`]).
+    pub fn start_stepping(&mut self) {
+        self.phase = Phase::Step;
+    }
+
+    /// Whether the blocks being formed now are formed once for the whole run (constant
+    /// `G`, at set-up): they may then use the threaded solves and the tiled `K` products.
+    fn condensing_once(&self) -> bool {
+        self.g_constant && self.phase == Phase::Setup
+    }
+
     /// Sizes the storage for `n` dofs and the `m` columns of `jac`; `with_d` adds
     /// `W_D`, `W_N` (projection schemes); `pool` columns on the per-active-column path
     /// (0: as many as fit in 2 GiB). Columns are computed by [`Delassus::refresh`] and
@@ -176,7 +205,7 @@ impl Delassus {
         (kind, pool): (DelassusKind, usize),
         with_d: bool,
         metric: Metric,
-        linear: bool,
+        g_constant: bool,
     ) -> Result<Self, Error> {
         let m = jac.ncols();
         let per = if with_d { 2 } else { 1 };
@@ -184,7 +213,7 @@ impl Delassus {
             DelassusKind::Dense => true,
             DelassusKind::Columns => false,
             DelassusKind::Auto => {
-                (linear || m <= AUTO_DENSE_MAX_CONTACTS)
+                (g_constant || m <= AUTO_DENSE_MAX_CONTACTS)
                     && n.saturating_mul(m).saturating_mul(8 * per) <= AUTO_DENSE_MAX_BYTES
             }
         };
@@ -224,7 +253,8 @@ impl Delassus {
             dense,
             with_d,
             metric,
-            linear,
+            g_constant,
+            phase: Phase::Setup,
             cg: vec![0.0; nm],
             d: vec![0.0; if with_d { nm } else { 0 }],
             wn: vec![0.0; if dense && with_d { m * m } else { 0 }],
@@ -302,7 +332,8 @@ impl Delassus {
             col.iter_mut().for_each(|x| *x = 0.0);
             self.jac.axpy(a, 1.0, col);
         }
-        solve_columns(self.factor.as_mut(), &mut self.cg, m, self.linear);
+        let once = self.condensing_once();
+        solve_columns(self.factor.as_mut(), &mut self.cg, m, once);
         self.column_solves += m;
         for b in 0..m {
             for a in 0..m {
@@ -334,7 +365,7 @@ impl Delassus {
             }
             Metric::Mass => spmv(k, &cg[b * n..(b + 1) * n], d),
         };
-        if self.linear && metric == Metric::Mass && m >= PRODUCT_TILE {
+        if self.condensing_once() && metric == Metric::Mass && m >= PRODUCT_TILE {
             // once, at construction: K times PRODUCT_TILE columns per pass over K
             k_times_columns(k, cg, &mut self.d, n);
         } else {
@@ -342,7 +373,8 @@ impl Delassus {
                 column(b, d);
             }
         }
-        solve_columns(self.factor.as_mut(), &mut self.d, m, self.linear);
+        let once = self.condensing_once();
+        solve_columns(self.factor.as_mut(), &mut self.d, m, once);
         self.column_solves += m;
         for b in 0..m {
             for a in 0..m {

@@ -419,7 +419,9 @@ pub struct ThetaCore {
     pub(crate) e: Vec<f64>,
     with_projection: bool,
     feedback: bool,
-    pub(crate) linear: bool,
+    /// `G` does not depend on `q` (every contact set is linear): condensed once,
+    /// and the Newton loop only re-solves the contact-space problem (eq. 56a).
+    pub(crate) g_constant: bool,
     jac_at_qk: bool,
     pub(crate) newton: NewtonParams,
     pub(crate) projection_tolerance: f64,
@@ -519,7 +521,7 @@ impl ThetaCore {
         } else {
             0
         };
-        let linear = contacts.is_linear();
+        let g_constant = contacts.is_linear();
         let state = State::with_layout(q0, v0, m, tangent_dim, rows);
         let del = Delassus::new(
             factor,
@@ -528,7 +530,7 @@ impl ThetaCore {
             (params.delassus, params.delassus_pool),
             with_projection,
             params.metric,
-            linear,
+            g_constant,
         );
         // the dense one-step workspaces (module doc of `Workspace`): the gathered block
         // and the MLCP's three, plus the coupled position problem's matrix
@@ -572,7 +574,7 @@ impl ThetaCore {
             e,
             with_projection,
             feedback: params.projection_feedback,
-            linear,
+            g_constant,
             jac_at_qk: true,
             newton: params.newton,
             projection_tolerance: params.projection_tolerance,
@@ -613,6 +615,7 @@ impl ThetaCore {
         core.del.refresh(&core.sys.stiffness);
         core.del.jac.transpose_mul(&core.state.v, &mut core.u_rows);
         core.scatter_local_velocity();
+        core.del.start_stepping();
         Ok(core)
     }
 
@@ -632,7 +635,7 @@ impl ThetaCore {
             } else {
                 String::new()
             },
-            if self.linear {
+            if self.g_constant {
                 "linear gap: G and W constant (condensed once), one sparse solve per step; \
                  Newton iterations only re-solve the contact-space problem (eq. 56a)"
             } else {
@@ -723,7 +726,7 @@ impl ThetaCore {
         stats: &mut StepStats,
     ) -> Result<(), Error> {
         let (h, th, m, rows) = (self.h, self.theta, self.m, self.rows);
-        if !self.linear && !self.jac_at_qk {
+        if !self.g_constant && !self.jac_at_qk {
             self.contacts
                 .evaluate(&self.state.q, &mut self.g_at_lin, &mut self.del.jac);
             self.del.refresh(&self.sys.stiffness);
@@ -744,7 +747,7 @@ impl ThetaCore {
         while it < self.newton.max_iterations {
             it += 1;
             stats.newton_iterations += 1;
-            if !self.linear && it > 1 {
+            if !self.g_constant && it > 1 {
                 self.contacts
                     .evaluate(&self.q_lin, &mut self.g_at_lin, &mut self.del.jac);
                 self.del.refresh(&self.sys.stiffness);
@@ -767,7 +770,7 @@ impl ThetaCore {
             // linearized gaps without contact impulse or projection (eq. 51), normal rows
             for c in 0..m {
                 let a = self.off[c];
-                self.g_lin[a] = if self.linear || !relinearized {
+                self.g_lin[a] = if self.g_constant || !relinearized {
                     self.state.gap[c] + h * (1.0 - th) * self.u_k[a]
                 } else {
                     self.g_at_lin[c]
@@ -885,7 +888,7 @@ impl ThetaCore {
             }
             self.tau_prev.copy_from_slice(&self.tau);
             // convergence
-            let r = if self.linear {
+            let r = if self.g_constant {
                 self.linear_residual()?
             } else {
                 self.form();
@@ -934,7 +937,7 @@ impl ThetaCore {
             coupled_last = false;
             if it >= COUPLED_AFTER
                 && helped
-                && self.linear
+                && self.g_constant
                 && law == VelocityLaw::Impact
                 && rule != PositionRule::None
                 && self.coupled_correction(rule)?
@@ -1289,7 +1292,7 @@ impl ThetaCore {
     /// `v = v_free + M̂⁻¹G P − hθ M̂⁻¹K N G τ_used`, `q = q_k + h(1−θ)v_k + hθ v + N G τ`.
     pub(crate) fn form(&mut self) {
         let (h, th) = (self.h, self.theta);
-        if self.linear {
+        if self.g_constant {
             // called once per step: v_free is not needed afterwards (begin_step
             // rewrites it), so hand its buffer over instead of copying
             std::mem::swap(&mut self.v_new, &mut self.v_free);
@@ -1332,7 +1335,7 @@ impl ThetaCore {
     fn evaluate_at_state(&mut self) {
         self.contacts
             .evaluate(&self.state.q, &mut self.state.gap, &mut self.del.jac);
-        if !self.linear {
+        if !self.g_constant {
             self.del.refresh(&self.sys.stiffness);
             self.jac_at_qk = true;
         }
@@ -1340,7 +1343,7 @@ impl ThetaCore {
     }
 
     pub fn commit(&mut self, stats: &mut StepStats) {
-        if self.linear {
+        if self.g_constant {
             self.form();
         }
         std::mem::swap(&mut self.state.q, &mut self.q_new);

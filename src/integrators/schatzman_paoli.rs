@@ -35,7 +35,8 @@ pub struct SchatzmanPaoli {
     /// `M_SP` factored, `G` and `W_SP = GᵀM_SP⁻¹G`.
     del: Delassus,
     e: Vec<f64>,
-    linear: bool,
+    /// `G` does not depend on `q` (condensed once).
+    g_constant: bool,
     newton: NewtonParams,
     state: State,
     q_prev: Vec<f64>,
@@ -94,7 +95,7 @@ impl SchatzmanPaoli {
             .collect();
         let jac = ContactJacobian::for_set(contacts.as_ref());
         let e: Vec<f64> = contacts.laws().iter().map(|l| l.restitution).collect();
-        let linear = contacts.is_linear();
+        let g_constant = contacts.is_linear();
         let del = Delassus::new(
             factor,
             jac,
@@ -102,7 +103,7 @@ impl SchatzmanPaoli {
             (params.delassus, params.delassus_pool),
             false,
             Metric::Mass,
-            linear,
+            g_constant,
         );
         let mut sp = SchatzmanPaoli {
             sys,
@@ -113,7 +114,7 @@ impl SchatzmanPaoli {
             m,
             del: del?,
             e,
-            linear,
+            g_constant,
             newton: params.newton,
             state: State::initial(q0, v0, m),
             q_prev,
@@ -137,6 +138,7 @@ impl SchatzmanPaoli {
         sp.del
             .jac
             .transpose_mul(&sp.state.v, &mut sp.state.local_velocity);
+        sp.del.start_stepping();
         Ok(sp)
     }
 }
@@ -185,10 +187,10 @@ impl Integrator for SchatzmanPaoli {
         let mut converged = false;
         for it in 1..=self.newton.max_iterations {
             st.newton_iterations += 1;
-            if !self.linear || it == 1 {
+            if !self.g_constant || it == 1 {
                 self.contacts
                     .evaluate(&self.q_lin, &mut self.g_lin, &mut self.del.jac);
-                if !self.linear {
+                if !self.g_constant {
                     self.del.refresh(&self.sys.stiffness);
                 }
             }
@@ -215,7 +217,7 @@ impl Integrator for SchatzmanPaoli {
             .map_err(|e| fail(&self.state, "Schatzman–Paoli LCP", e))?;
             self.q_new.copy_from_slice(&self.q_free);
             self.del.add_inverse_g(1.0, &self.p, &mut self.q_new);
-            if self.linear {
+            if self.g_constant {
                 converged = true;
                 st.newton_residual = 0.0;
                 break;
@@ -278,7 +280,7 @@ impl Integrator for SchatzmanPaoli {
         self.q_prev.copy_from_slice(s.vector("q_prev", n)?);
         self.g_prev.copy_from_slice(s.vector("g_prev", m)?);
         self.q_lin.copy_from_slice(s.vector("q_lin", n)?);
-        if !self.linear {
+        if !self.g_constant {
             self.contacts
                 .evaluate(&self.q_lin, &mut self.g_lin, &mut self.del.jac);
             self.del.refresh(&self.sys.stiffness);
@@ -302,7 +304,7 @@ impl Integrator for SchatzmanPaoli {
             self.del.factor.backend_name(),
             self.n,
             self.m,
-            if self.linear {
+            if self.g_constant {
                 "linear gap: no Newton iteration"
             } else {
                 "nonlinear gap: re-linearized every Newton iteration"
