@@ -13,6 +13,7 @@
 pub mod energy;
 pub mod generate;
 pub mod geometry;
+pub mod hyperelastic;
 pub mod ordering;
 pub mod point_mass;
 pub mod rod;

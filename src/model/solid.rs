@@ -274,7 +274,7 @@ impl AnyElement {
 const G2: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_625_8];
 
 /// One integration point: shape values, reference gradients, weight.
-type Point<const NN: usize, const D: usize> = ([f64; NN], [[f64; D]; NN], f64);
+pub(super) type Point<const NN: usize, const D: usize> = ([f64; NN], [[f64; D]; NN], f64);
 
 /// Quadrature of the triangle: constant gradients; the 3 edge-midpoint rule (degree 2)
 /// integrates the consistent mass exactly.
@@ -306,7 +306,7 @@ fn quad4_points() -> [Point<4, 2>; 4] {
 }
 
 /// The tetrahedron's 4-point rule of degree 2 (exact for the consistent mass).
-fn tet4_points() -> [Point<4, 3>; 4] {
+pub(super) fn tet4_points() -> [Point<4, 3>; 4] {
     let g = [
         [-1.0, -1.0, -1.0],
         [1.0, 0.0, 0.0],
@@ -319,7 +319,7 @@ fn tet4_points() -> [Point<4, 3>; 4] {
 }
 
 /// 2×2×2 Gauss points of the trilinear hexahedron (VTK / Gmsh node order).
-fn hex8_points() -> [Point<8, 3>; 8] {
+pub(super) fn hex8_points() -> [Point<8, 3>; 8] {
     const SGN: [[f64; 3]; 8] = [
         [-1.0, -1.0, -1.0],
         [1.0, -1.0, -1.0],
