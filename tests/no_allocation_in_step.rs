@@ -283,3 +283,40 @@ fn linear_solver_refactors_and_solves_do_not_allocate() {
         );
     }
 }
+
+/// The hyperelastic body's internal force and tangent (what the Newton loop of a
+/// nonlinear structure evaluates at every iterate) are assembled without reserving
+/// anything after the plan: counted on the worker thread of a one-thread rayon pool,
+/// where the assembly runs.
+#[test]
+fn hyperelastic_assembly_does_not_allocate() {
+    use signorini::model::generate::box_mesh;
+    use signorini::model::hyperelastic::{HyperBody, Hyperelastic};
+    use signorini::model::solid::{CellKind, Material};
+    let mat = Material {
+        young: 1e7,
+        poisson: 0.3,
+        density: 1000.0,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    for kind in [CellKind::Hex8, CellKind::Tet4] {
+        let mesh = box_mesh(kind, [4, 3, 2], [0.4, 0.3, 0.2]);
+        let body = HyperBody::new(&mesh, Hyperelastic::neo_hookean(&mat)).unwrap();
+        let n = body.plan().dim();
+        let u: Vec<f64> = (0..n).map(|i| 1e-3 * (i as f64).sin()).collect();
+        let mut k = vec![0.0; body.plan().nnz()];
+        let mut f = vec![0.0; n];
+        let allocated = pool.install(|| {
+            body.evaluate(&u, &mut k, &mut f).unwrap();
+            let before = ALLOCS.with(|c| c.get());
+            for _ in 0..3 {
+                body.evaluate(&u, &mut k, &mut f).unwrap();
+            }
+            ALLOCS.with(|c| c.get()) - before
+        });
+        assert_eq!(allocated, 0, "{kind:?}: {allocated} allocations");
+    }
+}

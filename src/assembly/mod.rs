@@ -225,6 +225,188 @@ impl PatternAssembler {
     }
 }
 
+/// Dofs of a vector lent to one assembly task: contributions to other rows are skipped
+/// (another task owns them).
+pub struct RowSlab<'a> {
+    rows: std::ops::Range<usize>,
+    values: &'a mut [f64],
+}
+
+impl RowSlab<'_> {
+    /// Adds `v` at row `i` if this task owns it.
+    pub fn add(&mut self, i: usize, v: f64) {
+        if self.rows.contains(&i) {
+            self.values[i - self.rows.start] += v;
+        }
+    }
+}
+
+/// One task of an [`AssemblyPlan`]: a range of nodes and where its cells start.
+struct PlanTask {
+    nodes: std::ops::Range<usize>,
+    cells: std::ops::Range<usize>,
+}
+
+/// The parallel assembly of a matrix and a vector on a mesh's fixed pattern, planned
+/// once (the pattern, the cut of the nodes into task ranges, each task's cells in
+/// increasing order), so that [`AssemblyPlan::assemble`] reserves nothing: the Newton
+/// loop of a nonlinear structure fills its tangent `K_t` and internal force `f_int`
+/// at every iterate. Each column and each row of the vector receives its terms in cell
+/// order whatever the cut, so the result does not depend on the thread count
+/// (the scheme of [`PatternAssembler::par_assemble_pair`]).
+pub struct AssemblyPlan {
+    n: usize,
+    dim: usize,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    tasks: Vec<PlanTask>,
+    task_cells: Vec<usize>,
+}
+
+impl AssemblyPlan {
+    /// Plans the assembly of `cells` (node lists) over `nodes` nodes with `dim` dofs
+    /// each, in four tasks per thread of the current rayon pool.
+    pub fn new(nodes: usize, dim: usize, cells: &[&[usize]]) -> Self {
+        let pattern = PatternAssembler::new(nodes, dim, cells);
+        let mut start = vec![0usize; nodes + 1];
+        for c in cells {
+            for &a in *c {
+                start[a + 1] += 1;
+            }
+        }
+        for a in 0..nodes {
+            start[a + 1] += start[a];
+        }
+        let mut fill = start.clone();
+        let mut of_node = vec![0usize; start[nodes]];
+        for (id, c) in cells.iter().enumerate() {
+            for &a in *c {
+                of_node[fill[a]] = id;
+                fill[a] += 1;
+            }
+        }
+        let chunks = (4 * rayon::current_num_threads()).clamp(1, nodes.max(1));
+        let mut tasks = Vec::with_capacity(chunks);
+        let mut task_cells = Vec::new();
+        for c in 0..chunks {
+            let (a, b) = (c * nodes / chunks, (c + 1) * nodes / chunks);
+            let first = task_cells.len();
+            let mut ids: Vec<usize> = of_node[start[a]..start[b]].to_vec();
+            ids.sort_unstable();
+            ids.dedup();
+            task_cells.extend_from_slice(&ids);
+            tasks.push(PlanTask {
+                nodes: a..b,
+                cells: first..task_cells.len(),
+            });
+        }
+        AssemblyPlan {
+            n: pattern.n,
+            dim,
+            col_ptr: pattern.col_ptr,
+            row_idx: pattern.row_idx,
+            tasks,
+            task_cells,
+        }
+    }
+
+    /// Order of the matrix (`nodes · dim`).
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// Entries of the pattern (the length of the values [`AssemblyPlan::assemble`] fills).
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// The matrix of `values` on this pattern (allocates: for set-ups and checks).
+    pub fn matrix(&self, values: &[f64]) -> SparseMatrix {
+        let sym = SymbolicSparseColMat::new_checked(
+            self.n,
+            self.n,
+            self.col_ptr.clone(),
+            None,
+            self.row_idx.clone(),
+        );
+        SparseMatrix::new(sym, values.to_vec())
+    }
+
+    /// Zeroes `values` (`nnz` entries) and `vector` (`dim` entries), then calls
+    /// `cell(id, matrix, vector)` for every cell in parallel; the closure adds the whole
+    /// element matrix and vector and keeps what falls in its task's columns and rows.
+    /// The first error in cell order is returned. Reserves nothing.
+    pub fn assemble<E: Send>(
+        &self,
+        values: &mut [f64],
+        vector: &mut [f64],
+        cell: impl Fn(usize, &mut ColumnSlab, &mut RowSlab) -> Result<(), E> + Sync,
+    ) -> Result<(), (usize, E)> {
+        assert_eq!(
+            values.len(),
+            self.row_idx.len(),
+            "values on the plan's pattern"
+        );
+        assert_eq!(vector.len(), self.n, "a vector of the plan's order");
+        values.fill(0.0);
+        vector.fill(0.0);
+        let (dim, col_ptr, row_idx) = (self.dim, &self.col_ptr[..], &self.row_idx[..]);
+        let run = |t: &PlanTask, vals: &mut [f64], vec: &mut [f64]| {
+            let cols = t.nodes.start * dim..t.nodes.end * dim;
+            let mut m = ColumnSlab {
+                col_ptr,
+                row_idx,
+                offset: col_ptr[cols.start],
+                cols: cols.clone(),
+                values: vals,
+            };
+            let mut v = RowSlab {
+                rows: cols,
+                values: vec,
+            };
+            self.task_cells[t.cells.clone()]
+                .iter()
+                .find_map(|&id| cell(id, &mut m, &mut v).err().map(|e| (id, e)))
+        };
+        let err = self.split(&self.tasks, values, vector, &run);
+        match err {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    /// Runs `run` on every task: halves the task list, cuts the values and the vector at
+    /// the halves' border and recurses on both with `rayon::join` (stack jobs only, no
+    /// heap); the first error in cell order wins.
+    fn split<E: Send>(
+        &self,
+        tasks: &[PlanTask],
+        values: &mut [f64],
+        vector: &mut [f64],
+        run: &(impl Fn(&PlanTask, &mut [f64], &mut [f64]) -> Option<(usize, E)> + Sync),
+    ) -> Option<(usize, E)> {
+        match tasks {
+            [] => None,
+            [t] => run(t, values, vector),
+            _ => {
+                let (left, right) = tasks.split_at(tasks.len() / 2);
+                let border = right[0].nodes.start * self.dim;
+                let col0 = left[0].nodes.start * self.dim;
+                let (va, vb) = values.split_at_mut(self.col_ptr[border] - self.col_ptr[col0]);
+                let (xa, xb) = vector.split_at_mut(border - col0);
+                let (ea, eb) = rayon::join(
+                    || self.split(left, va, xa, run),
+                    || self.split(right, vb, xb, run),
+                );
+                match (ea, eb) {
+                    (Some(a), Some(b)) => Some(if a.0 <= b.0 { a } else { b }),
+                    (a, b) => a.or(b),
+                }
+            }
+        }
+    }
+}
+
 /// Collects element contributions for one global matrix.
 pub struct Assembler {
     n: usize,
