@@ -305,7 +305,7 @@ fn hyperelastic_assembly_does_not_allocate() {
     for kind in [CellKind::Hex8, CellKind::Tet4] {
         let mesh = box_mesh(kind, [4, 3, 2], [0.4, 0.3, 0.2]);
         let body = HyperBody::new(&mesh, Hyperelastic::neo_hookean(&mat)).unwrap();
-        let n = body.plan().dim();
+        let n = body.plan().order();
         let u: Vec<f64> = (0..n).map(|i| 1e-3 * (i as f64).sin()).collect();
         let mut k = vec![0.0; body.plan().nnz()];
         let mut f = vec![0.0; n];

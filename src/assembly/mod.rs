@@ -311,7 +311,7 @@ impl AssemblyPlan {
     }
 
     /// Order of the matrix (`nodes · dim`).
-    pub fn dim(&self) -> usize {
+    pub fn order(&self) -> usize {
         self.n
     }
 

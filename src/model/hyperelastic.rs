@@ -623,7 +623,7 @@ mod tests {
         for mesh in meshes() {
             for law in laws() {
                 let body = HyperBody::new(&mesh, law).unwrap();
-                let n = body.plan().dim();
+                let n = body.plan().order();
                 let u: Vec<f64> = (0..n).map(|_| 0.01 * lcg(&mut seed)).collect();
                 let mut k = vec![0.0; body.plan().nnz()];
                 let mut f = vec![0.0; n];
