@@ -222,6 +222,82 @@ fn fmt_f64(buf: &mut ryu::Buffer, x: f64) -> &[u8] {
     }
 }
 
+/// The run's HDF5 file (`fields.vtkhdf`: the VTKHDF frames and `/history`), when the
+/// `hdf5` feature is built and the output asks for it. Holding the feature switch here
+/// keeps it out of the run layer: without the feature (or with `hdf5 = false`) every
+/// `attach_*` hands its writer back unchanged.
+pub struct Hdf5Output {
+    #[cfg(feature = "hdf5")]
+    file: Option<h5::RunFile>,
+}
+
+impl Hdf5Output {
+    /// Creates the file in `dir` (or opens the one of a checkpointed run, `resuming`)
+    /// when `options` ask for HDF5 and the feature is built.
+    pub fn open(dir: &Path, options: &OutputOptions, resuming: bool) -> Result<Self, Error> {
+        #[cfg(feature = "hdf5")]
+        {
+            let file = match (options.hdf5(), resuming) {
+                (false, _) => None,
+                (true, false) => Some(h5::RunFile::create(dir)?),
+                (true, true) => Some(h5::RunFile::open(dir)?),
+            };
+            Ok(Hdf5Output { file })
+        }
+        #[cfg(not(feature = "hdf5"))]
+        {
+            let _ = (dir, options, resuming);
+            Ok(Hdf5Output {})
+        }
+    }
+
+    /// `hist`, also writing every row to `/history` (`m` contacts with `tangent_dim`
+    /// tangents; the scheme's name, `h`, `θ` and the parameters as attributes);
+    /// `resume_rows`: the rows of a checkpointed run to keep.
+    #[allow(clippy::too_many_arguments)]
+    pub fn attach_history(
+        &self,
+        hist: HistoryWriter,
+        (m, tangent_dim): (usize, usize),
+        scheme: &str,
+        h: f64,
+        theta: f64,
+        parameters: &serde_json::Value,
+        resume_rows: Option<usize>,
+    ) -> Result<HistoryWriter, Error> {
+        #[cfg(feature = "hdf5")]
+        if let Some(f) = &self.file {
+            return Ok(hist.with_hdf5(h5::History::create(
+                f,
+                m,
+                tangent_dim,
+                scheme,
+                h,
+                theta,
+                parameters,
+                resume_rows,
+            )?));
+        }
+        let _ = (m, tangent_dim, scheme, h, theta, parameters, resume_rows);
+        Ok(hist)
+    }
+
+    /// `frames`, also appending every frame to the VTKHDF grid; `resume_frames`: the
+    /// frames of a checkpointed run to keep.
+    pub fn attach_frames(
+        &self,
+        frames: frames::FrameWriter,
+        resume_frames: Option<usize>,
+    ) -> Result<frames::FrameWriter, Error> {
+        #[cfg(feature = "hdf5")]
+        if let Some(f) = &self.file {
+            return frames.with_hdf5(f, resume_frames);
+        }
+        let _ = resume_frames;
+        Ok(frames)
+    }
+}
+
 /// Streams one CSV row per step; see the module doc for the file protocol.
 pub struct HistoryWriter {
     #[cfg(feature = "hdf5")]

@@ -292,26 +292,16 @@ pub fn run_checkpointed(
                 HistoryWriter::create(&hist_path, m, integ.state().tangent_dim)?
             }
         };
-        #[cfg(feature = "hdf5")]
-        let h5 = match (o.options.hdf5(), resume) {
-            (false, _) => None,
-            (true, None) => Some(crate::io::h5::RunFile::create(o.dir)?),
-            (true, Some(_)) => Some(crate::io::h5::RunFile::open(o.dir)?),
-        };
-        #[cfg(feature = "hdf5")]
-        let hist = match &h5 {
-            Some(f) => hist.with_hdf5(crate::io::h5::History::create(
-                f,
-                m,
-                integ.state().tangent_dim,
-                integ.name(),
-                h,
-                theta,
-                &parameters,
-                resume.map(|c| c.run.history_rows as usize),
-            )?),
-            None => hist,
-        };
+        let h5 = crate::io::Hdf5Output::open(o.dir, o.options, resume.is_some())?;
+        let hist = h5.attach_history(
+            hist,
+            (m, integ.state().tangent_dim),
+            integ.name(),
+            h,
+            theta,
+            &parameters,
+            resume.map(|c| c.run.history_rows as usize),
+        )?;
         // a model without field geometry (the academic examples) writes no frames
         if o.options.fields && !geom.points.is_empty() {
             let w = match resume {
@@ -334,11 +324,7 @@ pub fn run_checkpointed(
             if !geom_outlines.is_empty() {
                 crate::io::frames::write_outlines(&o.dir.join("obstacles.vtu"), &geom_outlines)?;
             }
-            #[cfg(feature = "hdf5")]
-            let w = match &h5 {
-                Some(f) => w.with_hdf5(f, resume.map(|c| c.run.frames))?,
-                None => w,
-            };
+            let w = h5.attach_frames(w, resume.map(|c| c.run.frames))?;
             let s = integ.state();
             let mut w =
                 FrameStream::spawn_with_statuses(w, s.q.len(), m, s.status.len(), FRAME_POOL);
