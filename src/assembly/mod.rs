@@ -158,24 +158,7 @@ impl PatternAssembler {
             "both matrices share one pattern"
         );
         let nodes = self.n / self.dim.max(1);
-        // node -> cells, in increasing cell order
-        let mut start = vec![0usize; nodes + 1];
-        for c in cells {
-            for &a in *c {
-                start[a + 1] += 1;
-            }
-        }
-        for a in 0..nodes {
-            start[a + 1] += start[a];
-        }
-        let mut fill = start.clone();
-        let mut of_node = vec![0usize; start[nodes]];
-        for (id, c) in cells.iter().enumerate() {
-            for &a in *c {
-                of_node[fill[a]] = id;
-                fill[a] += 1;
-            }
-        }
+        let (start, of_node) = cells_of_nodes(nodes, cells);
         let chunks = (4 * rayon::current_num_threads()).clamp(1, nodes.max(1));
         let bounds: Vec<usize> = (0..=chunks).map(|c| c * nodes / chunks).collect();
         let dim = self.dim;
@@ -268,23 +251,7 @@ impl AssemblyPlan {
     /// each, in four tasks per thread of the current rayon pool.
     pub fn new(nodes: usize, dim: usize, cells: &[&[usize]]) -> Self {
         let pattern = PatternAssembler::new(nodes, dim, cells);
-        let mut start = vec![0usize; nodes + 1];
-        for c in cells {
-            for &a in *c {
-                start[a + 1] += 1;
-            }
-        }
-        for a in 0..nodes {
-            start[a + 1] += start[a];
-        }
-        let mut fill = start.clone();
-        let mut of_node = vec![0usize; start[nodes]];
-        for (id, c) in cells.iter().enumerate() {
-            for &a in *c {
-                of_node[fill[a]] = id;
-                fill[a] += 1;
-            }
-        }
+        let (start, of_node) = cells_of_nodes(nodes, cells);
         let chunks = (4 * rayon::current_num_threads()).clamp(1, nodes.max(1));
         let mut tasks = Vec::with_capacity(chunks);
         let mut task_cells = Vec::new();
@@ -405,6 +372,29 @@ impl AssemblyPlan {
             }
         }
     }
+}
+
+/// The cells of every node in increasing cell order, as compressed rows: node `a`'s
+/// cells are `of_node[start[a]..start[a + 1]]`.
+fn cells_of_nodes(nodes: usize, cells: &[&[usize]]) -> (Vec<usize>, Vec<usize>) {
+    let mut start = vec![0usize; nodes + 1];
+    for c in cells {
+        for &a in *c {
+            start[a + 1] += 1;
+        }
+    }
+    for a in 0..nodes {
+        start[a + 1] += start[a];
+    }
+    let mut fill = start.clone();
+    let mut of_node = vec![0usize; start[nodes]];
+    for (id, c) in cells.iter().enumerate() {
+        for &a in *c {
+            of_node[fill[a]] = id;
+            fill[a] += 1;
+        }
+    }
+    (start, of_node)
 }
 
 /// Collects element contributions for one global matrix.
