@@ -150,8 +150,7 @@ pub struct Delassus {
     dense: bool,
     with_d: bool,
     metric: Metric,
-    /// `G` constant: [`Delassus::refresh`] runs once, at construction.
-    /// `G` does not depend on `q`: its blocks are condensed once, at set-up.
+    /// `G` does not depend on `q`: [`Delassus::refresh`] runs once, at set-up.
     g_constant: bool,
     /// Set-up or step loop ([`Delassus::start_stepping`]): the set-up may spread its
     /// blocked solves over threads (allocating), the step loop may not.
@@ -681,8 +680,8 @@ impl Delassus {
 }
 
 /// Solves the `m` columns of a dense `n × m` block of [`Delassus::refresh`]: on every
-/// thread when `G` is constant (`refresh` then runs once, at construction), otherwise
-/// sequentially and without allocating (`refresh` runs inside the step loop).
+/// thread when the blocks are condensed `once` (constant `G`, at set-up), otherwise
+/// sequentially and without allocating (`refresh` inside the step loop).
 fn solve_columns(factor: &mut dyn LinearSolver, x: &mut [f64], m: usize, once: bool) {
     if once {
         factor.solve_block_in_place_par(x, m);
