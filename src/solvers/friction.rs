@@ -709,32 +709,42 @@ impl FrictionSolver {
                     next.iterations += spent;
                     return Ok(self.counted(next, params.tol));
                 }
+                // a Newton stage of at most `cap` iterations; `iterations` counts every stage
+                let stage = |s: &mut Self,
+                             mode,
+                             cap: usize,
+                             spent: &mut usize,
+                             r: &mut [f64],
+                             u: &mut [f64]| {
+                    let p = FrictionParams {
+                        max_iterations: left(*spent).max_iterations.min(cap),
+                        ..*params
+                    };
+                    let mut next = newton(s, mode, &p, r, u);
+                    *spent += next.iterations;
+                    next.iterations = *spent;
+                    next
+                };
                 if self.one_step {
                     // one-step problems: the proximal Newton from the caller's start for a
                     // few iterations first (AUTO_NEWTON_FIRST), the plain method after it
                     // from NSGS's iterate only where that did not finish
                     self.rprev[..k].copy_from_slice(&r[..k]);
                     r[..k].copy_from_slice(&self.start[..k]);
-                    let p = FrictionParams {
-                        max_iterations: left(spent).max_iterations.min(AUTO_NEWTON_FIRST),
-                        ..*params
-                    };
-                    let mut next = newton(self, NewtonMode::Proximal, &p, r, u);
-                    spent += next.iterations;
-                    next.iterations = spent;
+                    let next = stage(
+                        self,
+                        NewtonMode::Proximal,
+                        AUTO_NEWTON_FIRST,
+                        &mut spent,
+                        r,
+                        u,
+                    );
                     if next.converged || spent >= params.max_iterations {
                         return Ok(self.counted(next, params.tol));
                     }
                     r[..k].copy_from_slice(&self.rprev[..k]);
                 }
-                let p = FrictionParams {
-                    max_iterations: left(spent).max_iterations.min(AUTO_NSN),
-                    ..*params
-                };
-                let mut next = newton(self, NewtonMode::Plain, &p, r, u);
-                spent += next.iterations;
-                next.iterations = spent;
-                info = next;
+                info = stage(self, NewtonMode::Plain, AUTO_NSN, &mut spent, r, u);
                 if !info.converged && spent < params.max_iterations {
                     // the plain method's iterate, in PROX's scratch (PROX does not run here)
                     let res0 = info.residual;
