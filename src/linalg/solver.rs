@@ -217,18 +217,14 @@ impl LinearSolver for SparseLdlt {
         Ok(())
     }
     fn solve_in_place(&mut self, x: &mut [f64]) {
-        let ldlt = LdltRef::<usize, f64>::new(&self.symbolic, &self.values);
-        let rhs = MatMut::from_column_major_slice_mut(x, self.n, 1);
-        ldlt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.mem));
+        self.solve_block_in_place(x, 1);
     }
     fn solve_block_in_place(&mut self, x: &mut [f64], k: usize) {
-        let n = self.n;
         let ldlt = LdltRef::<usize, f64>::new(&self.symbolic, &self.values);
-        for block in x[..n * k].chunks_mut(n.max(1) * SOLVE_CHUNK) {
-            let cols = block.len() / n.max(1);
-            let rhs = MatMut::from_column_major_slice_mut(block, n, cols);
-            ldlt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.mem));
-        }
+        let mem = &mut self.mem;
+        in_chunks(x, self.n, k, |rhs| {
+            ldlt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(mem))
+        });
     }
 }
 
@@ -292,19 +288,15 @@ impl LinearSolver for SparseLu {
         Ok(())
     }
     fn solve_in_place(&mut self, x: &mut [f64]) {
-        // `numeric` is the output of `factorize_numeric_lu` on `symbolic` (refactor)
-        let lu = LuRef::<usize, f64>::new_unchecked(&self.symbolic, &self.numeric);
-        let rhs = MatMut::from_column_major_slice_mut(x, self.n, 1);
-        lu.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.mem));
+        self.solve_block_in_place(x, 1);
     }
     fn solve_block_in_place(&mut self, x: &mut [f64], k: usize) {
-        let n = self.n;
+        // `numeric` is the output of `factorize_numeric_lu` on `symbolic` (refactor)
         let lu = LuRef::<usize, f64>::new_unchecked(&self.symbolic, &self.numeric);
-        for block in x[..n * k].chunks_mut(n.max(1) * SOLVE_CHUNK) {
-            let cols = block.len() / n.max(1);
-            let rhs = MatMut::from_column_major_slice_mut(block, n, cols);
-            lu.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut self.mem));
-        }
+        let mem = &mut self.mem;
+        in_chunks(x, self.n, k, |rhs| {
+            lu.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(mem))
+        });
     }
 }
 
@@ -396,16 +388,24 @@ impl LinearSolver for DenseSolver {
     fn solve_block_in_place(&mut self, x: &mut [f64], k: usize) {
         use faer::linalg::lu::partial_pivoting::solve;
         let n = self.n;
-        if n == 0 {
-            return;
-        }
-        for block in x[..n * k].chunks_mut(n * SOLVE_CHUNK) {
-            let cols = block.len() / n;
-            let lu = faer::MatRef::from_column_major_slice(&self.lu, n, n);
-            let p = faer::perm::PermRef::new_checked(&self.perm, &self.perm_inv, n);
-            let rhs = MatMut::from_column_major_slice_mut(block, n, cols);
-            solve::solve_in_place(lu, lu, p, rhs, Par::Seq, MemStack::new(&mut self.mem));
-        }
+        let lu = faer::MatRef::from_column_major_slice(&self.lu, n, n);
+        let p = faer::perm::PermRef::new_checked(&self.perm, &self.perm_inv, n);
+        let mem = &mut self.mem;
+        in_chunks(x, n, k, |rhs| {
+            solve::solve_in_place(lu, lu, p, rhs, Par::Seq, MemStack::new(mem))
+        });
+    }
+}
+
+/// Hands the `k` columns of the column-major `n × k` block `x` to `solve` in chunks of at
+/// most [`SOLVE_CHUNK`] columns (one faer call each: block kernels, one scratch).
+fn in_chunks(x: &mut [f64], n: usize, k: usize, mut solve: impl FnMut(MatMut<'_, f64>)) {
+    if n == 0 {
+        return;
+    }
+    for block in x[..n * k].chunks_mut(n * SOLVE_CHUNK) {
+        let cols = block.len() / n;
+        solve(MatMut::from_column_major_slice_mut(block, n, cols));
     }
 }
 

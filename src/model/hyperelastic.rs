@@ -314,13 +314,7 @@ impl HyperBody {
         use crate::assembly::Accumulate;
         self.plan
             .assemble(tangent, force, |id, k, f| {
-                let (kind, nodes) = &self.cells[id];
-                let mut x = [[0.0; 3]; 8];
-                let mut ue = [0.0; 24];
-                for (a, &v) in nodes.iter().enumerate() {
-                    x[a] = self.points[v];
-                    ue[3 * a..3 * a + 3].copy_from_slice(&u[3 * v..3 * v + 3]);
-                }
+                let (nodes, x, ue) = self.gather(id, u);
                 let mut dofs = [0usize; 24];
                 for (a, &v) in nodes.iter().enumerate() {
                     for i in 0..3 {
@@ -328,20 +322,21 @@ impl HyperBody {
                     }
                 }
                 let nd = 3 * nodes.len();
-                match kind {
+                // force and column-major tangent of the cell
+                let mut add = |fe: &[f64], te: &[f64]| {
+                    k.add_element(&dofs[..nd], |a, b| te[a + b * nd]);
+                    for a in 0..nd {
+                        f.add(dofs[a], fe[a]);
+                    }
+                };
+                match self.cells[id].0 {
                     CellKind::Hex8 => {
                         let e = hex8(&self.law, &x, &ue)?;
-                        k.add_element(&dofs[..nd], |a, b| e.tangent[(a, b)]);
-                        for a in 0..nd {
-                            f.add(dofs[a], e.force[a]);
-                        }
+                        add(e.force.as_slice(), e.tangent.as_slice());
                     }
                     _ => {
                         let e = tet4(&self.law, &x[..4], &ue[..12])?;
-                        k.add_element(&dofs[..nd], |a, b| e.tangent[(a, b)]);
-                        for a in 0..nd {
-                            f.add(dofs[a], e.force[a]);
-                        }
+                        add(e.force.as_slice(), e.tangent.as_slice());
                     }
                 }
                 Ok(())
@@ -349,16 +344,24 @@ impl HyperBody {
             .map_err(|(cell, e): (usize, Inverted)| InvertedCell { cell, det: e.det })
     }
 
+    /// Cell `id`'s nodes, their reference coordinates and their displacements in `u`
+    /// (the first `nodes` entries used).
+    fn gather(&self, id: usize, u: &[f64]) -> (&[usize], [[f64; 3]; 8], [f64; 24]) {
+        let nodes = &self.cells[id].1;
+        let mut x = [[0.0; 3]; 8];
+        let mut ue = [0.0; 24];
+        for (a, &v) in nodes.iter().enumerate() {
+            x[a] = self.points[v];
+            ue[3 * a..3 * a + 3].copy_from_slice(&u[3 * v..3 * v + 3]);
+        }
+        (nodes, x, ue)
+    }
+
     /// Strain energy `Σ ∫ W dV₀` (J), summed in cell order.
     pub fn strain_energy(&self, u: &[f64]) -> Result<f64, InvertedCell> {
         let mut total = 0.0;
-        for (id, (kind, nodes)) in self.cells.iter().enumerate() {
-            let mut x = [[0.0; 3]; 8];
-            let mut ue = [0.0; 24];
-            for (a, &v) in nodes.iter().enumerate() {
-                x[a] = self.points[v];
-                ue[3 * a..3 * a + 3].copy_from_slice(&u[3 * v..3 * v + 3]);
-            }
+        for (id, (kind, _)) in self.cells.iter().enumerate() {
+            let (_, x, ue) = self.gather(id, u);
             let e = match kind {
                 CellKind::Hex8 => hex8(&self.law, &x, &ue).map(|e| e.energy),
                 _ => tet4(&self.law, &x[..4], &ue[..12]).map(|e| e.energy),
