@@ -683,10 +683,18 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     );
     out!(
         "newton              {}",
-        if report.linear_contacts {
-            "not needed for the dynamics (linear structure, constant G): factor once, never refactor"
-        } else {
-            "needed: curved obstacle, G(q) re-linearized every iteration (M̂ still factored once)"
+        match (report.linear_structure, report.linear_contacts) {
+            (true, true) => {
+                "not needed for the dynamics (linear structure, constant G): factor once, never refactor"
+            }
+            (true, false) => {
+                "needed: curved obstacle, G(q) re-linearized every iteration (M̂ still factored once)"
+            }
+            (false, _) if scene.scheme.newton.modified => {
+                "nonlinear structure: modified Newton (M̂ⁿ formed at each step's first iterate, \
+                 re-formed when the iterates stop contracting)"
+            }
+            (false, _) => "nonlinear structure: full Newton (M̂ⁿ refactored at every iterate)",
         }
     );
     out!("path                {}", integ.path());

@@ -54,7 +54,7 @@ impl Integrator for CombinedProjection {
     fn step(&mut self) -> Result<StepStats, Error> {
         let mut st = StepStats::default();
         let c = &mut self.core;
-        c.begin_step();
+        c.begin_step(&mut st)?;
         c.vel_mask.iter_mut().for_each(|x| *x = false);
         let rule = PositionRule::Combined {
             project_all: self.project_all,

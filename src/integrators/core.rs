@@ -58,6 +58,7 @@
 //! - Rows that keep `g = 0` with `P = 0` and `τ < 0` because eq. 65 had no solution for
 //!   the index set are counted in `StepStats::held_rows` (position problem below).
 
+use super::structure::Structure;
 use super::{Forecast, NewtonParams, SchemeParams, State, StepStats};
 use crate::assembly::linear_combination;
 use crate::contact::{ContactJacobian, ContactSet, ContactStatus};
@@ -65,6 +66,7 @@ use crate::delassus::{Delassus, Op};
 use crate::error::Error;
 use crate::linalg::{LinearSolver, SolverKind, SparseMatrix, spmv_add, sym_spmv_add};
 use crate::model::LinearSystem;
+use crate::model::system::Linearity;
 use crate::solvers::friction::{
     Block, FrictionParams, FrictionProblem, FrictionSolver, FrictionSolverKind,
 };
@@ -419,9 +421,16 @@ pub struct ThetaCore {
     pub(crate) e: Vec<f64>,
     with_projection: bool,
     feedback: bool,
-    /// `G` does not depend on `q` (every contact set is linear): condensed once,
-    /// and the Newton loop only re-solves the contact-space problem (eq. 56a).
+    /// `G` does not depend on `q` (every contact set is linear).
     pub(crate) g_constant: bool,
+    /// `G` constant and the structure linear: `M̂`, `W` are condensed once and the
+    /// Newton loop only re-solves the contact-space problem (eq. 56a).
+    pub(crate) operators_constant: bool,
+    /// A nonlinear structure's Newton data ([`super::structure`]); `None` when linear.
+    structure: Option<Box<Structure>>,
+    /// The structure is linearized at the step's first iterate (`v = v_k`, `τ = 0`):
+    /// a Newton loop starting now needs no new evaluation.
+    at_first_iterate: bool,
     jac_at_qk: bool,
     pub(crate) newton: NewtonParams,
     pub(crate) projection_tolerance: f64,
@@ -487,15 +496,27 @@ impl ThetaCore {
         with_projection: bool,
     ) -> Result<Self, Error> {
         let theta = params.theta;
-        let factor = factor_step_matrix(
-            params,
-            &sys,
-            q0,
-            v0,
-            h,
-            (h * h * theta * theta, h * theta),
-            "iteration matrix M + hθC + h²θ²K",
-        )?;
+        let structure = (sys.linearity() != Linearity::Linear)
+            .then(|| Box::new(Structure::new(&sys, params.newton.modified)));
+        let factor = match &structure {
+            None => factor_step_matrix(
+                params,
+                &sys,
+                q0,
+                v0,
+                h,
+                (h * h * theta * theta, h * theta),
+                "iteration matrix M + hθC + h²θ²K",
+            )?,
+            Some(st) => {
+                params.validate()?;
+                crate::error::require_positive("dt", h)?;
+                check_vector("initial displacement", q0, sys.ndof())?;
+                check_vector("initial velocity", v0, sys.ndof())?;
+                // the pattern's symbolic analysis; the values come with the first step
+                st.factor()?
+            }
+        };
         let n = sys.ndof();
         let np = sys.prescribed.as_ref().map_or(0, |p| p.dofs.len());
         let m = contacts.len();
@@ -522,6 +543,7 @@ impl ThetaCore {
             0
         };
         let g_constant = contacts.is_linear();
+        let operators_constant = g_constant && structure.is_none();
         let state = State::with_layout(q0, v0, m, tangent_dim, rows);
         let del = Delassus::new(
             factor,
@@ -530,7 +552,7 @@ impl ThetaCore {
             (params.delassus, params.delassus_pool),
             with_projection,
             params.metric,
-            g_constant,
+            operators_constant,
         );
         // the dense one-step workspaces (module doc of `Workspace`): the gathered block
         // and the MLCP's three, plus the coupled position problem's matrix
@@ -575,6 +597,9 @@ impl ThetaCore {
             with_projection,
             feedback: params.projection_feedback,
             g_constant,
+            operators_constant,
+            structure,
+            at_first_iterate: false,
             jac_at_qk: true,
             newton: params.newton,
             projection_tolerance: params.projection_tolerance,
@@ -612,7 +637,10 @@ impl ThetaCore {
         };
         core.contacts
             .evaluate(&core.state.q, &mut core.state.gap, &mut core.del.jac);
-        core.del.refresh(&core.sys.stiffness);
+        if core.structure.is_none() {
+            // a nonlinear structure condenses with each step's first iteration matrix
+            core.del.refresh(&core.sys.stiffness);
+        }
         core.del.jac.transpose_mul(&core.state.v, &mut core.u_rows);
         core.scatter_local_velocity();
         core.del.start_stepping();
@@ -621,10 +649,33 @@ impl ThetaCore {
 
     /// A description of the linear-algebra path, for summaries.
     pub fn path(&self) -> String {
+        let structure = match &self.structure {
+            None => format!(
+                "M̂ = M + hθC + h²θ²K factored once ({}, n = {})",
+                self.del.factor.backend_name(),
+                self.n
+            ),
+            Some(st) => format!(
+                "nonlinear structure ({}): {} Newton on eq. 41–48, M̂ⁿ = M + hθC + h²θ²Kⁿ \
+                 refactored {} ({}, n = {})",
+                self.sys
+                    .nonlinear
+                    .iter()
+                    .map(|f| f.describe())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                if st.modified { "modified" } else { "full" },
+                if st.modified {
+                    "at each step's first iterate and when the iterates stop contracting"
+                } else {
+                    "at every iterate"
+                },
+                self.del.factor.backend_name(),
+                self.n
+            ),
+        };
         format!(
-            "M̂ = M + hθC + h²θ²K factored once ({}, n = {}); {} contact(s){}, {}; {}{}",
-            self.del.factor.backend_name(),
-            self.n,
+            "{structure}; {} contact(s){}, {}; {}{}",
             self.m,
             if self.friction {
                 format!(
@@ -635,9 +686,11 @@ impl ThetaCore {
             } else {
                 String::new()
             },
-            if self.g_constant {
+            if self.operators_constant {
                 "linear gap: G and W constant (condensed once), one sparse solve per step; \
                  Newton iterations only re-solve the contact-space problem (eq. 56a)"
+            } else if self.g_constant {
+                "linear gap: G constant, W condensed again with each new M̂ⁿ"
             } else {
                 "nonlinear gap: G(q) re-linearized every Newton iteration"
             },
@@ -650,8 +703,12 @@ impl ThetaCore {
         )
     }
 
-    /// Free velocity and the contact-space data at the start of a step.
-    pub fn begin_step(&mut self) {
+    /// Free velocity and the contact-space data at the start of a step (for a
+    /// nonlinear structure, at its first Newton iterate: [`super::structure`]).
+    pub fn begin_step(&mut self, stats: &mut StepStats) -> Result<(), Error> {
+        if self.structure.is_some() {
+            return self.begin_nonlinear_step(stats);
+        }
         let (h, th) = (self.h, self.theta);
         let s = &self.state;
         // work = h f − h K (q + hθ v) − h C v; K and C are symmetric, so their CSC
@@ -670,24 +727,12 @@ impl ThetaCore {
                 .sum();
             *w = h * (f - kx);
         }
-        // time-dependent nodal loads at t_{k+θ}
-        self.sys.add_loads(s.time + th * h, h, &mut self.work);
-        // prescribed dofs (eliminated): −M_fp Δv_p − h C_fp v_p(t_{k+θ}) − h K_fp u_p(t_{k+θ})
-        if let Some(p) = &self.sys.prescribed {
-            let t = s.time;
-            p.velocity_at(t, &mut self.vp_a);
-            p.velocity_at(t + h, &mut self.vp_b);
-            for (b, a) in self.vp_b.iter_mut().zip(&self.vp_a) {
-                *b -= a;
-            }
-            spmv_add(p.mass.as_ref(), -1.0, &self.vp_b, &mut self.work);
-            p.velocity_at(t + th * h, &mut self.vp_a);
-            if let Some(c) = &p.damping {
-                spmv_add(c.as_ref(), -h, &self.vp_a, &mut self.work);
-            }
-            p.displacement_at(t + th * h, &mut self.vp_a);
-            spmv_add(p.stiffness.as_ref(), -h, &self.vp_a, &mut self.work);
-        }
+        add_step_loads(
+            &self.sys,
+            (s.time, h, th),
+            (&mut self.vp_a, &mut self.vp_b),
+            &mut self.work,
+        );
         if let Some(c) = &self.sys.damping {
             sym_spmv_add(c.as_ref(), -h, &s.v, &mut self.work);
         }
@@ -700,6 +745,108 @@ impl ThetaCore {
         self.del.next_epoch();
         self.q_lin.copy_from_slice(&self.state.q);
         self.g_at_lin.copy_from_slice(&self.state.gap);
+        Ok(())
+    }
+
+    /// [`ThetaCore::begin_step`] of a nonlinear structure: the step's loads, then the
+    /// first Newton iterate.
+    fn begin_nonlinear_step(&mut self, stats: &mut StepStats) -> Result<(), Error> {
+        let (h, th) = (self.h, self.theta);
+        let st = self.structure.as_mut().expect("a nonlinear structure");
+        for (e, f) in st.ext.iter_mut().zip(&self.sys.force) {
+            *e = h * f;
+        }
+        add_step_loads(
+            &self.sys,
+            (self.state.time, h, th),
+            (&mut self.vp_a, &mut self.vp_b),
+            &mut st.ext,
+        );
+        self.u_k.copy_from_slice(&self.u_rows);
+        self.del.next_epoch();
+        self.q_lin.copy_from_slice(&self.state.q);
+        self.g_at_lin.copy_from_slice(&self.state.gap);
+        self.first_iterate(stats)
+    }
+
+    /// Linearizes a nonlinear structure at the step's first iterate `v⁰ = v_k`, `τ⁰ = 0`
+    /// (`q⁰ = q_k + h v_k`): factors `M̂⁰`, condenses `W` on it (`G` at `q_k`), and sets
+    /// the free velocity.
+    fn first_iterate(&mut self, stats: &mut StepStats) -> Result<(), Error> {
+        let h = self.h;
+        let s = &self.state;
+        self.v_new.copy_from_slice(&s.v);
+        for ((qn, q), v) in self.q_new.iter_mut().zip(&s.q).zip(&s.v) {
+            *qn = q + h * v;
+        }
+        self.linearize_structure(true, stats)?;
+        let st = self.structure.as_ref().expect("a nonlinear structure");
+        self.del.refresh(&st.tangent);
+        self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
+        self.at_first_iterate = true;
+        Ok(())
+    }
+
+    /// Evaluates a nonlinear structure at the iterate `(q_new, v_new)`: with `tangent`
+    /// refactors `M̂ⁿ`; sets `v_free = vⁿ + M̂ⁿ⁻¹(−M(vⁿ − v_k) + hF_θⁿ)` (eq. 45 without
+    /// contact impulse). The caller refreshes the Delassus data.
+    fn linearize_structure(&mut self, tangent: bool, stats: &mut StepStats) -> Result<(), Error> {
+        let st = self.structure.as_mut().expect("a nonlinear structure");
+        let s = &self.state;
+        st.evaluate(
+            &self.sys,
+            (self.h, self.theta),
+            (&s.q, &s.v),
+            (&self.q_new, &self.v_new),
+            tangent,
+        )
+        .map_err(|e| step_error(s, self.h, e))?;
+        if tangent {
+            self.del
+                .factor
+                .refactor(st.step_matrix.as_ref(), "iteration matrix M + hθC + h²θ²Kⁿ")
+                .map_err(|e| step_error(s, self.h, e))?;
+            stats.factorizations += 1;
+        }
+        self.work.copy_from_slice(&st.rhs);
+        self.del.factor.solve_in_place(&mut self.work);
+        for ((vf, v), w) in self.v_free.iter_mut().zip(&self.v_new).zip(&self.work) {
+            *vf = v + w;
+        }
+        self.at_first_iterate = false;
+        Ok(())
+    }
+
+    /// The residual of eq. 41 at the iterate `(q_new, v_new)` with the impulse `P`:
+    /// `‖M(v − v_k) − hF_θ − GP‖∞` relative to the largest of its terms (0 below 64 ulps
+    /// of that scale).
+    fn structure_residual(&mut self) -> Result<f64, Error> {
+        let st = self.structure.as_mut().expect("a nonlinear structure");
+        let s = &self.state;
+        st.evaluate(
+            &self.sys,
+            (self.h, self.theta),
+            (&s.q, &s.v),
+            (&self.q_new, &self.v_new),
+            false,
+        )
+        .map_err(|e| step_error(s, self.h, e))?;
+        // work = −R = rhs + G P
+        self.work.copy_from_slice(&st.rhs);
+        let mut gp = 0.0_f64;
+        for a in 0..self.rows {
+            if self.p[a] != 0.0 {
+                self.del.jac.axpy(a, self.p[a], &mut self.work);
+                gp = gp.max(self.p[a].abs());
+            }
+        }
+        let scale = st.scale.max(gp);
+        let r = self.work.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
+        Ok(if r <= 64.0 * f64::EPSILON * scale {
+            0.0
+        } else {
+            r / scale.max(f64::MIN_POSITIVE)
+        })
     }
 
     /// Sets `vel_mask` from the forecast `ḡ_{k+1}` (eq. 61 or 62): active iff `ḡ ≤ 0`.
@@ -729,10 +876,18 @@ impl ThetaCore {
         if !self.g_constant && !self.jac_at_qk {
             self.contacts
                 .evaluate(&self.state.q, &mut self.g_at_lin, &mut self.del.jac);
-            self.del.refresh(&self.sys.stiffness);
-            self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
+            if self.structure.is_none() {
+                self.del.refresh(&self.sys.stiffness);
+                self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
+            }
             self.jac_at_qk = true;
         }
+        if self.structure.is_some() && !self.at_first_iterate {
+            // a later round of Algorithm 2: Newton restarts from the first iterate
+            self.first_iterate(stats)?;
+        }
+        // modified Newton: the last two changes of the iterate, for its contraction test
+        let (mut change, mut change_before) = (f64::INFINITY, f64::INFINITY);
         self.tau_prev.iter_mut().for_each(|x| *x = 0.0);
         self.p.iter_mut().for_each(|x| *x = 0.0);
         self.eq_rows.iter_mut().for_each(|x| *x = false);
@@ -747,17 +902,37 @@ impl ThetaCore {
         while it < self.newton.max_iterations {
             it += 1;
             stats.newton_iterations += 1;
-            if !self.g_constant && it > 1 {
-                self.contacts
-                    .evaluate(&self.q_lin, &mut self.g_at_lin, &mut self.del.jac);
-                self.del.refresh(&self.sys.stiffness);
+            if it > 1 && !self.operators_constant {
+                if !self.g_constant {
+                    self.contacts
+                        .evaluate(&self.q_lin, &mut self.g_at_lin, &mut self.del.jac);
+                    relinearized = true;
+                    self.jac_at_qk = false;
+                }
+                // a nonlinear structure: the next iterate's M̂ⁿ (full Newton, or modified
+                // Newton when the last change was not at most half the one before) and
+                // free velocity
+                let refactored = match self.structure.as_ref().map(|s| s.modified) {
+                    None => false,
+                    Some(modified) => {
+                        let tangent = !modified || change > 0.5 * change_before;
+                        self.linearize_structure(tangent, stats)?;
+                        tangent
+                    }
+                };
+                if !self.g_constant || refactored {
+                    let k = match &self.structure {
+                        Some(st) => &st.tangent,
+                        None => &self.sys.stiffness,
+                    };
+                    self.del.refresh(k);
+                }
                 self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
-                relinearized = true;
-                self.jac_at_qk = false;
             }
             // coupling hθ W_D τⁿ (zero without projection)
             self.coupling.iter_mut().for_each(|x| *x = 0.0);
-            if self.feedback && self.tau_prev.iter().any(|&t| t != 0.0) {
+            if self.feedback && self.structure.is_none() && self.tau_prev.iter().any(|&t| t != 0.0)
+            {
                 self.del
                     .ensure_support(&self.tau_prev, &self.sys.stiffness)
                     .map_err(|e| fail(&self.state, "Delassus columns", e))?;
@@ -888,12 +1063,13 @@ impl ThetaCore {
             }
             self.tau_prev.copy_from_slice(&self.tau);
             // convergence
-            let r = if self.g_constant {
+            let r = if self.operators_constant {
                 self.linear_residual()?
             } else {
                 self.form();
                 let r = newton_change(&self.q_new, &self.q_lin, &self.state.q);
                 self.q_lin.copy_from_slice(&self.q_new);
+                (change_before, change) = (change, r);
                 r
             };
             stats.newton_residual = r;
@@ -915,8 +1091,17 @@ impl ThetaCore {
                 self.newton.tol
             };
             if r <= tol {
-                converged = true;
-                break;
+                if self.structure.is_none() {
+                    converged = true;
+                    break;
+                }
+                // eq. 41 at the new iterate
+                let rs = self.structure_residual()?;
+                stats.newton_residual = r.max(rs);
+                if rs <= tol {
+                    converged = true;
+                    break;
+                }
             }
             // Stagnation: no 10 % gain in STALL iterations. With friction the iterates
             // can cycle among position solutions that differ by rows resting at g ≈ 0
@@ -937,7 +1122,7 @@ impl ThetaCore {
             coupled_last = false;
             if it >= COUPLED_AFTER
                 && helped
-                && self.g_constant
+                && self.operators_constant
                 && law == VelocityLaw::Impact
                 && rule != PositionRule::None
                 && self.coupled_correction(rule)?
@@ -1292,14 +1477,20 @@ impl ThetaCore {
     /// `v = v_free + M̂⁻¹G P − hθ M̂⁻¹K N G τ_used`, `q = q_k + h(1−θ)v_k + hθ v + N G τ`.
     pub(crate) fn form(&mut self) {
         let (h, th) = (self.h, self.theta);
-        if self.g_constant {
+        if self.operators_constant {
             // called once per step: v_free is not needed afterwards (begin_step
             // rewrites it), so hand its buffer over instead of copying
             std::mem::swap(&mut self.v_new, &mut self.v_free);
         } else {
             self.v_new.copy_from_slice(&self.v_free);
         }
-        let kfac = if self.feedback { -h * th } else { 0.0 };
+        // a nonlinear structure has the projection's feedback in F(q_θ) (module doc of
+        // `structure`)
+        let kfac = if self.feedback && self.structure.is_none() {
+            -h * th
+        } else {
+            0.0
+        };
         self.del.add_velocity_correction(
             &self.p,
             kfac,
@@ -1336,16 +1527,20 @@ impl ThetaCore {
         self.contacts
             .evaluate(&self.state.q, &mut self.state.gap, &mut self.del.jac);
         if !self.g_constant {
-            self.del.refresh(&self.sys.stiffness);
+            if self.structure.is_none() {
+                // (a nonlinear structure condenses at the next step's first iterate)
+                self.del.refresh(&self.sys.stiffness);
+            }
             self.jac_at_qk = true;
         }
         self.del.jac.transpose_mul(&self.state.v, &mut self.u_rows);
     }
 
     pub fn commit(&mut self, stats: &mut StepStats) {
-        if self.g_constant {
+        if self.operators_constant {
             self.form();
         }
+        self.at_first_iterate = false;
         std::mem::swap(&mut self.state.q, &mut self.q_new);
         std::mem::swap(&mut self.state.v, &mut self.v_new);
         self.state.impulse_rows.copy_from_slice(&self.p);
@@ -1402,6 +1597,46 @@ impl ThetaCore {
                 ContactStatus::Slip
             };
         }
+    }
+}
+
+/// Adds what the step's right-hand side owes to time-dependent nodal loads at
+/// `t_{k+θ}` and to the prescribed dofs (eliminated): `−M_fp Δv_p − h C_fp v_p(t_{k+θ})
+/// − h K_fp u_p(t_{k+θ})`, with `(t_k, h, θ)`; `vp` are two scratch vectors.
+fn add_step_loads(
+    sys: &LinearSystem,
+    (t, h, th): (f64, f64, f64),
+    (vp_a, vp_b): (&mut [f64], &mut [f64]),
+    out: &mut [f64],
+) {
+    sys.add_loads(t + th * h, h, out);
+    if let Some(p) = &sys.prescribed {
+        p.velocity_at(t, vp_a);
+        p.velocity_at(t + h, vp_b);
+        for (b, a) in vp_b.iter_mut().zip(vp_a.iter()) {
+            *b -= a;
+        }
+        spmv_add(p.mass.as_ref(), -1.0, vp_b, out);
+        p.velocity_at(t + th * h, vp_a);
+        if let Some(c) = &p.damping {
+            spmv_add(c.as_ref(), -h, vp_a, out);
+        }
+        p.displacement_at(t + th * h, vp_a);
+        spmv_add(p.stiffness.as_ref(), -h, vp_a, out);
+    }
+}
+
+/// A structural failure in the step after `state` (an inverted element, a singular
+/// iteration matrix) as the run's error, naming the step and the time it reached.
+fn step_error(state: &State, h: f64, e: Error) -> Error {
+    Error::RunFailed {
+        step: state.step + 1,
+        time: state.time + h,
+        contact: None,
+        detail: match e {
+            Error::Numerical(m) => m,
+            e => e.to_string(),
+        },
     }
 }
 

@@ -42,7 +42,7 @@ impl Integrator for DirectProjection {
     }
     fn step(&mut self) -> Result<StepStats, Error> {
         let mut st = StepStats::default();
-        self.core.begin_step();
+        self.core.begin_step(&mut st)?;
         self.core.forecast(self.forecast);
         self.core.newton(
             VelocityLaw::Impact,

@@ -29,6 +29,7 @@ pub mod direct_projection;
 pub mod moreau_jean;
 pub mod saved;
 pub mod schatzman_paoli;
+pub(crate) mod structure;
 pub mod trapezoid;
 
 use serde::{Deserialize, Serialize};
@@ -148,6 +149,9 @@ pub struct StepStats {
     /// (eq. 65 had no solution with them as complementarity rows; see
     /// [`core`]'s position problem), in the last index-set round of the step.
     pub held_rows: usize,
+    /// Nonlinear structures: factorizations of the iteration matrix `M̂ⁿ` in the step
+    /// (0 on the linear path, where `M̂` is factored once at set-up).
+    pub factorizations: usize,
     /// Algorithm 2: index-set rounds redone with Algorithm 1's position rule
     /// (`0 ≤ g ⊥ τ ≥ 0` on every active row) because the combined rule (eq. 67–70)
     /// hit the Newton cap or left held rows.
@@ -322,6 +326,10 @@ pub struct NewtonParams {
     pub tol: f64,
     /// Iteration cap (default 50); reaching it is counted in [`StepStats::caps_hit`].
     pub max_iterations: usize,
+    /// Nonlinear structures only: modified Newton, the iteration matrix `M̂ⁿ` formed at
+    /// the step's first iterate and kept while the iterates contract (default false:
+    /// full Newton, `M̂ⁿ` refactored at every iterate; [`structure`] module doc).
+    pub modified: bool,
 }
 
 impl Default for NewtonParams {
@@ -329,6 +337,7 @@ impl Default for NewtonParams {
         NewtonParams {
             tol: 1e-10,
             max_iterations: 50,
+            modified: false,
         }
     }
 }
@@ -468,6 +477,16 @@ pub fn build(
             "0 free degrees of freedom",
             "every node is fixed or prescribed: there is nothing to integrate (free some \
              nodes of `fixed`, or drop the [[prescribed]] entries that cover every node)",
+        ));
+    }
+    if system.linearity() != crate::model::system::Linearity::Linear
+        && params.kind == SchemeKind::SchatzmanPaoli
+    {
+        return Err(Error::invalid(
+            "scheme.kind",
+            params.kind.name(),
+            "integrates linear structures only (a body has a nonlinear material); use a \
+             θ-method scheme (moreau-jean, direct-projection, combined-projection)",
         ));
     }
     if system.prescribed.is_some() && params.kind == SchemeKind::SchatzmanPaoli {

@@ -37,7 +37,7 @@ impl Integrator for TrapezoidPosition {
     }
     fn step(&mut self) -> Result<StepStats, Error> {
         let mut st = StepStats::default();
-        self.core.begin_step();
+        self.core.begin_step(&mut st)?;
         self.core
             .newton(VelocityLaw::PositionLevel, PositionRule::None, &mut st)?;
         self.core.commit(&mut st);

@@ -129,6 +129,7 @@ impl Geometry {
                     young,
                     poisson: 0.0,
                     density,
+                    model: crate::model::solid::MaterialModel::Linear,
                 },
                 Formulation::Solid,
             )],

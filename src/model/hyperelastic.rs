@@ -278,6 +278,18 @@ pub struct InvertedCell {
     pub det: f64,
 }
 
+impl std::fmt::Debug for HyperBody {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "HyperBody({:?}, {} cells, {} nodes)",
+            self.law,
+            self.cells.len(),
+            self.points.len()
+        )
+    }
+}
+
 impl HyperBody {
     /// The body of `mesh` (3-D cells only: tet4, hex8) under `law`; plans the assembly.
     pub fn new(mesh: &super::solid::Mesh, law: Hyperelastic) -> Result<Self, crate::Error> {
@@ -295,6 +307,14 @@ impl HyperBody {
             cells: mesh.cells.clone(),
             law,
         })
+    }
+
+    /// The law's name (`svk` or `neo-hookean`).
+    pub fn law_name(&self) -> &'static str {
+        match self.law {
+            Hyperelastic::Svk { .. } => "St. Venant–Kirchhoff",
+            Hyperelastic::NeoHookean { .. } => "neo-Hookean",
+        }
     }
 
     /// The assembly plan (order, pattern).
@@ -384,6 +404,7 @@ mod tests {
         young: 1e7,
         poisson: 0.3,
         density: 1000.0,
+        model: crate::model::solid::MaterialModel::Linear,
     };
 
     /// A reproducible pseudo-random sequence in [−1, 1] (no dependency).

@@ -18,6 +18,7 @@ pub mod ordering;
 pub mod point_mass;
 pub mod rod;
 pub mod solid;
+pub mod system;
 
 use crate::linalg::{SparseMatrix, quadratic_form};
 
@@ -83,6 +84,11 @@ pub struct LinearSystem {
     /// Dofs eliminated with a prescribed velocity (the scene's `[[prescribed]]`): their
     /// coupling to the kept dofs.
     pub prescribed: Option<Prescribed>,
+    /// Nonlinear internal forces `r(q)` (large-deformation bodies), added to `F` as
+    /// `−r(q)` ([`system`]); empty for a linear system. Attached to the final
+    /// (restricted) system: [`LinearSystem::block_diagonal`] and
+    /// [`LinearSystem::restrict`] take systems without them.
+    pub nonlinear: Vec<std::sync::Arc<dyn system::InternalForce>>,
 }
 
 /// Dofs moved with a prescribed velocity `v_p(t) = w_p φ_p(t)` (displacement
@@ -348,6 +354,10 @@ impl LinearSystem {
                 "every body must have the same number of displacement components",
             ));
         }
+        assert!(
+            parts.iter().all(|p| p.nonlinear.is_empty()),
+            "internal forces are attached after the join"
+        );
         if parts.len() == 1 {
             return Ok(parts.into_iter().next().expect("one part"));
         }
@@ -381,6 +391,7 @@ impl LinearSystem {
                 .collect(),
             ordering: None,
             prescribed: None,
+            nonlinear: Vec::new(),
             loads: {
                 let mut off = 0;
                 let mut loads = Vec::new();
@@ -491,6 +502,10 @@ impl LinearSystem {
     /// Removes the dofs marked `fixed` (homogeneous Dirichlet conditions, u = 0).
     /// Returns the reduced system and, for each old dof, its new index.
     pub fn restrict(&self, fixed: &[bool]) -> (LinearSystem, Vec<Option<usize>>) {
+        assert!(
+            self.nonlinear.is_empty(),
+            "internal forces are attached after the restriction"
+        );
         let mut map = vec![None; self.ndof()];
         let mut next = 0;
         for (i, f) in fixed.iter().enumerate() {
@@ -535,6 +550,7 @@ impl LinearSystem {
                 .collect(),
             ordering: None,
             prescribed: None,
+            nonlinear: Vec::new(),
             loads: self
                 .loads
                 .iter()
@@ -636,10 +652,20 @@ impl LinearSystem {
     }
 
     /// Potential energy of the kept dofs `½ qᵀ K q − fᵀ q` (J): elastic energy plus the
-    /// potential of the constant external force.
+    /// potential of the constant external force, plus the energies of the nonlinear
+    /// internal forces ([`system::InternalForce::energy`]; NaN where a cell is inverted).
     pub fn potential_energy(&self, q: &[f64]) -> f64 {
-        0.5 * quadratic_form(self.stiffness.as_ref(), q)
-            - self.force.iter().zip(q).map(|(f, x)| f * x).sum::<f64>()
+        let linear = 0.5 * quadratic_form(self.stiffness.as_ref(), q)
+            - self.force.iter().zip(q).map(|(f, x)| f * x).sum::<f64>();
+        if self.nonlinear.is_empty() {
+            return linear;
+        }
+        linear
+            + self
+                .nonlinear
+                .iter()
+                .map(|r| r.energy(q).unwrap_or(f64::NAN))
+                .sum::<f64>()
     }
 
     /// Linear momentum along the first axis, `e_xᵀ M v` (kg·m/s), where `e_x` is 1 on

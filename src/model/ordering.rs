@@ -155,6 +155,7 @@ mod tests {
             young: 1.0,
             poisson: 0.3,
             density: 1.0,
+            model: crate::model::solid::MaterialModel::Linear,
         };
         Geometry {
             dim: 3,
@@ -218,6 +219,7 @@ mod tests {
             young: 210e9,
             poisson: 0.3,
             density: 7800.0,
+            model: crate::model::solid::MaterialModel::Linear,
         };
         let sys =
             crate::model::solid::assemble(&mesh, &mat, Formulation::Solid, MassKind::Consistent)

@@ -30,6 +30,7 @@ pub fn point_mass(dim: usize, mass: f64, force: &[f64]) -> Result<LinearSystem, 
         ordering: None,
         loads: Vec::new(),
         prescribed: None,
+        nonlinear: Vec::new(),
     })
 }
 
@@ -72,6 +73,7 @@ pub fn rigid_block(mass: f64, length: f64, thickness: f64, g: f64) -> Result<Lin
         ordering: None,
         loads: Vec::new(),
         prescribed: None,
+        nonlinear: Vec::new(),
     })
 }
 
@@ -109,5 +111,6 @@ pub fn diagonal(masses: &[f64], force: &[f64]) -> Result<LinearSystem, Error> {
         ordering: None,
         loads: Vec::new(),
         prescribed: None,
+        nonlinear: Vec::new(),
     })
 }

@@ -96,6 +96,7 @@ impl Rod {
             ordering: None,
             loads: Vec::new(),
             prescribed: None,
+            nonlinear: Vec::new(),
         })
     }
 }

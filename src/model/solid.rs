@@ -15,7 +15,8 @@ use super::{LinearSystem, MassKind};
 use crate::assembly::{Accumulate, PatternAssembler};
 use crate::error::{Error, require_in, require_positive};
 
-/// Isotropic linear elastic material.
+/// An isotropic elastic material: its small-strain constants and the law that holds at
+/// large strain.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
@@ -25,6 +26,34 @@ pub struct Material {
     pub poisson: f64,
     /// Density `ρ` (kg/m³).
     pub density: f64,
+    /// The constitutive law (default `linear`).
+    #[serde(default)]
+    pub model: MaterialModel,
+}
+
+/// Constitutive law of a [`Material`]; every law has the same small-strain limit, the
+/// isotropic linear elasticity of `young` and `poisson`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MaterialModel {
+    /// Linear elasticity, small strain: the structure stays linear (`M̂` factored once).
+    #[default]
+    Linear,
+    /// St. Venant–Kirchhoff, total-Lagrangian ([`super::hyperelastic`]).
+    Svk,
+    /// Compressible neo-Hookean, total-Lagrangian ([`super::hyperelastic`]).
+    NeoHookean,
+}
+
+impl MaterialModel {
+    /// The name used in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            MaterialModel::Linear => "linear",
+            MaterialModel::Svk => "svk",
+            MaterialModel::NeoHookean => "neo-hookean",
+        }
+    }
 }
 
 impl Material {
@@ -620,6 +649,7 @@ pub fn assemble_with_contacts(
         ordering: None,
         loads: Vec::new(),
         prescribed: None,
+        nonlinear: Vec::new(),
     })
 }
 

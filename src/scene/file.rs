@@ -51,8 +51,12 @@ use crate::error::{Error, require_positive};
 use crate::integrators::SchemeParams;
 use crate::io::frames::{GeomCell, Geometry, Outline, orthonormal};
 use crate::model::generate::{box_mesh, rectangle_mesh};
+use crate::model::hyperelastic::{HyperBody, Hyperelastic};
 use crate::model::rod::Rod;
-use crate::model::solid::{CellKind, Formulation, Material, Mesh, assemble_with_contacts};
+use crate::model::solid::{
+    CellKind, Formulation, Material, MaterialModel, Mesh, assemble_with_contacts,
+};
+use crate::model::system::HyperelasticPart;
 use crate::model::{LinearSystem, MassKind};
 use crate::scene::Model;
 
@@ -399,6 +403,8 @@ pub struct ModelReport {
     pub gravity: bool,
     /// Dofs removed by `fixed` node sets.
     pub fixed_dofs: usize,
+    /// Whether the structure is linear (no body with a large-deformation law).
+    pub linear_structure: bool,
 }
 
 impl Scene {
@@ -491,6 +497,17 @@ impl Scene {
             b.material
                 .validate()
                 .map_err(|e| prefix(&format!("bodies[{i}].material"), e))?;
+            let rod = matches!(b.mesh, MeshSpec::Rod { .. });
+            if b.material.model != MaterialModel::Linear
+                && (rod || b.formulation != Formulation::Solid)
+            {
+                return Err(Error::invalid(
+                    &format!("bodies[{i}].material.model"),
+                    b.material.model.name(),
+                    "large-deformation laws take 3-D solid bodies (tet4, hex8 cells); rods \
+                     and plane bodies are linear only (model = \"linear\")",
+                ));
+            }
             if let Some(r) = b.damping {
                 crate::error::require_in(
                     &format!("bodies[{i}].damping.alpha"),
@@ -627,6 +644,7 @@ impl Scene {
                 damping: model.system.damping.is_some(),
                 gravity: model.system.force.iter().any(|&f| f != 0.0),
                 fixed_dofs: 0,
+                linear_structure: model.system.nonlinear.is_empty(),
             };
             return Ok((model, report));
         }
@@ -812,7 +830,34 @@ impl Scene {
             })
             .collect();
         geometry.prescribed_functions = functions.clone();
-        let (system, map) = full.restrict_prescribed(&fixed, &prescribed, functions);
+        let (mut system, map) = full.restrict_prescribed(&fixed, &prescribed, functions);
+        // large-deformation bodies: their internal forces on the kept dofs
+        for (bi, b) in self.bodies.iter().enumerate() {
+            let law = match b.material.model {
+                MaterialModel::Linear => continue,
+                MaterialModel::Svk => Hyperelastic::svk(&b.material),
+                MaterialModel::NeoHookean => Hyperelastic::neo_hookean(&b.material),
+            };
+            let at = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
+            let mesh = &meshes[bi];
+            let n = 3 * mesh.points.len();
+            let dofs: Vec<Option<usize>> = (0..n).map(|i| map[offsets[bi] + i]).collect();
+            if let Some(i) = (0..n).find(|&i| prescribed[offsets[bi] + i].is_some()) {
+                return Err(at(Error::invalid(
+                    "material.model",
+                    b.material.model.name(),
+                    &format!(
+                        "takes no prescribed velocities yet (node {} is in a [[prescribed]] \
+                         set); hold it with `fixed`, or use model = \"linear\"",
+                        i / 3
+                    ),
+                )));
+            }
+            let body = HyperBody::new(mesh, law).map_err(|e| at(prefix("mesh", e)))?;
+            let part =
+                HyperelasticPart::new(&b.name, body, dofs, mesh.cell_ids.clone()).map_err(at)?;
+            system.add_internal_force(std::sync::Arc::new(part));
+        }
         geometry.dof_of = map.clone();
         let v0: Vec<f64> = v0
             .iter()
@@ -822,7 +867,6 @@ impl Scene {
             .collect();
         // forces on node sets (after the elimination: loads on fixed dofs are dropped,
         // the supports carry them)
-        let mut system = system;
         for (fi, f) in self.forces.iter().enumerate() {
             let at = |e: Error| prefix(&format!("forces[{fi}]"), e);
             let bi = self
@@ -914,6 +958,7 @@ impl Scene {
             damping: system.damping.is_some(),
             gravity: self.loads.gravity.is_some(),
             fixed_dofs,
+            linear_structure: system.nonlinear.is_empty(),
         };
         let n = system.ndof();
         if crate::model::ordering::worth_ordering(&geometry) {

@@ -1,0 +1,242 @@
+//! The structural side of the θ-method Newton loop for a nonlinear structure
+//! ([`crate::model::system::Linearity::ConstantMass`]): eq. 41–48 with `M` and `C`
+//! constant and `F(t, q, v) = f(t) − Cv − Kq − r(q)`.
+//!
+//! The Newton unknown is the velocity `v` of the end of the step; positions follow from
+//! eq. 18b with the projection of the last iterate, `q(v) = q_k + h(θv + (1−θ)v_k) + NGτ`,
+//! and `F` is evaluated at the θ-point `q_θ = θq + (1−θ)q_k`, `v_θ = θv + (1−θ)v_k`
+//! (eq. 41). At an iterate `vⁿ` the linearization of eq. 45 without contact gives the
+//! free velocity of the iteration,
+//!
+//! `M̂ⁿ (v_freeⁿ − vⁿ) = −M(vⁿ − v_k) + hF(t_{k+θ}, q_θⁿ, v_θⁿ)`,  `M̂ⁿ = M + hθC + h²θ²Kⁿ`
+//! (eq. 47, `Kⁿ = K + ∂r/∂q` at `q_θⁿ`),
+//!
+//! and the contact problem of the iteration (eq. 56–58) is solved on
+//! `v = v_freeⁿ + M̂ⁿ⁻¹ G P` exactly as in the linear case, with `W = GᵀM̂ⁿ⁻¹G`. The
+//! projection's feedback on the velocity (the `hθKⁿGτⁿ` term of eq. 56a) is already in
+//! `F(q_θⁿ)`, whose `q` carries the last `τ`: nothing is added for it. For a linear `F`
+//! one iteration from `v⁰ = v_k`, `τ⁰ = 0` gives the linear scheme's free velocity.
+//!
+//! Convergence (eq. 41, sec. 4.3.2): the change of `q` between iterates relative to the
+//! step's increment (as for nonlinear contacts), and the residual
+//! `R = M(v − v_k) − hF_θ − GP` relative to the largest of its terms, both below the
+//! Newton tolerance. Full Newton refactors `M̂ⁿ` at every iterate; modified Newton
+//! ([`super::NewtonParams::modified`]) forms it at the step's first iterate and keeps it
+//! while the iterates contract (each change at most half the previous one), so a
+//! checkpoint needs nothing of it and a resume stays bitwise.
+//!
+//! Set-up builds one pattern, the union of `M`, `K`, `C` and the internal forces'
+//! tangents, with the position of every source entry in it; an iterate then only adds
+//! values into buffers sized at set-up (no allocation in the step).
+
+use std::sync::Arc;
+
+use faer::sparse::SymbolicSparseColMat;
+
+use crate::error::Error;
+use crate::linalg::{LinearSolver, SolverKind, SparseMatrix};
+use crate::model::LinearSystem;
+use crate::model::system::InternalForce;
+
+/// Set-up data and buffers of the structural Newton iteration (module doc).
+#[derive(Debug)]
+pub(crate) struct Structure {
+    forces: Vec<Arc<dyn InternalForce>>,
+    /// `M`, `K`, `C` on the union pattern.
+    mass: Vec<f64>,
+    stiffness: Vec<f64>,
+    damping: Vec<f64>,
+    /// Position in the union pattern of each internal force's tangent entries.
+    pos: Vec<Vec<usize>>,
+    /// Each internal force's tangent values.
+    tan: Vec<Vec<f64>>,
+    /// `Kⁿ` on the union pattern (the `K` of `W_D`).
+    pub tangent: SparseMatrix,
+    /// `M̂ⁿ` on the union pattern.
+    pub step_matrix: SparseMatrix,
+    /// Modified Newton (module doc).
+    pub modified: bool,
+    /// `K q_θ + r(q_θ)` of the last evaluation.
+    internal: Vec<f64>,
+    /// `h f(t_{k+θ})` plus loads and prescribed-dof terms of the step.
+    pub ext: Vec<f64>,
+    /// `q_θ`, `v_θ`, `v − v_k` of the iterate.
+    q_theta: Vec<f64>,
+    v_theta: Vec<f64>,
+    dv: Vec<f64>,
+    /// The iterate's `−M(v − v_k) + hF_θ` (then `v_free − v`).
+    pub rhs: Vec<f64>,
+    /// Scale of the residual's terms at the last evaluation.
+    pub scale: f64,
+}
+
+/// Where entry `(i, j)` sits in the compressed columns `(col_ptr, row_idx)`.
+fn position(col_ptr: &[usize], row_idx: &[usize], i: usize, j: usize) -> usize {
+    let r = col_ptr[j]..col_ptr[j + 1];
+    col_ptr[j]
+        + row_idx[r]
+            .binary_search(&i)
+            .expect("entry in the union pattern")
+}
+
+impl Structure {
+    /// The union pattern of `sys`'s matrices and internal forces, and the buffers.
+    pub fn new(sys: &LinearSystem, modified: bool) -> Self {
+        let n = sys.ndof();
+        let mut cols: Vec<Vec<usize>> = (0..n).map(|j| vec![j]).collect();
+        let mats: Vec<&SparseMatrix> =
+            [Some(&sys.mass), Some(&sys.stiffness), sys.damping.as_ref()]
+                .into_iter()
+                .flatten()
+                .collect();
+        for m in &mats {
+            let m = m.as_ref();
+            for (j, col) in cols.iter_mut().enumerate() {
+                col.extend_from_slice(&m.row_idx()[m.col_ptr()[j]..m.col_ptr()[j + 1]]);
+            }
+        }
+        let entries: Vec<Vec<(usize, usize)>> =
+            sys.nonlinear.iter().map(|f| f.tangent_entries()).collect();
+        for e in &entries {
+            for &(i, j) in e {
+                cols[j].push(i);
+            }
+        }
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for mut c in cols {
+            c.sort_unstable();
+            c.dedup();
+            row_idx.extend_from_slice(&c);
+            col_ptr.push(row_idx.len());
+        }
+        let nnz = row_idx.len();
+        let on_pattern = |m: Option<&SparseMatrix>| {
+            let mut v = vec![0.0; nnz];
+            if let Some(m) = m {
+                let m = m.as_ref();
+                for j in 0..n {
+                    for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
+                        v[position(&col_ptr, &row_idx, m.row_idx()[k], j)] += m.val()[k];
+                    }
+                }
+            }
+            v
+        };
+        let mass = on_pattern(Some(&sys.mass));
+        let stiffness = on_pattern(Some(&sys.stiffness));
+        let damping = on_pattern(sys.damping.as_ref());
+        let pos: Vec<Vec<usize>> = entries
+            .iter()
+            .map(|e| {
+                e.iter()
+                    .map(|&(i, j)| position(&col_ptr, &row_idx, i, j))
+                    .collect()
+            })
+            .collect();
+        let tan = entries.iter().map(|e| vec![0.0; e.len()]).collect();
+        let sym = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
+        Structure {
+            forces: sys.nonlinear.clone(),
+            tangent: SparseMatrix::new(sym.clone(), stiffness.clone()),
+            step_matrix: SparseMatrix::new(sym, mass.clone()),
+            mass,
+            stiffness,
+            damping,
+            pos,
+            tan,
+            modified,
+            internal: vec![0.0; n],
+            ext: vec![0.0; n],
+            q_theta: vec![0.0; n],
+            v_theta: vec![0.0; n],
+            dv: vec![0.0; n],
+            rhs: vec![0.0; n],
+            scale: 0.0,
+        }
+    }
+
+    /// Evaluates the iterate `(q, v)` of the step from `(q_k, v_k)`: `rhs = −M(v − v_k)
+    /// + ext − hCv_θ − h(Kq_θ + r(q_θ))` and the scale of its terms; with `tangent`,
+    /// `Kⁿ` and `M̂ⁿ = M + h²θ²Kⁿ + hθC` too (not factored).
+    pub fn evaluate(
+        &mut self,
+        sys: &LinearSystem,
+        (h, th): (f64, f64),
+        (q_k, v_k): (&[f64], &[f64]),
+        (q, v): (&[f64], &[f64]),
+        tangent: bool,
+    ) -> Result<(), Error> {
+        for i in 0..q.len() {
+            self.q_theta[i] = th * q[i] + (1.0 - th) * q_k[i];
+            self.v_theta[i] = th * v[i] + (1.0 - th) * v_k[i];
+            self.dv[i] = v[i] - v_k[i];
+        }
+        // internal = K q_θ + r(q_θ)
+        crate::linalg::spmv(sys.stiffness.as_ref(), &self.q_theta, &mut self.internal);
+        for (f, t) in self.forces.iter().zip(self.tan.iter_mut()) {
+            f.evaluate(
+                &self.q_theta,
+                &mut self.internal,
+                tangent.then_some(&mut t[..]),
+            )?;
+        }
+        // M and C are symmetric: their columns are their rows, each row a gather
+        let row = |a: faer::sparse::SparseColMatRef<'_, usize, f64>, i: usize, x: &[f64]| {
+            let r = a.col_ptr()[i]..a.col_ptr()[i + 1];
+            a.row_idx()[r.clone()]
+                .iter()
+                .zip(&a.val()[r])
+                .map(|(&j, &v)| v * x[j])
+                .sum::<f64>()
+        };
+        let (m, c) = (sys.mass.as_ref(), sys.damping.as_ref().map(|c| c.as_ref()));
+        let mut scale = 0.0_f64;
+        for i in 0..q.len() {
+            let md = row(m, i, &self.dv);
+            let cv = h * c.map_or(0.0, |c| row(c, i, &self.v_theta));
+            let int = h * self.internal[i];
+            scale = scale
+                .max(md.abs())
+                .max(cv.abs())
+                .max(int.abs())
+                .max(self.ext[i].abs());
+            self.rhs[i] = self.ext[i] - cv - int - md;
+        }
+        self.scale = scale;
+        if tangent {
+            let t = self.tangent.val_mut();
+            t.copy_from_slice(&self.stiffness);
+            for (p, v) in self.pos.iter().zip(&self.tan) {
+                for (&k, &x) in p.iter().zip(v) {
+                    t[k] += x;
+                }
+            }
+            let (a, b) = (h * h * th * th, h * th);
+            let t = self.tangent.val();
+            for (((s, &mm), &kk), &cc) in self
+                .step_matrix
+                .val_mut()
+                .iter_mut()
+                .zip(&self.mass)
+                .zip(t)
+                .zip(&self.damping)
+            {
+                *s = mm + a * kk + b * cc;
+            }
+        }
+        Ok(())
+    }
+
+    /// Factors `M̂` at set-up (symmetric: sparse `L D Lᵀ`, which also takes the
+    /// indefinite tangents of a body near buckling as long as no pivot vanishes).
+    pub fn factor(&self) -> Result<Box<dyn LinearSolver>, Error> {
+        crate::linalg::solver::factor(
+            self.step_matrix.as_ref(),
+            "iteration matrix M + hθC + h²θ²Kⁿ",
+            SolverKind::Ldlt,
+            None,
+        )
+    }
+}
