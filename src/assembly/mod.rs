@@ -244,6 +244,22 @@ pub struct AssemblyPlan {
     row_idx: Vec<usize>,
     tasks: Vec<PlanTask>,
     task_cells: Vec<usize>,
+    /// Nodes of every cell, compressed: cell `c`'s are `cell_nodes[cell_ptr[c]..cell_ptr[c + 1]]`.
+    cell_ptr: Vec<usize>,
+    cell_nodes: Vec<usize>,
+}
+
+/// Cells evaluated per batch of [`AssemblyPlan::assemble_batched`].
+pub const ELEMENT_BATCH: usize = 1024;
+
+/// Element buffers of [`AssemblyPlan::assemble_batched`]: the forces and matrices of
+/// one batch of cells, sized once.
+#[derive(Debug)]
+pub struct ElementBatch {
+    nd: usize,
+    cap: usize,
+    fe: Vec<f64>,
+    ke: Vec<f64>,
 }
 
 impl AssemblyPlan {
@@ -267,6 +283,13 @@ impl AssemblyPlan {
                 cells: first..task_cells.len(),
             });
         }
+        let mut cell_ptr = Vec::with_capacity(cells.len() + 1);
+        cell_ptr.push(0);
+        let mut cell_nodes = Vec::with_capacity(cells.iter().map(|c| c.len()).sum());
+        for c in cells {
+            cell_nodes.extend_from_slice(c);
+            cell_ptr.push(cell_nodes.len());
+        }
         AssemblyPlan {
             n: pattern.n,
             dim,
@@ -274,6 +297,157 @@ impl AssemblyPlan {
             row_idx: pattern.row_idx,
             tasks,
             task_cells,
+            cell_ptr,
+            cell_nodes,
+        }
+    }
+
+    /// Buffers for [`AssemblyPlan::assemble_batched`] with element matrices of up to
+    /// `nd` dofs (`nd²` values per cell, [`ELEMENT_BATCH`] cells).
+    pub fn batch(&self, nd: usize) -> ElementBatch {
+        let cap = ELEMENT_BATCH.min(self.cell_ptr.len() - 1).max(1);
+        ElementBatch {
+            nd,
+            cap,
+            fe: vec![0.0; cap * nd],
+            ke: vec![0.0; cap * nd * nd],
+        }
+    }
+
+    /// Like [`AssemblyPlan::assemble`], but every cell is evaluated once: cells are
+    /// evaluated in parallel a batch at a time into `batch` (`cell(id, fe, ke)` writes
+    /// the element vector and, when `values` is given, the column-major element matrix,
+    /// ordered as the cell's nodes, `dim` dofs each), then each task adds the batch's
+    /// terms to the columns and rows of its nodes. Every column and row receives its
+    /// terms in cell order, so the sums are those of [`AssemblyPlan::assemble`], bit for
+    /// bit, on any thread count. The first error in cell order is returned. Reserves
+    /// nothing.
+    pub fn assemble_batched<E: Send>(
+        &self,
+        mut values: Option<&mut [f64]>,
+        vector: &mut [f64],
+        batch: &mut ElementBatch,
+        cell: impl Fn(usize, &mut [f64], Option<&mut [f64]>) -> Result<(), E> + Sync,
+    ) -> Result<(), (usize, E)> {
+        use rayon::prelude::*;
+        assert_eq!(vector.len(), self.n, "a vector of the plan's order");
+        if let Some(v) = values.as_deref_mut() {
+            assert_eq!(v.len(), self.row_idx.len(), "values on the plan's pattern");
+            v.fill(0.0);
+        }
+        vector.fill(0.0);
+        let cells = self.cell_ptr.len() - 1;
+        let (nd, cap, with_matrix) = (batch.nd, batch.cap, values.is_some());
+        let mut c0 = 0;
+        while c0 < cells {
+            let c1 = (c0 + cap).min(cells);
+            let k = c1 - c0;
+            let fe = &mut batch.fe[..k * nd];
+            let ke = &mut batch.ke[..if with_matrix { k * nd * nd } else { 0 }];
+            let err = if with_matrix {
+                fe.par_chunks_mut(nd)
+                    .zip(ke.par_chunks_mut(nd * nd))
+                    .enumerate()
+                    .find_map_first(|(i, (f, m))| {
+                        cell(c0 + i, f, Some(m)).err().map(|e| (c0 + i, e))
+                    })
+            } else {
+                fe.par_chunks_mut(nd)
+                    .enumerate()
+                    .find_map_first(|(i, f)| cell(c0 + i, f, None).err().map(|e| (c0 + i, e)))
+            };
+            if let Some(e) = err {
+                return Err(e);
+            }
+            let (fe, ke) = (&batch.fe[..], &batch.ke[..]);
+            match values.as_deref_mut() {
+                Some(v) => {
+                    let run = |t: &PlanTask, vals: &mut [f64], vec: &mut [f64]| {
+                        self.scatter_batch(t, (c0, c1), (fe, ke, nd), vals, vec);
+                        None::<(usize, E)>
+                    };
+                    self.split(&self.tasks, v, vector, &run);
+                }
+                None => {
+                    let run = |t: &PlanTask, vec: &mut [f64]| {
+                        self.scatter_batch(t, (c0, c1), (fe, ke, nd), &mut [], vec);
+                    };
+                    self.split_vector(&self.tasks, vector, &run);
+                }
+            }
+            c0 = c1;
+        }
+        Ok(())
+    }
+
+    /// Adds the terms of cells `c0..c1` (evaluated into `fe`, `ke`) that fall in task
+    /// `t`'s rows and, unless `vals` is empty, columns, in cell order.
+    fn scatter_batch(
+        &self,
+        t: &PlanTask,
+        (c0, c1): (usize, usize),
+        (fe, ke, nd): (&[f64], &[f64], usize),
+        vals: &mut [f64],
+        vec: &mut [f64],
+    ) {
+        let with_matrix = !vals.is_empty();
+        let dim = self.dim;
+        let ids = &self.task_cells[t.cells.clone()];
+        let lo = ids.partition_point(|&c| c < c0);
+        let hi = ids.partition_point(|&c| c < c1);
+        let (col0, row0) = (self.col_ptr[t.nodes.start * dim], t.nodes.start * dim);
+        for &id in &ids[lo..hi] {
+            let i = id - c0;
+            let nodes = &self.cell_nodes[self.cell_ptr[id]..self.cell_ptr[id + 1]];
+            let ne = dim * nodes.len();
+            let f = &fe[i * nd..i * nd + ne];
+            for (a, &v) in nodes.iter().enumerate() {
+                if !t.nodes.contains(&v) {
+                    continue;
+                }
+                for c in 0..dim {
+                    vec[dim * v + c - row0] += f[dim * a + c];
+                }
+                if !with_matrix {
+                    continue;
+                }
+                let m = &ke[i * nd * nd..(i + 1) * nd * nd];
+                for c in 0..dim {
+                    let (lc, j) = (dim * a + c, dim * v + c);
+                    let r = self.col_ptr[j]..self.col_ptr[j + 1];
+                    let rows = &self.row_idx[r.clone()];
+                    for (b, &w) in nodes.iter().enumerate() {
+                        // the node's rows are contiguous in the sorted column
+                        let k = rows.partition_point(|&x| x < dim * w);
+                        for d in 0..dim {
+                            vals[r.start + k + d - col0] += m[(dim * b + d) + lc * ne];
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// [`AssemblyPlan::split`] for a vector alone (no matrix values).
+    fn split_vector(
+        &self,
+        tasks: &[PlanTask],
+        vector: &mut [f64],
+        run: &(impl Fn(&PlanTask, &mut [f64]) + Sync),
+    ) {
+        match tasks {
+            [] => {}
+            [t] => run(t, vector),
+            _ => {
+                let (left, right) = tasks.split_at(tasks.len() / 2);
+                let border = right[0].nodes.start * self.dim;
+                let row0 = left[0].nodes.start * self.dim;
+                let (xa, xb) = vector.split_at_mut(border - row0);
+                rayon::join(
+                    || self.split_vector(left, xa, run),
+                    || self.split_vector(right, xb, run),
+                );
+            }
         }
     }
 

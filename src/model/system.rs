@@ -89,6 +89,7 @@ struct Scratch {
     u: Vec<f64>,
     force: Vec<f64>,
     tangent: Vec<f64>,
+    batch: crate::assembly::ElementBatch,
 }
 
 impl HyperelasticPart {
@@ -117,6 +118,7 @@ impl HyperelasticPart {
         let kept = (0..nnz)
             .filter(|&k| dof[row[k]].is_some() && dof[col[k]].is_some())
             .collect();
+        let batch = body.batch();
         Ok(HyperelasticPart {
             name: name.to_string(),
             body,
@@ -130,6 +132,7 @@ impl HyperelasticPart {
                 u: vec![0.0; n],
                 force: vec![0.0; n],
                 tangent: vec![0.0; nnz],
+                batch,
             }),
         })
     }
@@ -181,8 +184,9 @@ impl InternalForce for HyperelasticPart {
         let mut guard = self.scratch.lock().unwrap_or_else(|p| p.into_inner());
         let s = &mut *guard;
         self.gather(q, &mut s.u);
+        let want = tangent.is_some().then_some(&mut s.tangent[..]);
         self.body
-            .evaluate(&s.u, &mut s.tangent, &mut s.force)
+            .evaluate_batched(&s.u, want, &mut s.force, &mut s.batch)
             .map_err(|c| inverted(&self.name, &self.cell_tags, c))?;
         self.k0_mul_add(-1.0, &s.u, &mut s.force);
         for (f, d) in s.force.iter().zip(&self.dof) {
