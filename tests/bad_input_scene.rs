@@ -306,6 +306,58 @@ const CASES: &[Case] = &[
         &["missing field `time`"],
     ),
     (
+        "unknown material model",
+        &[(
+            "density = 1000.0 }",
+            "density = 1000.0, model = \"mooney\" }",
+        )],
+        &[
+            "bodies[0].material",
+            "unknown variant `mooney`",
+            "neo-hookean",
+        ],
+    ),
+    (
+        "large-deformation law on a plane body",
+        &[
+            ("density = 1000.0 }", "density = 1000.0, model = \"svk\" }"),
+            (
+                "name = \"b\"\n",
+                "name = \"b\"\nformulation = \"plane-strain\"\n",
+            ),
+        ],
+        &["bodies[0].material.model", "svk", "3-D solid bodies"],
+    ),
+    (
+        "Schatzman–Paoli on a nonlinear structure",
+        &[
+            (
+                "density = 1000.0 }",
+                "density = 1000.0, model = \"neo-hookean\" }",
+            ),
+            ("[time]\n", "[scheme]\nkind = \"schatzman-paoli\"\n[time]\n"),
+        ],
+        &["scheme.kind", "schatzman-paoli", "linear structures only"],
+    ),
+    (
+        "prescribed velocity on a hyperelastic body",
+        &[
+            (
+                "density = 1000.0 }",
+                "density = 1000.0, model = \"neo-hookean\" }",
+            ),
+            (
+                "[[contacts]]",
+                "[[prescribed]]\nbody = \"b\"\nnodes = \"z1\"\nvelocity = [0.0, 0.0, -1.0]\n[[contacts]]",
+            ),
+        ],
+        &[
+            "bodies[0] (b).material.model",
+            "neo-hookean",
+            "no prescribed velocities",
+        ],
+    ),
+    (
         "unknown output encoding",
         &[("[time]\n", "[output]\nencoding = \"xml\"\n[time]\n")],
         &["output.encoding", "unknown variant `xml`"],

@@ -154,9 +154,12 @@ impl HyperelasticPart {
 
 /// The error of an inverted cell of body `name`, naming its file tag.
 fn inverted(name: &str, tags: &[u64], c: super::hyperelastic::InvertedCell) -> Error {
-    let tag = tags.get(c.cell).copied().unwrap_or(c.cell as u64);
+    let cell = match tags.get(c.cell) {
+        Some(tag) => format!("cell {tag} (file tag)"),
+        None => format!("cell {} (index in the generated mesh)", c.cell),
+    };
     Error::Numerical(format!(
-        "body \"{name}\": cell {tag} (file tag) is inverted: det F = {:.6e}, expected > 0 \
+        "body \"{name}\": {cell} is inverted: det F = {:.6e}, expected > 0 \
          (the step is too large for the deformation, or the body is crushed)",
         c.det
     ))
