@@ -221,8 +221,10 @@ fn the_schemes_newton_loop_follows_the_midpoint_rule() {
         0.0,
     )
     .unwrap();
-    let mut params = SchemeParams::default();
-    params.kind = SchemeKind::MoreauJean;
+    let params = SchemeParams {
+        kind: SchemeKind::MoreauJean,
+        ..SchemeParams::default()
+    };
     let mut integ = build(&params, sys, Box::new(far), &q0, &v0, h).unwrap();
     let mut newton = 0;
     for _ in 0..steps {
