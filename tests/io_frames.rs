@@ -403,3 +403,43 @@ fn frames_show_the_prescribed_motion() {
     assert_eq!(top, 25, "top-face nodes");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// A scene with a large-deformation body names its cell tensors `green_lagrange_strain`
+/// and `cauchy_stress` (and no `strain`, `stress`): the neo-Hookean box in free flight
+/// writes them zero (a translation strains nothing), in every frame.
+#[test]
+fn nonlinear_bodies_write_green_lagrange_strain_and_cauchy_stress() {
+    let text = FREE_BOX.replace(
+        "density = 7800.0 }",
+        "density = 7800.0, model = \"neo-hookean\" }",
+    );
+    let mut scene = Scene::from_toml(&text).unwrap();
+    scene.base_dir = PathBuf::from(".");
+    let dir = tmp("green-lagrange");
+    let options = OutputOptions {
+        stride: 1,
+        ..OutputOptions::default()
+    };
+    run_scene(
+        &scene,
+        Some(Output {
+            dir: &dir,
+            options: &options,
+        }),
+        &mut Quiet,
+    )
+    .unwrap();
+    let pvd = read_pvd(&dir.join("fields.pvd"));
+    assert_eq!(pvd.len(), 6);
+    for (_, file) in &pvd {
+        let f = read_frame(&dir.join(file));
+        assert!(!f.cell.contains_key("strain") && !f.cell.contains_key("stress"));
+        assert_eq!(f.cell["green_lagrange_strain"].len(), 8 * 6);
+        assert!(
+            f.cell["green_lagrange_strain"]
+                .iter()
+                .all(|e| e.abs() < 1e-14)
+        );
+        assert!(f.cell["cauchy_stress"].iter().all(|s| s.abs() < 1e-3));
+    }
+}

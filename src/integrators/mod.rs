@@ -29,7 +29,7 @@ pub mod direct_projection;
 pub mod moreau_jean;
 pub mod saved;
 pub mod schatzman_paoli;
-pub(crate) mod structure;
+pub mod structure;
 pub mod trapezoid;
 
 use serde::{Deserialize, Serialize};

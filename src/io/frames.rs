@@ -6,7 +6,10 @@
 //! candidate nodes, NaN elsewhere so ParaView leaves the others blank). Cell data, at
 //! the cell centre: `strain` and `stress` (symmetric tensors in ParaView's order
 //! `XX, YY, ZZ, XY, YZ, XZ`; Pa for stress) and `von_mises` (Pa). Rods are lines with the
-//! uniaxial stress `E ∂u/∂x`. Field data: `TimeValue` (s) and `Step`. Every array
+//! uniaxial stress `E ∂u/∂x`. A scene with a large-deformation body (material model `svk`
+//! or `neo-hookean`) names its tensors `green_lagrange_strain` and `cauchy_stress`
+//! instead: `E = (FᵀF − I)/2` and `σ = F S Fᵀ / J` at the centre of each cell of such a
+//! body (NaN for a cell inverted there), the small strain and Hooke stress elsewhere. Field data: `TimeValue` (s) and `Step`. Every array
 //! carries its SI unit as a `units` attribute of its `<DataArray>` (readers ignore
 //! attributes they do not know); a `String` field-data array would be the VTK way, but
 //! meshio 5.3.5 refuses to open a file holding one (tested), so the units are not there.
@@ -30,7 +33,11 @@ use base64::engine::general_purpose::STANDARD as B64;
 use crate::contact::ContactJacobian;
 use crate::error::Error;
 use crate::integrators::State;
-use crate::model::solid::{CellKind, Formulation, Material, centre_strain, hooke, von_mises};
+use crate::model::hyperelastic::{Hyperelastic, green_lagrange_and_cauchy};
+use crate::model::solid::{
+    CellKind, Formulation, Material, MaterialModel, centre_gradient, centre_strain, hooke,
+    von_mises,
+};
 
 pub use crate::model::geometry::{GeomCell, Geometry, Outline};
 
@@ -158,6 +165,14 @@ pub const FRICTION_POINT_ARRAYS: [(&str, usize); 5] = [
 ];
 /// Cell arrays of a frame.
 pub const CELL_ARRAYS: [(&str, usize); 3] = [("strain", 6), ("stress", 6), ("von_mises", 1)];
+
+/// The cell arrays of a scene with a large-deformation body (Green–Lagrange strain,
+/// Cauchy stress, von Mises of the Cauchy stress).
+pub const NONLINEAR_CELL_ARRAYS: [(&str, usize); 3] = [
+    ("green_lagrange_strain", 6),
+    ("cauchy_stress", 6),
+    ("von_mises", 1),
+];
 
 /// How array data are encoded in the `.vtu` files.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -366,7 +381,7 @@ impl FrameWriter {
             } else {
                 &FRICTION_POINT_ARRAYS[..]
             },
-            &CELL_ARRAYS,
+            &self.cell_arrays(),
             reopen,
         )?);
         Ok(self)
@@ -440,6 +455,23 @@ impl FrameWriter {
         r
     }
 
+    /// The cell arrays: `strain` and `stress` (small strain, Hooke) when every body is
+    /// linear; `green_lagrange_strain` and `cauchy_stress` when a body has a
+    /// large-deformation law (the linear bodies of such a scene write their small strain
+    /// and Hooke stress, the linearizations of these measures, in the same arrays).
+    fn cell_arrays(&self) -> [(&'static str, usize); 3] {
+        if self
+            .geom
+            .bodies
+            .iter()
+            .any(|(m, _)| m.model != MaterialModel::Linear)
+        {
+            NONLINEAR_CELL_ARRAYS
+        } else {
+            CELL_ARRAYS
+        }
+    }
+
     fn fill(&mut self, s: &Snapshot) {
         let g = &self.geom;
         let dim = g.dim;
@@ -499,8 +531,22 @@ impl FrameWriter {
                         x[j] = g.points[p];
                         u[j] = [self.disp[3 * p], self.disp[3 * p + 1], self.disp[3 * p + 2]];
                     }
-                    eps = centre_strain(*k, &x, &u, mat, *form);
-                    sig = hooke(mat, &eps);
+                    let law = match mat.model {
+                        MaterialModel::Linear => None,
+                        MaterialModel::Svk => Some(Hyperelastic::svk(mat)),
+                        MaterialModel::NeoHookean => Some(Hyperelastic::neo_hookean(mat)),
+                    };
+                    match law {
+                        None => {
+                            eps = centre_strain(*k, &x, &u, mat, *form);
+                            sig = hooke(mat, &eps);
+                        }
+                        Some(law) => {
+                            let grad = centre_gradient(*k, &x, &u);
+                            (eps, sig) = green_lagrange_and_cauchy(&law, &grad)
+                                .unwrap_or(([f64::NAN; 6], [f64::NAN; 6]));
+                        }
+                    }
                 }
             }
             self.strain[6 * c..6 * c + 6].copy_from_slice(&eps);
@@ -549,14 +595,18 @@ impl FrameWriter {
         }
         let ids = node_ids(&self.geom);
         self.array_i64(&mut x, "node_id", 1, &ids);
-        x.push_str("</PointData>\n<CellData Tensors=\"stress\" Scalars=\"von_mises\">\n");
+        let [(strain_name, _), (stress_name, _), _] = self.cell_arrays();
+        let _ = write!(
+            x,
+            "</PointData>\n<CellData Tensors=\"{stress_name}\" Scalars=\"von_mises\">\n"
+        );
         let (strain, stress, mises) = (
             std::mem::take(&mut self.strain),
             std::mem::take(&mut self.stress),
             std::mem::take(&mut self.mises),
         );
-        self.array_f64(&mut x, "strain", 6, &strain);
-        self.array_f64(&mut x, "stress", 6, &stress);
+        self.array_f64(&mut x, strain_name, 6, &strain);
+        self.array_f64(&mut x, stress_name, 6, &stress);
         self.array_f64(&mut x, "von_mises", 1, &mises);
         (self.strain, self.stress, self.mises) = (strain, stress, mises);
         x.push_str("</CellData>\n");
@@ -643,8 +693,8 @@ impl FrameWriter {
             "displacement" | "gap" | "Points" => " units=\"m\"",
             "velocity" => " units=\"m/s\"",
             "contact_force" => " units=\"N\"",
-            "stress" | "von_mises" => " units=\"Pa\"",
-            "strain" => " units=\"1\"",
+            "stress" | "cauchy_stress" | "von_mises" => " units=\"Pa\"",
+            "strain" | "green_lagrange_strain" => " units=\"1\"",
             "TimeValue" => " units=\"s\"",
             _ => "",
         };

@@ -141,6 +141,32 @@ impl Hyperelastic {
     }
 }
 
+/// Green–Lagrange strain `E = (FᵀF − I)/2` and Cauchy stress `σ = F S Fᵀ / J` for the
+/// displacement gradient `grad` (`F = I + grad`), both in ParaView's order
+/// `XX, YY, ZZ, XY, YZ, XZ` (tensor components); `None` where `det F ≤ 0`.
+pub fn green_lagrange_and_cauchy(
+    law: &Hyperelastic,
+    grad: &Matrix3<f64>,
+) -> Option<([f64; 6], [f64; 6])> {
+    let f = Matrix3::identity() + grad;
+    let s = law.stress(&f).ok()?;
+    let j = f.determinant();
+    let e = 0.5 * (f.transpose() * f - Matrix3::identity());
+    let sm = Matrix3::new(s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2]);
+    let sigma = f * sm * f.transpose() / j;
+    let order = |m: &Matrix3<f64>| {
+        [
+            m[(0, 0)],
+            m[(1, 1)],
+            m[(2, 2)],
+            m[(0, 1)],
+            m[(1, 2)],
+            m[(0, 2)],
+        ]
+    };
+    Some((order(&e), order(&sigma)))
+}
+
 /// Voigt index pairs `(11, 22, 33, 23, 13, 12)`.
 const VOIGT: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)];
 
@@ -731,6 +757,35 @@ mod tests {
             e.err()
         );
     }
+    /// The frames' measures: under a uniaxial stretch `F = diag(s, 1, 1)` the
+    /// Green–Lagrange strain is `(s² − 1)/2` and the neo-Hookean Cauchy stress
+    /// `σ_xx = (μ(s² − 1) + λ ln s)/s`, `σ_yy = σ_zz = λ ln s / s`; under a rotation both
+    /// vanish (to 1e-12 of μ), where the small strain gives `cos φ − 1`.
+    #[test]
+    fn green_lagrange_and_cauchy_of_a_stretch_and_a_rotation() {
+        let law = Hyperelastic::neo_hookean(&MAT);
+        let Hyperelastic::NeoHookean { lambda, mu } = law else {
+            unreachable!()
+        };
+        let s = 1.3_f64;
+        let grad = Matrix3::new(s - 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let (e, sig) = green_lagrange_and_cauchy(&law, &grad).unwrap();
+        assert!((e[0] - (s * s - 1.0) / 2.0).abs() < 1e-15);
+        assert!(e[1..].iter().all(|x| x.abs() < 1e-15));
+        let sxx = (mu * (s * s - 1.0) + lambda * s.ln()) / s;
+        assert!((sig[0] - sxx).abs() <= 1e-12 * sxx.abs());
+        for k in [1, 2] {
+            assert!((sig[k] - lambda * s.ln() / s).abs() <= 1e-12 * sxx.abs());
+        }
+        let phi = 0.7_f64;
+        let (c, sn) = (phi.cos(), phi.sin());
+        let rot = Matrix3::new(c, -sn, 0.0, sn, c, 0.0, 0.0, 0.0, 1.0);
+        let (e, sig) = green_lagrange_and_cauchy(&law, &(rot - Matrix3::identity())).unwrap();
+        assert!(e.iter().all(|x| x.abs() < 1e-15), "{e:?}");
+        assert!(sig.iter().all(|x| x.abs() < 1e-12 * mu), "{sig:?}");
+        assert!(green_lagrange_and_cauchy(&law, &(-2.0 * Matrix3::identity())).is_none());
+    }
+
     /// A 3 × 2 × 2 hex8 box and the same box cut into tet4 cells.
     fn meshes() -> [crate::model::solid::Mesh; 2] {
         use crate::model::generate::box_mesh;

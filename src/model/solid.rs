@@ -693,6 +693,19 @@ pub fn centre_strain(
     mat: &Material,
     f: Formulation,
 ) -> [f64; 6] {
+    let grad = centre_gradient(kind, x, u);
+    let e = |i: usize, j: usize| 0.5 * (grad[(i, j)] + grad[(j, i)]);
+    let zz = match f {
+        Formulation::Solid => e(2, 2),
+        Formulation::PlaneStrain => 0.0,
+        Formulation::PlaneStress { .. } => -mat.poisson / (1.0 - mat.poisson) * (e(0, 0) + e(1, 1)),
+    };
+    [e(0, 0), e(1, 1), zz, e(0, 1), e(1, 2), e(0, 2)]
+}
+
+/// The displacement gradient `∂u_i/∂X_j` at the centre of a cell (reference coordinates
+/// `x`, nodal displacements `u`; zero rows and columns past the cell's dimension).
+pub fn centre_gradient(kind: CellKind, x: &[[f64; 3]], u: &[[f64; 3]]) -> Matrix3<f64> {
     let g = centre_gradients(kind);
     let nn = kind.nodes();
     let d = kind.dim();
@@ -703,7 +716,7 @@ pub fn centre_strain(
         }
     }
     let jinv_t = jac.try_inverse().unwrap_or_else(Matrix3::zeros).transpose();
-    let mut grad = Matrix3::<f64>::zeros(); // grad[(i, j)] = ∂u_i/∂x_j
+    let mut grad = Matrix3::<f64>::zeros();
     for a in 0..nn {
         let gx = jinv_t * Vector3::new(g[a][0], g[a][1], g[a][2]);
         for i in 0..d {
@@ -712,13 +725,7 @@ pub fn centre_strain(
             }
         }
     }
-    let e = |i: usize, j: usize| 0.5 * (grad[(i, j)] + grad[(j, i)]);
-    let zz = match f {
-        Formulation::Solid => e(2, 2),
-        Formulation::PlaneStrain => 0.0,
-        Formulation::PlaneStress { .. } => -mat.poisson / (1.0 - mat.poisson) * (e(0, 0) + e(1, 1)),
-    };
-    [e(0, 0), e(1, 1), zz, e(0, 1), e(1, 2), e(0, 2)]
+    grad
 }
 
 /// Isotropic Hooke's law on a strain tensor in the order of [`centre_strain`].
