@@ -145,6 +145,11 @@ struct FclibArgs {
 struct SceneArgs {
     /// The scene file.
     scene: PathBuf,
+    /// Override a key of the scene: KEY=VALUE, KEY a dotted path with array indices,
+    /// VALUE in TOML (repeatable), e.g. --set scheme.newton.modified=true
+    /// --set 'bodies[0].material.model="svk"'.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
     /// Output directory (default: the scene's output.dir, else out/<file stem>).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -518,7 +523,7 @@ fn scene_out(args: &SceneArgs, scene: &Scene) -> PathBuf {
 
 fn run_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     args.output.validate()?;
-    let scene = Scene::from_file(&args.scene)?;
+    let scene = Scene::from_file_with(&args.scene, &args.set)?;
     let out = scene_out(args, &scene);
     if !args.quiet {
         err!(
@@ -641,7 +646,7 @@ fn fclib(a: &FclibArgs) -> Result<bool, signorini::Error> {
 }
 
 fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
-    let scene = Scene::from_file(&args.scene)?;
+    let scene = Scene::from_file_with(&args.scene, &args.set)?;
     let in_file = |e: signorini::Error| e.in_file(&args.scene);
     let (model, report) = scene.build().map_err(in_file)?;
     let integ = model
@@ -741,6 +746,16 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
             l.stalls,
             l.steps_with_held_rows,
             l.complementarity_fallbacks
+        );
+    }
+    if let Some(n) = &s.nonlinear {
+        out!(
+            "nonlinear           {} factorizations of M̂ⁿ ({:.2} per step); {:.3} s assembling F and Kⁿ, {:.3} s factoring, of {:.3} s of steps",
+            n.factorizations,
+            n.factorizations_per_step,
+            n.assembly_seconds,
+            n.factorization_seconds,
+            s.wall_seconds
         );
     }
     if let Some(f) = &s.friction {

@@ -522,3 +522,58 @@ fn tables_an_example_scene_would_ignore_are_refused() {
         );
     }
 }
+
+/// `--set KEY=VALUE` overrides a scene key before validation (`check` names the Newton
+/// variant it selected); a malformed override, a missing array entry and a misspelt key
+/// are refused with exit 2, naming the override or the key path.
+#[test]
+fn set_overrides_are_applied_and_checked() {
+    let dir = tmp("set");
+    let text = BOX_ON_FLOOR.replace("MESH", BOX_MESH).replace(
+        "density = 1000.0 }",
+        "density = 1000.0, model = \"neo-hookean\" }",
+    );
+    std::fs::write(dir.join("scene.toml"), &text).unwrap();
+    let (code, _) = cli(
+        &dir,
+        &[
+            "check",
+            "scene.toml",
+            "--set",
+            "scheme.newton.modified=true",
+        ],
+        &[],
+    );
+    assert_eq!(code, 0);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .current_dir(&dir)
+        .args([
+            "check",
+            "scene.toml",
+            "--set",
+            "scheme.newton.modified=true",
+        ])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("modified Newton"), "{stdout}");
+    for (set, needles) in [
+        ("scheme.newton.modified", &["--set", "KEY=VALUE"][..]),
+        ("scheme.theta=half", &["--set", "not a TOML value"][..]),
+        (
+            "bodies[2].velocity=[0.0, 0.0, 1.0]",
+            &["--set", "no [2]"][..],
+        ),
+        (
+            "scheme.newtn=1",
+            &["scene.toml", "scheme.newtn", "unknown field"][..],
+        ),
+        (
+            "bodies[0].material.model=\"mooney\"",
+            &["bodies[0].material.model", "mooney"][..],
+        ),
+    ] {
+        let r = cli(&dir, &["check", "scene.toml", "--set", set], &[]);
+        expect(set, r, 2, needles);
+    }
+}

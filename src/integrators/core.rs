@@ -794,6 +794,7 @@ impl ThetaCore {
         let st = self.structure.as_mut().expect("a nonlinear structure");
         let s = &self.state;
         if tangent || !st.rhs_at_iterate {
+            let t0 = std::time::Instant::now();
             st.evaluate(
                 &self.sys,
                 (self.h, self.theta),
@@ -802,14 +803,17 @@ impl ThetaCore {
                 tangent,
             )
             .map_err(|e| step_error(s, self.h, e))?;
+            stats.assembly_seconds += t0.elapsed().as_secs_f64();
         }
         st.rhs_at_iterate = false;
         if tangent {
+            let t0 = std::time::Instant::now();
             self.del
                 .factor
                 .refactor(st.step_matrix.as_ref(), "iteration matrix M + hθC + h²θ²Kⁿ")
                 .map_err(|e| step_error(s, self.h, e))?;
             stats.factorizations += 1;
+            stats.factorization_seconds += t0.elapsed().as_secs_f64();
         }
         self.work.copy_from_slice(&st.rhs);
         self.del.factor.solve_in_place(&mut self.work);
@@ -823,9 +827,10 @@ impl ThetaCore {
     /// The residual of eq. 41 at the iterate `(q_new, v_new)` with the impulse `P`:
     /// `‖M(v − v_k) − hF_θ − GP‖∞` relative to the largest of its terms (0 below 64 ulps
     /// of that scale).
-    fn structure_residual(&mut self) -> Result<f64, Error> {
+    fn structure_residual(&mut self, stats: &mut StepStats) -> Result<f64, Error> {
         let st = self.structure.as_mut().expect("a nonlinear structure");
         let s = &self.state;
+        let t0 = std::time::Instant::now();
         st.evaluate(
             &self.sys,
             (self.h, self.theta),
@@ -834,6 +839,7 @@ impl ThetaCore {
             false,
         )
         .map_err(|e| step_error(s, self.h, e))?;
+        stats.assembly_seconds += t0.elapsed().as_secs_f64();
         // the next linearization, at this iterate, can reuse the right-hand side
         st.rhs_at_iterate = true;
         // work = −R = rhs + G P
@@ -1077,7 +1083,7 @@ impl ThetaCore {
                 if self.structure.is_some() {
                     // eq. 41 at the new iterate; with a constant G the gaps are exact
                     // (eq. 49 holds identically) and R alone decides
-                    let rs = self.structure_residual()?;
+                    let rs = self.structure_residual(stats)?;
                     let r = if self.g_constant { rs } else { r.max(rs) };
                     (change_before, change) = (change, r);
                     r

@@ -152,6 +152,11 @@ pub struct StepStats {
     /// Nonlinear structures: factorizations of the iteration matrix `M̂ⁿ` in the step
     /// (0 on the linear path, where `M̂` is factored once at set-up).
     pub factorizations: usize,
+    /// Nonlinear structures: wall time of the step spent evaluating `F` and `Kⁿ`
+    /// (element kernels and assembly) and forming `M̂ⁿ` (s).
+    pub assembly_seconds: f64,
+    /// Nonlinear structures: wall time of the step spent refactoring `M̂ⁿ` (s).
+    pub factorization_seconds: f64,
     /// Algorithm 2: index-set rounds redone with Algorithm 1's position rule
     /// (`0 ≤ g ⊥ τ ≥ 0` on every active row) because the combined rule (eq. 67–70)
     /// hit the Newton cap or left held rows.

@@ -87,6 +87,9 @@ pub struct RunState {
     /// Coupled position solves, stagnated Newton loops, steps with held rows,
     /// complementarity fallbacks of Algorithm 2.
     pub newton_loops: [usize; 4],
+    /// Nonlinear structures: factorizations of `M̂ⁿ` so far.
+    #[serde(default)]
+    pub factorizations: usize,
     /// The energy balance's sums (`model::energy::EnergyAudit::save`).
     pub energy_audit: [Bits; 6],
     /// Largest relative energy excess met.

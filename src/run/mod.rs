@@ -452,6 +452,14 @@ pub fn run_checkpointed(
             complementarity_fallbacks: acc.loops[3],
         },
         friction: acc.friction(s.tangent_dim > 0),
+        nonlinear: (sys.linearity() != crate::model::system::Linearity::Linear).then(|| {
+            summary::NonlinearSummary {
+                factorizations: acc.factorizations,
+                factorizations_per_step: acc.factorizations as f64 / steps.max(1) as f64,
+                assembly_seconds: acc.assembly_seconds,
+                factorization_seconds: acc.factorization_seconds,
+            }
+        }),
         max_lcp_residual: acc.lcp_res,
         energy: [energy0, energy1],
         energy_balance,

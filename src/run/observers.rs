@@ -34,6 +34,11 @@ pub(super) struct Acc {
     pub(super) loops: [usize; 4],
     /// Largest relative energy excess met ([`EnergyCheck`]).
     pub(super) energy_excess: f64,
+    /// Nonlinear structures: factorizations of `M̂ⁿ`, and the seconds spent assembling
+    /// and factoring (this session's steps).
+    pub(super) factorizations: usize,
+    pub(super) assembly_seconds: f64,
+    pub(super) factorization_seconds: f64,
 }
 
 impl Acc {
@@ -65,6 +70,9 @@ impl Acc {
         }
         self.lcp_res = self.lcp_res.max(s.lcp_residual);
         self.violation = self.violation.max(s.max_violation);
+        self.factorizations += s.factorizations;
+        self.assembly_seconds += s.assembly_seconds;
+        self.factorization_seconds += s.factorization_seconds;
     }
     pub(super) fn friction(&self, frictional: bool) -> Option<FrictionSummary> {
         frictional.then(|| FrictionSummary {
@@ -347,6 +355,7 @@ impl RunObserver {
             ],
             friction_residual: [Bits(a.fr_res_sum), Bits(a.fr_res_max)],
             newton_loops: a.loops,
+            factorizations: a.factorizations,
             energy_audit: self
                 .energy
                 .as_ref()
@@ -396,6 +405,7 @@ impl RunObserver {
         ] = r.friction_counts;
         (a.fr_res_sum, a.fr_res_max) = (r.friction_residual[0].0, r.friction_residual[1].0);
         a.loops = r.newton_loops;
+        a.factorizations = r.factorizations;
         a.energy_excess = r.energy_excess.0;
         let t = &mut self.tracker;
         t.trace = r.trace.as_ref().map(|f| f.0.clone());

@@ -96,6 +96,20 @@ pub struct NewtonLoops {
     pub complementarity_fallbacks: usize,
 }
 
+/// The Newton loop of a nonlinear structure over a run ([`Summary::nonlinear`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct NonlinearSummary {
+    /// Factorizations of `M̂ⁿ` over the run.
+    pub factorizations: usize,
+    /// Factorizations per step.
+    pub factorizations_per_step: f64,
+    /// Seconds spent evaluating `F`, `Kⁿ` and forming `M̂ⁿ` (element kernels and assembly;
+    /// the steps run in this session).
+    pub assembly_seconds: f64,
+    /// Seconds spent refactoring `M̂ⁿ` (this session's steps).
+    pub factorization_seconds: f64,
+}
+
 /// A run's energy balance ([`Summary::energy_balance`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct EnergyBalance {
@@ -153,6 +167,9 @@ pub struct Summary {
     /// Friction solver statistics (absent in a frictionless scene).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<FrictionSummary>,
+    /// The nonlinear structure's Newton loop (absent for a linear structure).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub nonlinear: Option<NonlinearSummary>,
     /// Largest LCP complementarity residual met.
     pub max_lcp_residual: f64,
     /// Energy (kinetic + potential) at the start and at the end (J).

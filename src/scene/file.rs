@@ -418,6 +418,32 @@ impl Scene {
         Ok(scene)
     }
 
+    /// [`Scene::from_file`] with `KEY=VALUE` overrides applied to the file's TOML before
+    /// it is read as a scene (`signorini run --set`): `KEY` is a dotted path with array
+    /// indices (`scheme.newton.modified`, `bodies[0].material.model`), tables on the path
+    /// are created, and `VALUE` is a TOML value (`true`, `1e-5`, `"svk"`). The scene is
+    /// then validated as usual, so a misspelt key is refused with its path.
+    pub fn from_file_with(path: &Path, overrides: &[String]) -> Result<Scene, Error> {
+        if overrides.is_empty() {
+            return Self::from_file(path);
+        }
+        let text = crate::limits::read_text(path, "scene", crate::limits::MAX_SCENE_BYTES)?;
+        // syntax errors are located in the file's own text
+        let mut table: toml::Table = match toml::from_str(&text) {
+            Ok(t) => t,
+            Err(_) => return Self::from_file(path),
+        };
+        for o in overrides {
+            apply_override(&mut table, o)?;
+        }
+        let text = toml::to_string(&table)
+            .map_err(|e| Error::invalid("--set", "(scene)", &format!("does not serialize: {e}")))?;
+        let mut scene = Self::from_toml(&text).map_err(|e| e.in_file(path))?;
+        scene.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        scene.file = Some(path.to_path_buf());
+        Ok(scene)
+    }
+
     /// Parses and validates scene text.
     pub fn from_toml(text: &str) -> Result<Scene, Error> {
         let at = |span: Option<std::ops::Range<usize>>| match span {
@@ -1332,6 +1358,73 @@ fn node_set(mesh: &crate::model::solid::Mesh, name: &str) -> Result<Vec<usize>, 
 }
 
 /// The first line of a parser's message (toml's messages carry a source excerpt after it).
+/// Sets `KEY=VALUE` in a scene's TOML table ([`Scene::from_file_with`]).
+fn apply_override(table: &mut toml::Table, o: &str) -> Result<(), Error> {
+    let bad = |why: &str| Error::invalid("--set", o, why);
+    let (key, value) = o
+        .split_once('=')
+        .ok_or_else(|| bad("expected KEY=VALUE, e.g. scheme.newton.modified=true"))?;
+    let value: toml::Value = toml::from_str::<toml::Table>(&format!("v = {}", value.trim()))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .ok_or_else(|| bad("VALUE is not a TOML value (quote strings: model=\"svk\")"))?;
+    // segments: names, each with optional [index]
+    let mut path: Vec<(&str, Option<usize>)> = Vec::new();
+    for seg in key.trim().split('.') {
+        let (name, index) = match seg.split_once('[') {
+            Some((n, rest)) => {
+                let i = rest
+                    .strip_suffix(']')
+                    .and_then(|i| i.parse::<usize>().ok())
+                    .ok_or_else(|| bad("an index is written name[0]"))?;
+                (n, Some(i))
+            }
+            None => (seg, None),
+        };
+        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+            return Err(bad(
+                "KEY is a dotted path of names, e.g. bodies[0].material.model",
+            ));
+        }
+        path.push((name, index));
+    }
+    let (last, parents) = path.split_last().expect("at least one segment");
+    let mut cur = table;
+    for &(name, index) in parents {
+        let entry = cur
+            .entry(name.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        let next = match index {
+            None => entry,
+            Some(i) => {
+                let len = entry.as_array().map_or(0, |a| a.len());
+                entry
+                    .as_array_mut()
+                    .and_then(|a| a.get_mut(i))
+                    .ok_or_else(|| bad(&format!("`{name}` has {len} entries; no [{i}]")))?
+            }
+        };
+        cur = next
+            .as_table_mut()
+            .ok_or_else(|| bad(&format!("`{name}` is not a table")))?;
+    }
+    match last.1 {
+        None => {
+            cur.insert(last.0.to_string(), value);
+        }
+        Some(i) => {
+            let arr = cur
+                .get_mut(last.0)
+                .and_then(|v| v.as_array_mut())
+                .ok_or_else(|| bad(&format!("`{}` is not an array", last.0)))?;
+            let len = arr.len();
+            *arr.get_mut(i)
+                .ok_or_else(|| bad(&format!("`{}` has {len} entries; no [{i}]", last.0)))? = value;
+        }
+    }
+    Ok(())
+}
+
 fn first_line(m: &str) -> &str {
     m.lines().next().unwrap_or(m).trim()
 }
