@@ -2,8 +2,10 @@
 //! per-step cost of Algorithm 2 (LCP `auto`) on a hex8 box pressed on a plane with its
 //! whole bottom face, for about 10⁴ and 10⁵ dofs, with the Delassus data dense (`n × m`
 //! blocks formed once) or per active column (DESIGN.md §4). The step samples are the
-//! steady pressed state: every column is computed before the first sample. Run:
-//! `cargo bench --bench solid`.
+//! steady pressed state: every column is computed before the first sample. And the
+//! neo-Hookean internal force with its tangent (what each full-Newton iterate of a
+//! nonlinear structure assembles) and alone (a residual check), batched, on 1 and 2
+//! threads. Run: `cargo bench --bench solid`.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use signorini::contact::plane::NodesOnPlane;
@@ -44,6 +46,46 @@ fn assembly(c: &mut Criterion) {
                 })
             });
         }
+    }
+    g.finish();
+}
+
+fn hyperelastic(c: &mut Criterion) {
+    use signorini::model::hyperelastic::{HyperBody, Hyperelastic};
+    let mut g = c.benchmark_group("hyperelastic_assembly");
+    g.sample_size(10);
+    let n = SIZES[0];
+    let mesh = box_mesh(CellKind::Hex8, [n, n, n], [1.0, 1.0, 1.0]);
+    let dofs = 3 * (n + 1).pow(3);
+    let u: Vec<f64> = (0..dofs).map(|i| 1e-3 * (i as f64).sin()).collect();
+    for threads in [1usize, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        // the plan cuts the nodes for the pool it is built in
+        let body = pool.install(|| HyperBody::new(&mesh, Hyperelastic::neo_hookean(&MAT)).unwrap());
+        let mut batch = body.batch();
+        let mut k = vec![0.0; body.plan().nnz()];
+        let mut f = vec![0.0; dofs];
+        g.bench_function(
+            BenchmarkId::new(format!("tangent_{threads}_threads"), dofs),
+            |b| {
+                b.iter(|| {
+                    pool.install(|| body.evaluate_batched(&u, Some(&mut k), &mut f, &mut batch))
+                        .unwrap()
+                })
+            },
+        );
+        g.bench_function(
+            BenchmarkId::new(format!("force_{threads}_threads"), dofs),
+            |b| {
+                b.iter(|| {
+                    pool.install(|| body.evaluate_batched(&u, None, &mut f, &mut batch))
+                        .unwrap()
+                })
+            },
+        );
     }
     g.finish();
 }
@@ -97,5 +139,5 @@ fn steps(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, assembly, steps);
+criterion_group!(benches, assembly, hyperelastic, steps);
 criterion_main!(benches);

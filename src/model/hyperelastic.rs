@@ -243,12 +243,30 @@ fn kernel<const NN: usize, const ND: usize>(
     u: &[f64],
     want: Want,
 ) -> Result<HyperElement<ND>, Inverted> {
-    debug_assert_eq!(ND, 3 * NN);
     let mut out = HyperElement {
         force: SMatrix::<f64, ND, 1>::zeros(),
         tangent: SMatrix::<f64, ND, ND>::zeros(),
         energy: 0.0,
     };
+    let tangent = want.tangent.then_some(out.tangent.as_mut_slice());
+    out.energy = kernel_into::<NN, ND>(law, pts, u, want, out.force.as_mut_slice(), tangent)?;
+    Ok(out)
+}
+
+/// The element force (added into `fe`, `ND` values) and, with `ke`, the column-major
+/// tangent (added into `ke`, `ND²` values) of one cell; returns the strain energy when
+/// `want.energy` (else 0). The material part `Bᵀ ℂ B` is formed on its upper triangle
+/// and mirrored (it is symmetric), the geometric part block by block.
+fn kernel_into<const NN: usize, const ND: usize>(
+    law: &Hyperelastic,
+    pts: &[RefPoint<NN>],
+    u: &[f64],
+    want: Want,
+    fe: &mut [f64],
+    mut ke: Option<&mut [f64]>,
+) -> Result<f64, Inverted> {
+    debug_assert_eq!(ND, 3 * NN);
+    let mut energy = 0.0;
     for (g, dv) in pts {
         // F = I + Σ_a u_a ⊗ ∇N_a
         let mut f = Matrix3::<f64>::identity();
@@ -260,14 +278,15 @@ fn kernel<const NN: usize, const ND: usize>(
             }
         }
         if want.energy {
-            out.energy += law.energy(&f)? * dv;
+            energy += law.energy(&f)? * dv;
         }
-        if !want.tangent {
+        let Some(ke) = ke.as_deref_mut() else {
+            // the force alone: B's columns formed one at a time
             let s = law.stress(&f)?;
             for a in 0..NN {
                 let ga = &g[a];
                 for i in 0..3 {
-                    let b = [
+                    let col = [
                         f[(i, 0)] * ga[0],
                         f[(i, 1)] * ga[1],
                         f[(i, 2)] * ga[2],
@@ -275,13 +294,12 @@ fn kernel<const NN: usize, const ND: usize>(
                         f[(i, 0)] * ga[2] + f[(i, 2)] * ga[0],
                         f[(i, 0)] * ga[1] + f[(i, 1)] * ga[0],
                     ];
-                    out.force[3 * a + i] +=
-                        b.iter().zip(s.iter()).map(|(x, y)| x * y).sum::<f64>() * dv;
+                    fe[3 * a + i] += (0..6).map(|k| col[k] * s[k]).sum::<f64>() * dv;
                 }
             }
             continue;
-        }
-        let (s, d) = law.stress_tangent(&f)?;
+        };
+        // B (6 × ND): column c = 3a + i
         let mut b = SMatrix::<f64, 6, ND>::zeros();
         for a in 0..NN {
             let ga = &g[a];
@@ -295,9 +313,22 @@ fn kernel<const NN: usize, const ND: usize>(
                 b[(5, c)] = f[(i, 0)] * ga[1] + f[(i, 1)] * ga[0];
             }
         }
-        out.force += b.transpose() * s * *dv;
-        out.tangent += b.transpose() * (d * b) * *dv;
-        // geometric part: (∇N_a · S ∇N_b) I
+        let (s, d) = law.stress_tangent(&f)?;
+        for c in 0..ND {
+            let col = b.column(c);
+            fe[c] += (0..6).map(|k| col[k] * s[k]).sum::<f64>() * dv;
+        }
+        // material part: upper triangle of Bᵀ (ℂ B)
+        let db = d * b;
+        for j in 0..ND {
+            let dbj = db.column(j);
+            for i in 0..=j {
+                let bi = b.column(i);
+                let v = (0..6).map(|k| bi[k] * dbj[k]).sum::<f64>() * dv;
+                ke[i + j * ND] += v;
+            }
+        }
+        // geometric part: (∇N_a · S ∇N_b) I, on the upper triangle of blocks
         let sm = Matrix3::new(
             s[0], s[5], s[4], //
             s[5], s[1], s[3], //
@@ -305,15 +336,22 @@ fn kernel<const NN: usize, const ND: usize>(
         );
         for a in 0..NN {
             let sga = sm * g[a];
-            for bb in 0..NN {
+            for bb in a..NN {
                 let k = sga.dot(&g[bb]) * dv;
                 for i in 0..3 {
-                    out.tangent[(3 * a + i, 3 * bb + i)] += k;
+                    ke[(3 * a + i) + (3 * bb + i) * ND] += k;
                 }
             }
         }
     }
-    Ok(out)
+    if let Some(ke) = ke {
+        for j in 0..ND {
+            for i in 0..j {
+                ke[j + i * ND] = ke[i + j * ND];
+            }
+        }
+    }
+    Ok(energy)
 }
 
 /// The tet4 cell at reference coordinates `x` (4 nodes) displaced by `u` (12 values).
@@ -469,22 +507,19 @@ impl HyperBody {
             .assemble_batched(tangent, force, batch, |id, fe, ke| {
                 let (nodes, x, ue) = self.gather(id, u);
                 let nd = 3 * nodes.len();
-                let put = |f: &[f64], k: &[f64]| {
-                    fe[..nd].copy_from_slice(f);
-                    if let Some(ke) = ke {
-                        ke[..nd * nd].copy_from_slice(k);
-                    }
-                };
+                fe[..nd].fill(0.0);
+                let ke = ke.map(|k| {
+                    k[..nd * nd].fill(0.0);
+                    &mut k[..nd * nd]
+                });
                 match self.cells[id].0 {
                     CellKind::Hex8 => {
                         let pts = reference_points(&x, &hex8_points())?;
-                        let e = kernel::<8, 24>(&self.law, &pts, &ue, want)?;
-                        put(e.force.as_slice(), e.tangent.as_slice());
+                        kernel_into::<8, 24>(&self.law, &pts, &ue, want, &mut fe[..nd], ke)?;
                     }
                     _ => {
                         let pts = reference_points(&x[..4], &tet4_points())?;
-                        let e = kernel::<4, 12>(&self.law, &pts, &ue[..12], want)?;
-                        put(e.force.as_slice(), e.tangent.as_slice());
+                        kernel_into::<4, 12>(&self.law, &pts, &ue[..12], want, &mut fe[..nd], ke)?;
                     }
                 }
                 Ok(())
