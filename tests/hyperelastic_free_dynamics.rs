@@ -13,6 +13,8 @@
 //!   of order h². This is what the paper's θ-method gives; exact conservation "to the
 //!   Newton tolerance" would need an energy–momentum scheme.
 
+mod common;
+
 use signorini::linalg::solver::{SolverKind, factor};
 use signorini::model::MassKind;
 use signorini::model::generate::box_mesh;
@@ -202,30 +204,11 @@ fn free_neo_hookean_cube_keeps_momenta_and_a_bounded_second_order_energy_error()
 /// differences accumulate over the steps).
 #[test]
 fn the_schemes_newton_loop_follows_the_midpoint_rule() {
-    use signorini::contact::plane::NodesOnPlane;
-    use signorini::integrators::{SchemeKind, SchemeParams, build};
-    use signorini::model::system::HyperelasticPart;
     let (h, steps) = (1e-4, 2000);
     let reference = run(h, h * steps as f64);
     let (mesh, q0, v0) = cube();
-    let n = q0.len();
-    let mut sys = assemble(&mesh, &MAT, Formulation::Solid, MassKind::Consistent).unwrap();
-    let body = HyperBody::new(&mesh, Hyperelastic::neo_hookean(&MAT)).unwrap();
-    let part = HyperelasticPart::new("cube", body, (0..n).map(Some).collect(), Vec::new()).unwrap();
-    sys.add_internal_force(std::sync::Arc::new(part));
-    let far = NodesOnPlane::new(
-        vec![vec![0, 1, 2]],
-        vec![mesh.points[0].to_vec()],
-        vec![0.0, 0.0, 1.0],
-        -100.0,
-        0.0,
-    )
-    .unwrap();
-    let params = SchemeParams {
-        kind: SchemeKind::MoreauJean,
-        ..SchemeParams::default()
-    };
-    let mut integ = build(&params, sys, Box::new(far), &q0, &v0, h).unwrap();
+    let law = Hyperelastic::neo_hookean(&MAT);
+    let mut integ = common::free::free_body(&mesh, &MAT, Some(law), (&q0, &v0), h);
     let mut newton = 0;
     for _ in 0..steps {
         newton = newton.max(integ.step().unwrap().newton_iterations);

@@ -817,20 +817,12 @@ impl ThetaCore {
     /// refactors `M̂ⁿ`; sets `v_free = vⁿ + M̂ⁿ⁻¹(−M(vⁿ − v_k) + hF_θⁿ)` (eq. 45 without
     /// contact impulse). The caller refreshes the Delassus data.
     fn linearize_structure(&mut self, tangent: bool, stats: &mut StepStats) -> Result<(), Error> {
+        let at_iterate = self.structure.as_ref().is_some_and(|st| st.rhs_at_iterate);
+        if tangent || !at_iterate {
+            self.evaluate_structure(tangent, stats)?;
+        }
         let st = self.structure.as_mut().expect("a nonlinear structure");
         let s = &self.state;
-        if tangent || !st.rhs_at_iterate {
-            let t0 = std::time::Instant::now();
-            st.evaluate(
-                &self.sys,
-                (self.h, self.theta),
-                (&s.q, &s.v),
-                (&self.q_new, &self.v_new),
-                tangent,
-            )
-            .map_err(|e| step_error(s, self.h, e))?;
-            stats.assembly_seconds += t0.elapsed().as_secs_f64();
-        }
         st.rhs_at_iterate = false;
         if tangent {
             let t0 = std::time::Instant::now();
@@ -850,10 +842,9 @@ impl ThetaCore {
         Ok(())
     }
 
-    /// The residual of eq. 41 at the iterate `(q_new, v_new)` with the impulse `P`:
-    /// `‖M(v − v_k) − hF_θ − GP‖∞` relative to the largest of its terms (0 below 64 ulps
-    /// of that scale).
-    fn structure_residual(&mut self, stats: &mut StepStats) -> Result<f64, Error> {
+    /// [`Structure::evaluate`] at the iterate `(q_new, v_new)` (with `tangent`, `Kⁿ` and
+    /// `M̂ⁿ` too), timed into `stats`; an inverted cell is the run's error.
+    fn evaluate_structure(&mut self, tangent: bool, stats: &mut StepStats) -> Result<(), Error> {
         let st = self.structure.as_mut().expect("a nonlinear structure");
         let s = &self.state;
         let t0 = std::time::Instant::now();
@@ -862,10 +853,19 @@ impl ThetaCore {
             (self.h, self.theta),
             (&s.q, &s.v),
             (&self.q_new, &self.v_new),
-            false,
+            tangent,
         )
         .map_err(|e| step_error(s, self.h, e))?;
         stats.assembly_seconds += t0.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// The residual of eq. 41 at the iterate `(q_new, v_new)` with the impulse `P`:
+    /// `‖M(v − v_k) − hF_θ − GP‖∞` relative to the largest of its terms (0 below 64 ulps
+    /// of that scale).
+    fn structure_residual(&mut self, stats: &mut StepStats) -> Result<f64, Error> {
+        self.evaluate_structure(false, stats)?;
+        let st = self.structure.as_mut().expect("a nonlinear structure");
         // the next linearization, at this iterate, can reuse the right-hand side
         st.rhs_at_iterate = true;
         // work = −R = rhs + G P

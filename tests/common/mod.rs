@@ -4,6 +4,7 @@
 
 pub mod bad;
 pub mod blocks;
+pub mod free;
 
 use std::collections::HashMap;
 use std::path::Path;
