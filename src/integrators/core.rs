@@ -21,6 +21,14 @@
 //! formed once per step. For nonlinear contacts `G(qⁿ)` and the operators are
 //! recomputed every Newton iteration (`m` extra solves).
 //!
+//! A nonlinear structure ([`crate::model::system::Linearity::ConstantMass`]: bodies with
+//! a large-deformation law) has no constant `M̂`: the structural side of the Newton loop
+//! of eq. 41–48 ([`super::structure`]) evaluates `F` and `Kⁿ` at each iterate, refactors
+//! `M̂ⁿ` and gives the iteration's free velocity; `W` is condensed again on each new
+//! `M̂ⁿ` and the contact problems above are solved unchanged. The projection's feedback
+//! enters through `F(q_θ)` (whose `q` carries the last `τ`) instead of `−hθ W_D τⁿ`, the
+//! coupled position solve is not taken, and the loop converges on eq. 41's residual.
+//!
 //! The operators live in [`Delassus`]: dense `n × m` blocks for the tens of contacts of
 //! the bar and the academic examples, per-active-column storage (columns computed when
 //! a contact first activates, corrections by one sparse solve) for thousands of
