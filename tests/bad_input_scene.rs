@@ -318,15 +318,19 @@ const CASES: &[Case] = &[
         ],
     ),
     (
-        "large-deformation law on a plane body",
+        "large-deformation law on a plane-stress body",
         &[
             ("density = 1000.0 }", "density = 1000.0, model = \"svk\" }"),
             (
                 "name = \"b\"\n",
-                "name = \"b\"\nformulation = \"plane-strain\"\n",
+                "name = \"b\"\nformulation = { plane-stress = { thickness = 0.01 } }\n",
             ),
         ],
-        &["bodies[0].material.model", "svk", "3-D solid bodies"],
+        &[
+            "bodies[0].material.model",
+            "svk",
+            "plane-stress bodies are linear only",
+        ],
     ),
     (
         "Schatzman–Paoli on a nonlinear structure",

@@ -1,6 +1,7 @@
 //! Hyperelastic solids at large deformation, total-Lagrangian (issue 17 §2): the
 //! material laws and the element kernels that give the internal force `f_int(u)` and
-//! its consistent tangent `K_t = ∂f_int/∂u` of a tet4 or hex8 cell, the `F(q)` and
+//! its consistent tangent `K_t = ∂f_int/∂u` of a tet4 or hex8 cell (tri3 and quad4 in
+//! plane strain: integrated as 3-D cells without z-part, `F₃₃ = 1`), the `F(q)` and
 //! `Kⁿ = −∂F/∂q` that the θ-method Newton loop of eq. 42–51 evaluates at every iterate.
 //!
 //! Kinematics: `F = I + ∇_X u`, `C = FᵀF`, Green–Lagrange `E = (C − I)/2`; the second
@@ -367,9 +368,12 @@ pub fn hex8(law: &Hyperelastic, x: &[[f64; 3]], u: &[f64]) -> Result<HyperElemen
     kernel::<8, 24>(law, &pts, u, ALL)
 }
 
-/// The 3-D cells this module integrates.
+/// The cells this module integrates: tet4 and hex8, tri3 and quad4 in plane strain.
 pub fn supports(kind: CellKind) -> bool {
-    matches!(kind, CellKind::Tet4 | CellKind::Hex8)
+    matches!(
+        kind,
+        CellKind::Tet4 | CellKind::Hex8 | CellKind::Tri3 | CellKind::Quad4
+    )
 }
 
 /// A hyperelastic body on a mesh of tet4 or hex8 cells: the internal force `f_int(u)`
@@ -380,6 +384,7 @@ pub struct HyperBody {
     points: Vec<[f64; 3]>,
     cells: Vec<(CellKind, Vec<usize>)>,
     law: Hyperelastic,
+    dim: usize,
 }
 
 /// Why a body cannot be evaluated: cell `cell` is inverted (`det F ≤ 0` or, for the
@@ -405,21 +410,36 @@ impl std::fmt::Debug for HyperBody {
 }
 
 impl HyperBody {
-    /// The body of `mesh` (3-D cells only: tet4, hex8) under `law`; plans the assembly.
+    /// The body of `mesh` under `law`: 3-D cells (tet4, hex8), or 2-D cells (tri3, quad4)
+    /// in plane strain; plans the assembly.
     pub fn new(mesh: &super::solid::Mesh, law: Hyperelastic) -> Result<Self, crate::Error> {
         if let Some((id, (kind, _))) = mesh.cells.iter().enumerate().find(|(_, c)| !supports(c.0)) {
             return Err(crate::Error::invalid(
                 &format!("cell {id}"),
                 kind.name(),
-                "a hyperelastic body takes tet4 and hex8 cells",
+                "a hyperelastic body takes tet4, hex8 (3-D) and tri3, quad4 (plane strain) cells",
+            ));
+        }
+        let dim = mesh.cells.first().map_or(3, |(k, _)| k.dim());
+        if let Some((id, (kind, _))) = mesh
+            .cells
+            .iter()
+            .enumerate()
+            .find(|(_, c)| c.0.dim() != dim)
+        {
+            return Err(crate::Error::invalid(
+                &format!("cell {id}"),
+                kind.name(),
+                &format!("the body's cells are {dim}-D; one dimension per body"),
             ));
         }
         let lists: Vec<&[usize]> = mesh.cells.iter().map(|(_, c)| c.as_slice()).collect();
         Ok(HyperBody {
-            plan: AssemblyPlan::new(mesh.points.len(), 3, &lists),
+            plan: AssemblyPlan::new(mesh.points.len(), dim, &lists),
             points: mesh.points.clone(),
             cells: mesh.cells.clone(),
             law,
+            dim,
         })
     }
 
@@ -431,14 +451,19 @@ impl HyperBody {
         }
     }
 
+    /// Displacement components per node: 3, or 2 in plane strain.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
     /// The assembly plan (order, pattern).
     pub fn plan(&self) -> &AssemblyPlan {
         &self.plan
     }
 
     /// Fills `tangent` (the plan's `nnz` values) with `K_t(u)` and `force` with
-    /// `f_int(u)` (3 per node); reserves nothing. The error names the first inverted
-    /// cell in mesh order.
+    /// `f_int(u)` ([`HyperBody::dim`] per node); reserves nothing. The error names the
+    /// first inverted cell in mesh order.
     pub fn evaluate(
         &self,
         u: &[f64],
@@ -446,32 +471,22 @@ impl HyperBody {
         force: &mut [f64],
     ) -> Result<(), InvertedCell> {
         use crate::assembly::Accumulate;
+        let dim = self.dim;
         self.plan
             .assemble(tangent, force, |id, k, f| {
-                let (nodes, x, ue) = self.gather(id, u);
+                let nodes = &self.cells[id].1;
+                let nd = dim * nodes.len();
                 let mut dofs = [0usize; 24];
                 for (a, &v) in nodes.iter().enumerate() {
-                    for i in 0..3 {
-                        dofs[3 * a + i] = 3 * v + i;
+                    for i in 0..dim {
+                        dofs[dim * a + i] = dim * v + i;
                     }
                 }
-                let nd = 3 * nodes.len();
-                // force and column-major tangent of the cell
-                let mut add = |fe: &[f64], te: &[f64]| {
-                    k.add_element(&dofs[..nd], |a, b| te[a + b * nd]);
-                    for a in 0..nd {
-                        f.add(dofs[a], fe[a]);
-                    }
-                };
-                match self.cells[id].0 {
-                    CellKind::Hex8 => {
-                        let e = hex8(&self.law, &x, &ue)?;
-                        add(e.force.as_slice(), e.tangent.as_slice());
-                    }
-                    _ => {
-                        let e = tet4(&self.law, &x[..4], &ue[..12])?;
-                        add(e.force.as_slice(), e.tangent.as_slice());
-                    }
+                let (mut fe, mut ke) = ([0.0; 24], [0.0; 576]);
+                self.cell_into(id, u, ALL, &mut fe[..nd], Some(&mut ke[..nd * nd]))?;
+                k.add_element(&dofs[..nd], |a, b| ke[a + b * nd]);
+                for a in 0..nd {
+                    f.add(dofs[a], fe[a]);
                 }
                 Ok(())
             })
@@ -483,7 +498,7 @@ impl HyperBody {
         let nd = self
             .cells
             .iter()
-            .map(|(_, c)| 3 * c.len())
+            .map(|(_, c)| self.dim * c.len())
             .max()
             .unwrap_or(0);
         self.plan.batch(nd)
@@ -503,59 +518,139 @@ impl HyperBody {
             tangent: tangent.is_some(),
             energy: false,
         };
+        let dim = self.dim;
         self.plan
             .assemble_batched(tangent, force, batch, |id, fe, ke| {
-                let (nodes, x, ue) = self.gather(id, u);
-                let nd = 3 * nodes.len();
-                fe[..nd].fill(0.0);
-                let ke = ke.map(|k| {
-                    k[..nd * nd].fill(0.0);
-                    &mut k[..nd * nd]
-                });
-                match self.cells[id].0 {
-                    CellKind::Hex8 => {
-                        let pts = reference_points(&x, &hex8_points())?;
-                        kernel_into::<8, 24>(&self.law, &pts, &ue, want, &mut fe[..nd], ke)?;
-                    }
-                    _ => {
-                        let pts = reference_points(&x[..4], &tet4_points())?;
-                        kernel_into::<4, 12>(&self.law, &pts, &ue[..12], want, &mut fe[..nd], ke)?;
-                    }
-                }
-                Ok(())
+                let nd = dim * self.cells[id].1.len();
+                self.cell_into(id, u, want, &mut fe[..nd], ke.map(|k| &mut k[..nd * nd]))
+                    .map(|_| ())
             })
             .map_err(|(cell, e): (usize, Inverted)| InvertedCell { cell, det: e.det })
     }
 
-    /// Cell `id`'s nodes, their reference coordinates and their displacements in `u`
-    /// (the first `nodes` entries used).
+    /// Cell `id`'s element force into `fe` and (with `ke`) its column-major tangent into
+    /// `ke`, both overwritten, in the body's dofs (`dim` per node); returns the strain
+    /// energy when `want.energy`. A plane-strain cell is integrated as a 3-D one whose
+    /// gradients and displacements have no z-part (`F₃₃ = 1`, `F₁₃ = F₂₃ = 0`), its
+    /// in-plane rows and columns kept: the plane-strain law exactly.
+    fn cell_into(
+        &self,
+        id: usize,
+        u: &[f64],
+        want: Want,
+        fe: &mut [f64],
+        mut ke: Option<&mut [f64]>,
+    ) -> Result<f64, Inverted> {
+        let (nodes, x, ue) = self.gather(id, u);
+        let nn = nodes.len();
+        fe.fill(0.0);
+        if let Some(k) = ke.as_deref_mut() {
+            k.fill(0.0);
+        }
+        let law = &self.law;
+        match self.cells[id].0 {
+            CellKind::Hex8 => {
+                let pts = reference_points(&x, &hex8_points())?;
+                kernel_into::<8, 24>(law, &pts, &ue, want, fe, ke)
+            }
+            CellKind::Tet4 => {
+                let pts = reference_points(&x[..4], &tet4_points())?;
+                kernel_into::<4, 12>(law, &pts, &ue[..12], want, fe, ke)
+            }
+            kind => {
+                let (mut f3, mut k3) = ([0.0; 12], [0.0; 144]);
+                let n3 = 3 * nn;
+                let k3s = ke.is_some().then_some(&mut k3[..n3 * n3]);
+                let energy = if kind == CellKind::Tri3 {
+                    let pts = reference_points_2d(&x[..3], &super::solid::tri3_points())?;
+                    kernel_into::<3, 9>(law, &pts, &ue[..9], want, &mut f3[..9], k3s)?
+                } else {
+                    let pts = reference_points_2d(&x[..4], &super::solid::quad4_points())?;
+                    kernel_into::<4, 12>(law, &pts, &ue[..12], want, &mut f3[..12], k3s)?
+                };
+                let n2 = 2 * nn;
+                for a in 0..nn {
+                    for i in 0..2 {
+                        fe[2 * a + i] = f3[3 * a + i];
+                        if let Some(k) = ke.as_deref_mut() {
+                            for b in 0..nn {
+                                for j in 0..2 {
+                                    k[(2 * a + i) + (2 * b + j) * n2] =
+                                        k3[(3 * a + i) + (3 * b + j) * n3];
+                                }
+                            }
+                        }
+                    }
+                }
+                Ok(energy)
+            }
+        }
+    }
+
+    /// Cell `id`'s nodes, their reference coordinates and their displacements in `u`,
+    /// three per node (z zero in plane strain; the first `nodes` entries used).
     fn gather(&self, id: usize, u: &[f64]) -> (&[usize], [[f64; 3]; 8], [f64; 24]) {
         let nodes = &self.cells[id].1;
+        let d = self.dim;
         let mut x = [[0.0; 3]; 8];
         let mut ue = [0.0; 24];
         for (a, &v) in nodes.iter().enumerate() {
             x[a] = self.points[v];
-            ue[3 * a..3 * a + 3].copy_from_slice(&u[3 * v..3 * v + 3]);
+            ue[3 * a..3 * a + d].copy_from_slice(&u[d * v..d * v + d]);
         }
         (nodes, x, ue)
     }
 
-    /// Strain energy `Σ ∫ W dV₀` (J), summed in cell order.
+    /// Strain energy `Σ ∫ W dV₀` (J; per unit thickness in plane strain), summed in
+    /// cell order.
     pub fn strain_energy(&self, u: &[f64]) -> Result<f64, InvertedCell> {
+        let want = Want {
+            tangent: false,
+            energy: true,
+        };
         let mut total = 0.0;
-        for (id, (kind, _)) in self.cells.iter().enumerate() {
-            let (_, x, ue) = self.gather(id, u);
-            let e = match kind {
-                CellKind::Hex8 => hex8(&self.law, &x, &ue).map(|e| e.energy),
-                _ => tet4(&self.law, &x[..4], &ue[..12]).map(|e| e.energy),
-            };
-            total += e.map_err(|e| InvertedCell {
-                cell: id,
-                det: e.det,
-            })?;
+        let mut fe = [0.0; 24];
+        for id in 0..self.cells.len() {
+            let nd = self.dim * self.cells[id].1.len();
+            total += self
+                .cell_into(id, u, want, &mut fe[..nd], None)
+                .map_err(|e| InvertedCell {
+                    cell: id,
+                    det: e.det,
+                })?;
         }
         Ok(total)
     }
+}
+
+/// [`reference_points`] of a plane cell: gradients `(∂N/∂X, ∂N/∂Y, 0)` and the area
+/// weight (unit thickness).
+fn reference_points_2d<const NN: usize, const P: usize>(
+    x: &[[f64; 3]],
+    pts: &[super::solid::Point<NN, 2>; P],
+) -> Result<[RefPoint<NN>; P], Inverted> {
+    let mut out = [([Vector3::zeros(); NN], 0.0); P];
+    for ((_, g, w), o) in pts.iter().zip(out.iter_mut()) {
+        let mut jac = nalgebra::Matrix2::<f64>::zeros();
+        for a in 0..NN {
+            for i in 0..2 {
+                for j in 0..2 {
+                    jac[(i, j)] += x[a][i] * g[a][j];
+                }
+            }
+        }
+        let det = jac.determinant();
+        if det.is_nan() || det <= 0.0 {
+            return Err(Inverted { det });
+        }
+        let jinv_t = jac.try_inverse().ok_or(Inverted { det })?.transpose();
+        for a in 0..NN {
+            let gx = jinv_t * nalgebra::Vector2::new(g[a][0], g[a][1]);
+            o.0[a] = Vector3::new(gx[0], gx[1], 0.0);
+        }
+        o.1 = det * w;
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -821,13 +916,21 @@ mod tests {
         assert!(green_lagrange_and_cauchy(&law, &(-2.0 * Matrix3::identity())).is_none());
     }
 
-    /// A 3 × 2 × 2 hex8 box and the same box cut into tet4 cells.
-    fn meshes() -> [crate::model::solid::Mesh; 2] {
-        use crate::model::generate::box_mesh;
+    /// A 3 × 2 × 2 hex8 box and the same box cut into tet4 cells; a 3 × 2 quad4 rectangle
+    /// and the same cut into tri3 cells (plane strain).
+    fn meshes() -> [crate::model::solid::Mesh; 4] {
+        use crate::model::generate::{box_mesh, rectangle_mesh};
         [
             box_mesh(CellKind::Hex8, [3, 2, 2], [0.3, 0.2, 0.2]),
             box_mesh(CellKind::Tet4, [3, 2, 2], [0.3, 0.2, 0.2]),
+            rectangle_mesh(CellKind::Quad4, [3, 2], [0.3, 0.2]),
+            rectangle_mesh(CellKind::Tri3, [3, 2], [0.3, 0.2]),
         ]
+    }
+
+    /// Displacement components per node of `mesh`.
+    fn dim(mesh: &crate::model::solid::Mesh) -> usize {
+        mesh.cells[0].0.dim()
     }
 
     /// The assembled `K_t` is the derivative of the assembled `f_int` (central
@@ -872,9 +975,9 @@ mod tests {
     }
 
     /// The batched assembly (each cell evaluated once) gives the bits of the per-task one
-    /// on one and two threads; its force-only evaluation (stress without tangent, a
-    /// different summation order) agrees to 1e-13 of the largest force. The 1 200-cell
-    /// box takes two batches.
+    /// on one and two threads; its force-only evaluation (the stress without the
+    /// tangent) gives the same force to 1e-13 of the largest. Plane-strain meshes
+    /// included; the 1 200-cell box takes two batches.
     #[test]
     fn batched_assembly_equals_per_task_assembly() {
         let mut seed = 13;
@@ -882,7 +985,7 @@ mod tests {
         assert!(big.cells.len() > crate::assembly::ELEMENT_BATCH);
         for mesh in meshes().into_iter().chain([big]) {
             let law = Hyperelastic::neo_hookean(&MAT);
-            let n = 3 * mesh.points.len();
+            let n = dim(&mesh) * mesh.points.len();
             let u: Vec<f64> = (0..n).map(|_| 0.01 * lcg(&mut seed)).collect();
             for threads in [1, 2] {
                 let pool = rayon::ThreadPoolBuilder::new()
@@ -918,7 +1021,7 @@ mod tests {
         let mut seed = 9;
         for mesh in meshes() {
             let law = Hyperelastic::neo_hookean(&MAT);
-            let n = 3 * mesh.points.len();
+            let n = dim(&mesh) * mesh.points.len();
             let u: Vec<f64> = (0..n).map(|_| 0.01 * lcg(&mut seed)).collect();
             let run = |threads: usize, u: &[f64]| {
                 let pool = rayon::ThreadPoolBuilder::new()
@@ -938,10 +1041,15 @@ mod tests {
             assert!(k1.iter().zip(&k2).all(|(a, b)| a.to_bits() == b.to_bits()));
             assert!(f1.iter().zip(&f2).all(|(a, b)| a.to_bits() == b.to_bits()));
             let (k0, f0) = run(2, &vec![0.0; n]);
+            let form = if dim(&mesh) == 3 {
+                Formulation::Solid
+            } else {
+                Formulation::PlaneStrain
+            };
             let lin = crate::model::solid::assemble(
                 &mesh,
                 &MAT,
-                Formulation::Solid,
+                form,
                 crate::model::MassKind::Consistent,
             )
             .unwrap();

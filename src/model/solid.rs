@@ -307,13 +307,13 @@ pub(super) type Point<const NN: usize, const D: usize> = ([f64; NN], [[f64; D]; 
 
 /// Quadrature of the triangle: constant gradients; the 3 edge-midpoint rule (degree 2)
 /// integrates the consistent mass exactly.
-fn tri3_points() -> [Point<3, 2>; 3] {
+pub(super) fn tri3_points() -> [Point<3, 2>; 3] {
     let g = [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
     [[0.5, 0.0], [0.5, 0.5], [0.0, 0.5]].map(|[r, s]| ([1.0 - r - s, r, s], g, 1.0 / 6.0))
 }
 
 /// 2×2 Gauss points of the bilinear quadrilateral.
-fn quad4_points() -> [Point<4, 2>; 4] {
+pub(super) fn quad4_points() -> [Point<4, 2>; 4] {
     std::array::from_fn(|p| {
         let (r, s) = (G2[p / 2], G2[p % 2]);
         (

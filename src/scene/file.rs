@@ -525,13 +525,14 @@ impl Scene {
                 .map_err(|e| prefix(&format!("bodies[{i}].material"), e))?;
             let rod = matches!(b.mesh, MeshSpec::Rod { .. });
             if b.material.model != MaterialModel::Linear
-                && (rod || b.formulation != Formulation::Solid)
+                && (rod || matches!(b.formulation, Formulation::PlaneStress { .. }))
             {
                 return Err(Error::invalid(
                     &format!("bodies[{i}].material.model"),
                     b.material.model.name(),
-                    "large-deformation laws take 3-D solid bodies (tet4, hex8 cells); rods \
-                     and plane bodies are linear only (model = \"linear\")",
+                    "large-deformation laws take solid bodies (tet4, hex8) and plane-strain \
+                     bodies (tri3, quad4); rods and plane-stress bodies are linear only \
+                     (model = \"linear\")",
                 ));
             }
             if let Some(r) = b.damping {
@@ -866,7 +867,7 @@ impl Scene {
             };
             let at = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
             let mesh = &meshes[bi];
-            let n = 3 * mesh.points.len();
+            let n = b.dim() * mesh.points.len();
             let dofs: Vec<Option<usize>> = (0..n).map(|i| map[offsets[bi] + i]).collect();
             if let Some(i) = (0..n).find(|&i| prescribed[offsets[bi] + i].is_some()) {
                 return Err(at(Error::invalid(
@@ -875,7 +876,7 @@ impl Scene {
                     &format!(
                         "takes no prescribed velocities yet (node {} is in a [[prescribed]] \
                          set); hold it with `fixed`, or use model = \"linear\"",
-                        i / 3
+                        i / b.dim()
                     ),
                 )));
             }
