@@ -152,6 +152,9 @@ pub struct Delassus {
     metric: Metric,
     /// `G` does not depend on `q`: [`Delassus::refresh`] runs once, at set-up.
     g_constant: bool,
+    /// `W_D` is formed (`with_d`, unless [`Delassus::without_wd`]): a nonlinear structure's
+    /// Newton loop carries the projection's feedback in `F` and never reads it.
+    need_wd: bool,
     /// Set-up or step loop ([`Delassus::start_stepping`]): the set-up may spread its
     /// blocked solves over threads (allocating), the step loop may not.
     phase: Phase,
@@ -181,6 +184,12 @@ pub struct Delassus {
 }
 
 impl Delassus {
+    /// Stops forming `W_D = GᵀÂ⁻¹K N G` (`W` and `W_N` still are): for a caller that
+    /// never reads it (`Op::Wd`, the projection feedback of [`Delassus::add_velocity_correction`]).
+    pub fn without_wd(&mut self) {
+        self.need_wd = false;
+    }
+
     /// Marks the end of the set-up: from now on the blocks are formed by sequential,
     /// allocation-free solves ([`Phase`]).
     pub fn start_stepping(&mut self) {
@@ -253,6 +262,7 @@ impl Delassus {
             with_d,
             metric,
             g_constant,
+            need_wd: with_d,
             phase: Phase::Setup,
             cg: vec![0.0; nm],
             d: vec![0.0; if with_d { nm } else { 0 }],
@@ -345,6 +355,22 @@ impl Delassus {
         if !self.with_d {
             return;
         }
+        if self.need_wd {
+            self.form_dense_wd(stiffness);
+        }
+        for b in 0..m {
+            for a in 0..m {
+                self.wn[a + b * m] = match self.metric {
+                    Metric::Euclidean => self.jac.col_dot_col(a, b),
+                    Metric::Mass => self.w[a + b * m],
+                };
+            }
+        }
+    }
+
+    /// The dense path's `Â⁻¹K N G` and `W_D` (after `Â⁻¹G`).
+    fn form_dense_wd(&mut self, stiffness: &SparseMatrix) {
+        let (n, m) = (self.n, self.m);
         // K N G column by column: K (Â⁻¹G_b) for the mass metric, K G_b (a combination
         // of the few columns of K that G_b touches) for the Euclidean one. Sequential:
         // the products are bound by memory bandwidth, and on two threads the 98k-dof
@@ -378,10 +404,6 @@ impl Delassus {
         for b in 0..m {
             for a in 0..m {
                 self.wd[a + b * m] = self.jac.dot(a, &self.d[b * n..(b + 1) * n]);
-                self.wn[a + b * m] = match self.metric {
-                    Metric::Euclidean => self.jac.col_dot_col(a, b),
-                    Metric::Mass => self.w[a + b * m],
-                };
             }
         }
     }
@@ -469,7 +491,7 @@ impl Delassus {
                 .transpose_mul(&blk[c * n..(c + 1) * n], &mut self.w[s * m..(s + 1) * m]);
         }
         self.column_solves += k;
-        if self.with_d {
+        if self.with_d && self.need_wd {
             let blk2 = &mut self.blk2[..n * k];
             for (c, &b) in self.pending.iter().enumerate() {
                 let out = &mut blk2[c * n..(c + 1) * n];

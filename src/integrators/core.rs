@@ -650,8 +650,11 @@ impl ThetaCore {
         core.contacts
             .evaluate(&core.state.q, &mut core.state.gap, &mut core.del.jac);
         if core.structure.is_none() {
-            // a nonlinear structure condenses with each step's first iteration matrix
             core.del.refresh(&core.sys.stiffness);
+        } else {
+            // a nonlinear structure condenses with each step's first iteration matrix,
+            // and carries the projection's feedback in F: W_D is never read
+            core.del.without_wd();
         }
         core.del.jac.transpose_mul(&core.state.v, &mut core.u_rows);
         core.scatter_local_velocity();
