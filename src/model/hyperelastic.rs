@@ -28,7 +28,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::assembly::AssemblyPlan;
 
-use super::solid::{CellKind, Material, Point, hex8_points, tet4_points};
+use super::solid::{CellKind, Material, Point, hex8_points};
 
 /// A hyperelastic law with its Lamé parameters `λ`, `μ` (Pa).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -355,9 +355,27 @@ fn kernel_into<const NN: usize, const ND: usize>(
     Ok(energy)
 }
 
+/// The one-point rule of the linear tetrahedron: its gradients, hence `F`, `S` and `ℂ`,
+/// are constant over the cell, so the centroid integrates force, tangent and energy
+/// exactly, at a quarter of the cost of the 4-point rule the mass needs.
+const TET4_CENTROID: [super::solid::Point<4, 3>; 1] = [(
+    [0.25; 4],
+    [
+        [-1.0, -1.0, -1.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+    ],
+    1.0 / 6.0,
+)];
+
+/// The one-point rule of the linear triangle (constant gradients, as [`TET4_CENTROID`]).
+const TRI3_CENTROID: [super::solid::Point<3, 2>; 1] =
+    [([1.0 / 3.0; 3], [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]], 0.5)];
+
 /// The tet4 cell at reference coordinates `x` (4 nodes) displaced by `u` (12 values).
 pub fn tet4(law: &Hyperelastic, x: &[[f64; 3]], u: &[f64]) -> Result<HyperElement<12>, Inverted> {
-    let pts = reference_points(x, &tet4_points())?;
+    let pts = reference_points(x, &TET4_CENTROID)?;
     kernel::<4, 12>(law, &pts, u, ALL)
 }
 
@@ -554,7 +572,7 @@ impl HyperBody {
                 kernel_into::<8, 24>(law, &pts, &ue, want, fe, ke)
             }
             CellKind::Tet4 => {
-                let pts = reference_points(&x[..4], &tet4_points())?;
+                let pts = reference_points(&x[..4], &TET4_CENTROID)?;
                 kernel_into::<4, 12>(law, &pts, &ue[..12], want, fe, ke)
             }
             kind => {
@@ -562,7 +580,7 @@ impl HyperBody {
                 let n3 = 3 * nn;
                 let k3s = ke.is_some().then_some(&mut k3[..n3 * n3]);
                 let energy = if kind == CellKind::Tri3 {
-                    let pts = reference_points_2d(&x[..3], &super::solid::tri3_points())?;
+                    let pts = reference_points_2d(&x[..3], &TRI3_CENTROID)?;
                     kernel_into::<3, 9>(law, &pts, &ue[..9], want, &mut f3[..9], k3s)?
                 } else {
                     let pts = reference_points_2d(&x[..4], &super::solid::quad4_points())?;
