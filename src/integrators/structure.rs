@@ -17,13 +17,17 @@
 //! `F(q_θⁿ)`, whose `q` carries the last `τ`: nothing is added for it. For a linear `F`
 //! one iteration from `v⁰ = v_k`, `τ⁰ = 0` gives the linear scheme's free velocity.
 //!
-//! Convergence (eq. 41, sec. 4.3.2): the change of `q` between iterates relative to the
-//! step's increment (as for nonlinear contacts), and the residual
-//! `R = M(v − v_k) − hF_θ − GP` relative to the largest of its terms, both below the
-//! Newton tolerance. Full Newton refactors `M̂ⁿ` at every iterate; modified Newton
-//! ([`super::NewtonParams::modified`]) forms it at the step's first iterate and keeps it
-//! while the iterates contract (each change at most half the previous one), so a
-//! checkpoint needs nothing of it and a resume stays bitwise.
+//! Convergence (eq. 41, 49, sec. 4.3.2): the residual `R = M(v − v_k) − hF_θ − GP`
+//! relative to the largest of its terms (the element forces that cancel at a node
+//! included, which sets the rounding floor) below the Newton tolerance; with a
+//! nonlinear `G` also the change of `q` between iterates relative to the step's increment
+//! (the linearized gaps of eq. 49), as for a linear structure. Full Newton refactors `M̂ⁿ`
+//! at every iterate; modified Newton ([`super::NewtonParams::modified`]) forms it at the
+//! step's first iterate and keeps it while the iterates contract (each change at most
+//! half the previous one), so a checkpoint needs nothing of it and a resume stays
+//! bitwise. A later index-set round of Algorithm 2 restarts from the velocity the last
+//! loop converged to, on the iteration matrix in hand. `W_D` is not formed: nothing
+//! reads it on this path.
 //!
 //! Set-up builds one pattern, the union of `M`, `K`, `C` and the internal forces'
 //! tangents, with the position of every source entry in it; an iterate then only adds
