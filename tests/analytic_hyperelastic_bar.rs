@@ -15,39 +15,26 @@ use signorini::scene::file::Scene;
 /// 0.0177 m and unit thickness (section 0.0177 m²: the plateau E S |v0| / c0 scales with
 /// it).
 fn bar(model: &str, scheme: &str, plane: bool) -> Scene {
-    if plane {
-        let text = format!(
-            r#"
-[time]
-dt = 2e-6
-t_end = 6e-4
-[scheme]
-kind = "{scheme}"
-[[bodies]]
-name = "bar"
-formulation = "plane-strain"
-mesh = {{ generator = "rectangle", cell = "quad4", cells = [100, 1], size = [1.0, 0.0177] }}
-material = {{ young = 210e9, poisson = 0.0, density = 7800.0, model = "{model}" }}
-velocity = [-0.1, 0.0]
-[[obstacles]]
-name = "wall"
-type = "plane"
-point = [0.0, 0.0]
-normal = [1.0, 0.0]
-[[contacts]]
-body = "bar"
-nodes = "x0"
-obstacle = "wall"
-[reference.impacting_bar]
-length = 1.0
-area = 0.0177
-young = 210e9
-density = 7800.0
-velocity = -0.1
-"#
-        );
-        return Scene::from_toml(&text).unwrap();
-    }
+    // (formulation and mesh, velocity, wall point and normal, section)
+    let (body, velocity, point, normal, area) = if plane {
+        (
+            "formulation = \"plane-strain\"\nmesh = { generator = \"rectangle\", cell = \"quad4\", \
+             cells = [100, 1], size = [1.0, 0.0177] }",
+            "[-0.1, 0.0]",
+            "[0.0, 0.0]",
+            "[1.0, 0.0]",
+            "0.0177",
+        )
+    } else {
+        (
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [100, 1, 1], \
+             size = [1.0, 0.017724538509055159, 0.017724538509055159] }",
+            "[-0.1, 0.0, 0.0]",
+            "[0.0, 0.0, 0.0]",
+            "[1.0, 0.0, 0.0]",
+            "3.141592653589793e-4",
+        )
+    };
     let text = format!(
         r#"
 [time]
@@ -57,21 +44,21 @@ t_end = 6e-4
 kind = "{scheme}"
 [[bodies]]
 name = "bar"
-mesh = {{ generator = "box", cell = "hex8", cells = [100, 1, 1], size = [1.0, 0.017724538509055159, 0.017724538509055159] }}
+{body}
 material = {{ young = 210e9, poisson = 0.0, density = 7800.0, model = "{model}" }}
-velocity = [-0.1, 0.0, 0.0]
+velocity = {velocity}
 [[obstacles]]
 name = "wall"
 type = "plane"
-point = [0.0, 0.0, 0.0]
-normal = [1.0, 0.0, 0.0]
+point = {point}
+normal = {normal}
 [[contacts]]
 body = "bar"
 nodes = "x0"
 obstacle = "wall"
 [reference.impacting_bar]
 length = 1.0
-area = 3.141592653589793e-4
+area = {area}
 young = 210e9
 density = 7800.0
 velocity = -0.1

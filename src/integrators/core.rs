@@ -342,8 +342,22 @@ const STALL: usize = 5;
 /// position solve ([`ThetaCore::coupled_correction`]).
 const COUPLED_AFTER: usize = 2;
 
-/// Checks the scheme parameters, `h` and the initial state, then forms and factors
-/// `M + a·K + b·C` (the step matrix of a scheme), naming it `what` in errors.
+/// Checks the scheme parameters, `h` and the initial state (`n` values each).
+pub(crate) fn check_step_inputs(
+    params: &SchemeParams,
+    n: usize,
+    q0: &[f64],
+    v0: &[f64],
+    h: f64,
+) -> Result<(), Error> {
+    params.validate()?;
+    crate::error::require_positive("dt", h)?;
+    check_vector("initial displacement", q0, n)?;
+    check_vector("initial velocity", v0, n)
+}
+
+/// Checks the inputs ([`check_step_inputs`]), then forms and factors `M + a·K + b·C`
+/// (the step matrix of a scheme), naming it `what` in errors.
 pub(crate) fn factor_step_matrix(
     params: &SchemeParams,
     sys: &LinearSystem,
@@ -353,11 +367,7 @@ pub(crate) fn factor_step_matrix(
     (a, b): (f64, f64),
     what: &str,
 ) -> Result<Box<dyn LinearSolver>, Error> {
-    params.validate()?;
-    crate::error::require_positive("dt", h)?;
-    let n = sys.ndof();
-    check_vector("initial displacement", q0, n)?;
-    check_vector("initial velocity", v0, n)?;
+    check_step_inputs(params, sys.ndof(), q0, v0, h)?;
     let mut terms = vec![(1.0, &sys.mass), (a, &sys.stiffness)];
     if let Some(c) = &sys.damping {
         terms.push((b, c));
@@ -520,10 +530,7 @@ impl ThetaCore {
                 "iteration matrix M + hθC + h²θ²K",
             )?,
             Some(st) => {
-                params.validate()?;
-                crate::error::require_positive("dt", h)?;
-                check_vector("initial displacement", q0, sys.ndof())?;
-                check_vector("initial velocity", v0, sys.ndof())?;
+                check_step_inputs(params, sys.ndof(), q0, v0, h)?;
                 // the pattern's symbolic analysis; the values come with the first step
                 st.factor()?
             }

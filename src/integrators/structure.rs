@@ -33,19 +33,15 @@
 //! tangents, with the position of every source entry in it; an iterate then only adds
 //! values into buffers sized at set-up (no allocation in the step).
 
-use std::sync::Arc;
-
 use faer::sparse::SymbolicSparseColMat;
 
 use crate::error::Error;
 use crate::linalg::{LinearSolver, SolverKind, SparseMatrix};
 use crate::model::LinearSystem;
-use crate::model::system::InternalForce;
 
 /// Set-up data and buffers of the structural Newton iteration (module doc).
 #[derive(Debug)]
 pub(crate) struct Structure {
-    forces: Vec<Arc<dyn InternalForce>>,
     /// `M`, `K`, `C` on the union pattern.
     mass: Vec<f64>,
     stiffness: Vec<f64>,
@@ -151,7 +147,6 @@ impl Structure {
         let tan = entries.iter().map(|e| vec![0.0; e.len()]).collect();
         let sym = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         Structure {
-            forces: sys.nonlinear.clone(),
             tangent: SparseMatrix::new(sym.clone(), stiffness.clone()),
             step_matrix: SparseMatrix::new(sym, mass.clone()),
             mass,
@@ -172,7 +167,8 @@ impl Structure {
         }
     }
 
-    /// Evaluates the iterate `(q, v)` of the step from `(q_k, v_k)`: `rhs = −M(v − v_k)
+    /// Evaluates the iterate `(q, v)` of the step from `(q_k, v_k)` (`sys` the system the
+    /// structure was built on): `rhs = −M(v − v_k)
     /// + ext − hCv_θ − h(Kq_θ + r(q_θ))` and the scale of its terms; with `tangent`,
     /// `Kⁿ` and `M̂ⁿ = M + h²θ²Kⁿ + hθC` too (not factored).
     pub fn evaluate(
@@ -201,7 +197,7 @@ impl Structure {
                 self.size[i] += t.abs();
             }
         }
-        for (f, t) in self.forces.iter().zip(self.tan.iter_mut()) {
+        for (f, t) in sys.nonlinear.iter().zip(self.tan.iter_mut()) {
             f.evaluate(
                 &self.q_theta,
                 &mut self.internal,

@@ -199,18 +199,19 @@ pub struct HyperElement<const ND: usize> {
 /// Reference gradients of the shape functions at one point: `(∇_X N_a, dV₀)`.
 type RefPoint<const NN: usize> = ([Vector3<f64>; NN], f64);
 
-fn reference_points<const NN: usize, const P: usize>(
+/// Reference gradients `∇_X N_a` and weights `det J · w` at the points of a `D`-D rule
+/// (`D` = 3, or 2 for a plane cell: gradients `(∂N/∂X, ∂N/∂Y, 0)`, unit thickness, the
+/// Jacobian completed by 1 in z as in [`super::solid::centre_gradient`]).
+fn reference_points<const NN: usize, const D: usize, const P: usize>(
     x: &[[f64; 3]],
-    pts: &[Point<NN, 3>; P],
+    pts: &[Point<NN, D>; P],
 ) -> Result<[RefPoint<NN>; P], Inverted> {
     let mut out = [([Vector3::zeros(); NN], 0.0); P];
     for ((_, g, w), o) in pts.iter().zip(out.iter_mut()) {
-        let mut jac = Matrix3::<f64>::zeros();
-        for a in 0..NN {
-            for i in 0..3 {
-                for j in 0..3 {
-                    jac[(i, j)] += x[a][i] * g[a][j];
-                }
+        let mut jac = Matrix3::<f64>::identity();
+        for i in 0..D {
+            for j in 0..D {
+                jac[(i, j)] = (0..NN).map(|a| x[a][i] * g[a][j]).sum();
             }
         }
         let det = jac.determinant();
@@ -219,7 +220,11 @@ fn reference_points<const NN: usize, const P: usize>(
         }
         let jinv_t = jac.try_inverse().ok_or(Inverted { det })?.transpose();
         for a in 0..NN {
-            o.0[a] = jinv_t * Vector3::new(g[a][0], g[a][1], g[a][2]);
+            let mut ga = Vector3::zeros();
+            for j in 0..D {
+                ga[j] = g[a][j];
+            }
+            o.0[a] = jinv_t * ga;
         }
         o.1 = det * w;
     }
@@ -580,10 +585,10 @@ impl HyperBody {
                 let n3 = 3 * nn;
                 let k3s = ke.is_some().then_some(&mut k3[..n3 * n3]);
                 let energy = if kind == CellKind::Tri3 {
-                    let pts = reference_points_2d(&x[..3], &TRI3_CENTROID)?;
+                    let pts = reference_points(&x[..3], &TRI3_CENTROID)?;
                     kernel_into::<3, 9>(law, &pts, &ue[..9], want, &mut f3[..9], k3s)?
                 } else {
-                    let pts = reference_points_2d(&x[..4], &super::solid::quad4_points())?;
+                    let pts = reference_points(&x[..4], &super::solid::quad4_points())?;
                     kernel_into::<4, 12>(law, &pts, &ue[..12], want, &mut f3[..12], k3s)?
                 };
                 let n2 = 2 * nn;
@@ -639,36 +644,6 @@ impl HyperBody {
         }
         Ok(total)
     }
-}
-
-/// [`reference_points`] of a plane cell: gradients `(∂N/∂X, ∂N/∂Y, 0)` and the area
-/// weight (unit thickness).
-fn reference_points_2d<const NN: usize, const P: usize>(
-    x: &[[f64; 3]],
-    pts: &[super::solid::Point<NN, 2>; P],
-) -> Result<[RefPoint<NN>; P], Inverted> {
-    let mut out = [([Vector3::zeros(); NN], 0.0); P];
-    for ((_, g, w), o) in pts.iter().zip(out.iter_mut()) {
-        let mut jac = nalgebra::Matrix2::<f64>::zeros();
-        for a in 0..NN {
-            for i in 0..2 {
-                for j in 0..2 {
-                    jac[(i, j)] += x[a][i] * g[a][j];
-                }
-            }
-        }
-        let det = jac.determinant();
-        if det.is_nan() || det <= 0.0 {
-            return Err(Inverted { det });
-        }
-        let jinv_t = jac.try_inverse().ok_or(Inverted { det })?.transpose();
-        for a in 0..NN {
-            let gx = jinv_t * nalgebra::Vector2::new(g[a][0], g[a][1]);
-            o.0[a] = Vector3::new(gx[0], gx[1], 0.0);
-        }
-        o.1 = det * w;
-    }
-    Ok(out)
 }
 
 #[cfg(test)]
