@@ -70,7 +70,7 @@ enum Command {
     /// Validate a scene file and print what the model includes and which paths the run takes.
     Check(SceneArgs),
     /// Run one of the paper's academic examples built in (bouncing-ball, oscillator,
-    /// rocking-block), as its scene file in meshes/ would.
+    /// rocking-block, slider-crank), as its scene file in meshes/ would.
     Example {
         /// The example.
         name: String,

@@ -20,6 +20,7 @@ pub mod block;
 pub mod frame;
 pub mod linear;
 pub mod plane;
+pub mod slider;
 pub mod sphere;
 
 /// The law of one contact: Newton's impact law and Coulomb's friction.

@@ -516,6 +516,25 @@ impl ThetaCore {
         h: f64,
         with_projection: bool,
     ) -> Result<Self, Error> {
+        // A nonsymmetric M̂ⁿ (gyroscopic terms) makes W nonsymmetric: `N = M̂⁻¹` is then
+        // no metric (eq. 59 needs N positive definite) and block pivoting's Cholesky
+        // does not apply, so the projection takes eq. 58's Euclidean metric and the
+        // LCPs Lemke's method (which needs no symmetry).
+        let nonsymmetric = sys.linearity() != Linearity::Linear && !sys.symmetric();
+        let adjusted;
+        let params = if nonsymmetric {
+            adjusted = SchemeParams {
+                metric: crate::delassus::Metric::Euclidean,
+                lcp: match params.lcp {
+                    p @ crate::solvers::LcpKind::Pgs { .. } => p,
+                    _ => crate::solvers::LcpKind::Lemke,
+                },
+                ..*params
+            };
+            &adjusted
+        } else {
+            params
+        };
         let theta = params.theta;
         let structure = (sys.linearity() != Linearity::Linear)
             .then(|| Box::new(Structure::new(&sys, params.newton.modified)));
@@ -679,7 +698,7 @@ impl ThetaCore {
             ),
             Some(st) => format!(
                 "nonlinear structure ({}): {} Newton on eq. 41–48, M̂ⁿ = M + hθC + h²θ²Kⁿ \
-                 refactored {} ({}, n = {})",
+                 refactored {} ({}, n = {}){}",
                 self.sys
                     .nonlinear
                     .iter()
@@ -693,7 +712,12 @@ impl ThetaCore {
                     "at every iterate"
                 },
                 self.del.factor.backend_name(),
-                self.n
+                self.n,
+                if st.symmetric {
+                    ""
+                } else {
+                    "; M̂ⁿ nonsymmetric: projection metric Euclidean, LCPs by Lemke"
+                }
             ),
         };
         format!(

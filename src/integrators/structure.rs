@@ -1,6 +1,7 @@
 //! The structural side of the θ-method Newton loop for a nonlinear structure
-//! ([`crate::model::system::Linearity::ConstantMass`]): eq. 41–48 with `M` and `C`
-//! constant and `F(t, q, v) = f(t) − Cv − Kq − r(q)`.
+//! ([`crate::model::system::Linearity::ConstantMass`] and
+//! [`crate::model::system::Linearity::Nonlinear`]): eq. 41–48 with
+//! `M(q) = M + ΔM(q)` and `F(t, q, v) = f(t) − Cv − Kq − r(q, v)`.
 //!
 //! The Newton unknown is the velocity `v` of the end of the step; positions follow from
 //! eq. 18b with the projection of the last iterate, `q(v) = q_k + h(θv + (1−θ)v_k) + NGτ`,
@@ -8,8 +9,9 @@
 //! (eq. 41). At an iterate `vⁿ` the linearization of eq. 45 without contact gives the
 //! free velocity of the iteration,
 //!
-//! `M̂ⁿ (v_freeⁿ − vⁿ) = −M(vⁿ − v_k) + hF(t_{k+θ}, q_θⁿ, v_θⁿ)`,  `M̂ⁿ = M + hθC + h²θ²Kⁿ`
-//! (eq. 47, `Kⁿ = K + ∂r/∂q` at `q_θⁿ`),
+//! `M̂ⁿ (v_freeⁿ − vⁿ) = −M(q_θⁿ)(vⁿ − v_k) + hF(t_{k+θ}, q_θⁿ, v_θⁿ)`,
+//! `M̂ⁿ = M(q_θⁿ) + hθCⁿ + h²θ²Kⁿ` (eq. 47, `Kⁿ = K + ∂r/∂q`, `Cⁿ = C + ∂r/∂v` at the
+//! θ-point; the derivative of `M(q)` is left out, the paper's semi-Newton of sec. 4.3),
 //!
 //! and the contact problem of the iteration (eq. 56–58) is solved on
 //! `v = v_freeⁿ + M̂ⁿ⁻¹ G P` exactly as in the linear case, with `W = GᵀM̂ⁿ⁻¹G`. The
@@ -29,15 +31,56 @@
 //! loop converged to, on the iteration matrix in hand. `W_D` is not formed: nothing
 //! reads it on this path.
 //!
-//! Set-up builds one pattern, the union of `M`, `K`, `C` and the internal forces'
-//! tangents, with the position of every source entry in it; an iterate then only adds
-//! values into buffers sized at set-up (no allocation in the step).
+//! Set-up builds one pattern, the union of `M`, `K`, `C` and the parts' tangents and
+//! masses, with the position of every source entry in it; an iterate then only adds
+//! values into buffers sized at set-up (no allocation in the step). A symmetric `M̂ⁿ`
+//! is factored by sparse `L D Lᵀ`; a nonsymmetric one (gyroscopic terms) by LU, dense
+//! below [`DENSE_MAX`] dofs (rigid multibody models), sparse above.
 
 use faer::sparse::SymbolicSparseColMat;
 
 use crate::error::Error;
 use crate::linalg::{LinearSolver, SolverKind, SparseMatrix};
 use crate::model::LinearSystem;
+
+/// Largest structure factored by the dense LU when `M̂ⁿ` is nonsymmetric (module doc).
+pub const DENSE_MAX: usize = 64;
+
+/// Where each part's entries sit in the union pattern, and their values.
+#[derive(Debug, Default)]
+struct Entries {
+    pos: Vec<Vec<usize>>,
+    val: Vec<Vec<f64>>,
+}
+
+impl Entries {
+    fn new(entries: &[Vec<(usize, usize)>], col_ptr: &[usize], row_idx: &[usize]) -> Self {
+        Entries {
+            pos: entries
+                .iter()
+                .map(|e| {
+                    e.iter()
+                        .map(|&(i, j)| position(col_ptr, row_idx, i, j))
+                        .collect()
+                })
+                .collect(),
+            val: entries.iter().map(|e| vec![0.0; e.len()]).collect(),
+        }
+    }
+
+    /// `out += Σ values` at their positions.
+    fn add_to(&self, out: &mut [f64]) {
+        for (p, v) in self.pos.iter().zip(&self.val) {
+            for (&k, &x) in p.iter().zip(v) {
+                out[k] += x;
+            }
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.pos.iter().all(|p| p.is_empty())
+    }
+}
 
 /// Set-up data and buffers of the structural Newton iteration (module doc).
 #[derive(Debug)]
@@ -46,10 +89,19 @@ pub(crate) struct Structure {
     mass: Vec<f64>,
     stiffness: Vec<f64>,
     damping: Vec<f64>,
-    /// Position in the union pattern of each internal force's tangent entries.
-    pos: Vec<Vec<usize>>,
-    /// Each internal force's tangent values.
-    tan: Vec<Vec<f64>>,
+    /// Each part's `∂r/∂q`, `∂r/∂v` and `ΔM(q)` entries.
+    tan: Entries,
+    damp: Entries,
+    dmass: Entries,
+    /// Some part has `∂r/∂v` / `ΔM(q)` entries.
+    has_damping: bool,
+    has_mass: bool,
+    /// `M̂ⁿ` is symmetric (module doc).
+    pub symmetric: bool,
+    /// `M(q_θ)` on the union pattern (with a mass part).
+    mass_now: Vec<f64>,
+    /// `M(q_θ)(v − v_k)` (with a mass part).
+    mdv: Vec<f64>,
     /// `Kⁿ` on the union pattern (the `K` of `W_D`).
     pub tangent: SparseMatrix,
     /// `M̂ⁿ` on the union pattern.
@@ -106,7 +158,11 @@ impl Structure {
         }
         let entries: Vec<Vec<(usize, usize)>> =
             sys.nonlinear.iter().map(|f| f.tangent_entries()).collect();
-        for e in &entries {
+        let damping_entries: Vec<Vec<(usize, usize)>> =
+            sys.nonlinear.iter().map(|f| f.damping_entries()).collect();
+        let mass_entries: Vec<Vec<(usize, usize)>> =
+            sys.nonlinear.iter().map(|f| f.mass_entries()).collect();
+        for e in entries.iter().chain(&damping_entries).chain(&mass_entries) {
             for &(i, j) in e {
                 cols[j].push(i);
             }
@@ -136,24 +192,25 @@ impl Structure {
         let mass = on_pattern(Some(&sys.mass));
         let stiffness = on_pattern(Some(&sys.stiffness));
         let damping = on_pattern(sys.damping.as_ref());
-        let pos: Vec<Vec<usize>> = entries
-            .iter()
-            .map(|e| {
-                e.iter()
-                    .map(|&(i, j)| position(&col_ptr, &row_idx, i, j))
-                    .collect()
-            })
-            .collect();
-        let tan = entries.iter().map(|e| vec![0.0; e.len()]).collect();
+        let tan = Entries::new(&entries, &col_ptr, &row_idx);
+        let damp = Entries::new(&damping_entries, &col_ptr, &row_idx);
+        let dmass = Entries::new(&mass_entries, &col_ptr, &row_idx);
+        let (has_damping, has_mass) = (!damp.is_empty(), !dmass.is_empty());
         let sym = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         Structure {
             tangent: SparseMatrix::new(sym.clone(), stiffness.clone()),
             step_matrix: SparseMatrix::new(sym, mass.clone()),
+            mass_now: if has_mass { mass.clone() } else { Vec::new() },
+            mdv: vec![0.0; if has_mass { n } else { 0 }],
             mass,
             stiffness,
             damping,
-            pos,
             tan,
+            damp,
+            dmass,
+            has_damping,
+            has_mass,
+            symmetric: sys.symmetric(),
             modified,
             internal: vec![0.0; n],
             size: vec![0.0; n],
@@ -197,12 +254,36 @@ impl Structure {
                 self.size[i] += t.abs();
             }
         }
-        for (f, t) in sys.nonlinear.iter().zip(self.tan.iter_mut()) {
+        for ((f, t), d) in sys
+            .nonlinear
+            .iter()
+            .zip(self.tan.val.iter_mut())
+            .zip(self.damp.val.iter_mut())
+        {
             f.evaluate(
                 &self.q_theta,
+                &self.v_theta,
                 &mut self.internal,
                 tangent.then_some(&mut t[..]),
+                tangent.then_some(&mut d[..]),
             )?;
+        }
+        if self.has_mass {
+            // M(q_θ) (v − v_k), column by column on the union pattern
+            for (f, m) in sys.nonlinear.iter().zip(self.dmass.val.iter_mut()) {
+                f.mass(&self.q_theta, m);
+            }
+            self.mass_now.copy_from_slice(&self.mass);
+            self.dmass.add_to(&mut self.mass_now);
+            let p = self.step_matrix.as_ref();
+            let (cp, ri) = (p.col_ptr(), p.row_idx());
+            self.mdv.fill(0.0);
+            for j in 0..q.len() {
+                let dj = self.dv[j];
+                for k in cp[j]..cp[j + 1] {
+                    self.mdv[ri[k]] += self.mass_now[k] * dj;
+                }
+            }
         }
         // M and C are symmetric: their columns are their rows, each row a gather
         let row = |a: faer::sparse::SparseColMatRef<'_, usize, f64>, i: usize, x: &[f64]| {
@@ -216,7 +297,11 @@ impl Structure {
         let (m, c) = (sys.mass.as_ref(), sys.damping.as_ref().map(|c| c.as_ref()));
         let mut scale = 0.0_f64;
         for i in 0..q.len() {
-            let md = row(m, i, &self.dv);
+            let md = if self.has_mass {
+                self.mdv[i]
+            } else {
+                row(m, i, &self.dv)
+            };
             let cv = h * c.map_or(0.0, |c| row(c, i, &self.v_theta));
             let int = h * self.internal[i];
             scale = scale
@@ -231,34 +316,52 @@ impl Structure {
         if tangent {
             let t = self.tangent.val_mut();
             t.copy_from_slice(&self.stiffness);
-            for (p, v) in self.pos.iter().zip(&self.tan) {
-                for (&k, &x) in p.iter().zip(v) {
-                    t[k] += x;
-                }
-            }
+            self.tan.add_to(t);
             let (a, b) = (h * h * th * th, h * th);
             let t = self.tangent.val();
+            let mass = if self.has_mass {
+                &self.mass_now
+            } else {
+                &self.mass
+            };
             for (((s, &mm), &kk), &cc) in self
                 .step_matrix
                 .val_mut()
                 .iter_mut()
-                .zip(&self.mass)
+                .zip(mass)
                 .zip(t)
                 .zip(&self.damping)
             {
                 *s = mm + a * kk + b * cc;
+            }
+            if self.has_damping {
+                // hθ ∂r/∂v
+                let s = self.step_matrix.val_mut();
+                for (p, v) in self.damp.pos.iter().zip(&self.damp.val) {
+                    for (&k, &x) in p.iter().zip(v) {
+                        s[k] += b * x;
+                    }
+                }
             }
         }
         Ok(())
     }
 
     /// Factors `M̂` at set-up (symmetric: sparse `L D Lᵀ`, which also takes the
-    /// indefinite tangents of a body near buckling as long as no pivot vanishes).
+    /// indefinite tangents of a body near buckling as long as no pivot vanishes;
+    /// nonsymmetric: LU, dense up to [`DENSE_MAX`] dofs).
     pub fn factor(&self) -> Result<Box<dyn LinearSolver>, Error> {
+        let kind = if self.symmetric {
+            SolverKind::Ldlt
+        } else if self.step_matrix.nrows() <= DENSE_MAX {
+            SolverKind::Dense
+        } else {
+            SolverKind::Lu
+        };
         crate::linalg::solver::factor(
             self.step_matrix.as_ref(),
-            "iteration matrix M + hθC + h²θ²Kⁿ",
-            SolverKind::Ldlt,
+            "iteration matrix M(q) + hθCⁿ + h²θ²Kⁿ",
+            kind,
             None,
         )
     }

@@ -95,7 +95,7 @@ impl EnergyAudit {
         let mut scratch = vec![0.0; 2 * np];
         let (k, u) = sys.prescribed_energy(t, q, v, &mut scratch);
         let extra0 = k + u;
-        let e0 = sys.kinetic_energy(v) + sys.potential_energy(q) + extra0;
+        let e0 = sys.kinetic_energy(q, v) + sys.potential_energy(q) + extra0;
         EnergyAudit {
             e0,
             extra0,
@@ -178,7 +178,7 @@ impl EnergyAudit {
     /// (J), the kinetic and the potential energy. Allocates nothing.
     pub fn excess(&mut self, sys: &LinearSystem, t: f64, q: &[f64], v: &[f64]) -> Excess {
         let (k, u) = sys.prescribed_energy(t, q, v, &mut self.scratch);
-        let (kinetic, potential) = (sys.kinetic_energy(v) + k, sys.potential_energy(q) + u);
+        let (kinetic, potential) = (sys.kinetic_energy(q, v) + k, sys.potential_energy(q) + u);
         let e = kinetic + potential;
         self.extra = k + u;
         self.e_max = self.e_max.max(e.abs()).max(kinetic);

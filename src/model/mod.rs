@@ -14,6 +14,7 @@ pub mod energy;
 pub mod generate;
 pub mod geometry;
 pub mod hyperelastic;
+pub mod multibody;
 pub mod ordering;
 pub mod point_mass;
 pub mod rod;
@@ -88,7 +89,7 @@ pub struct LinearSystem {
     /// `−r(q)` ([`system`]); empty for a linear system. Attached to the final
     /// (restricted) system: [`LinearSystem::block_diagonal`] and
     /// [`LinearSystem::restrict`] take systems without them.
-    pub nonlinear: Vec<std::sync::Arc<dyn system::InternalForce>>,
+    pub nonlinear: Vec<std::sync::Arc<dyn system::NonlinearPart>>,
 }
 
 /// Dofs moved with a prescribed velocity `v_p(t) = w_p φ_p(t)` (displacement
@@ -612,7 +613,7 @@ impl LinearSystem {
     /// least twice [`LinearSystem::prescribed_dofs`] values.
     pub fn energies(&self, t: f64, q: &[f64], v: &[f64], scratch: &mut [f64]) -> (f64, f64) {
         let (k, u) = self.prescribed_energy(t, q, v, scratch);
-        (self.kinetic_energy(v) + k, self.potential_energy(q) + u)
+        (self.kinetic_energy(q, v) + k, self.potential_energy(q) + u)
     }
 
     /// What the prescribed dofs add to the kept dofs' kinetic and potential energy at
@@ -646,14 +647,24 @@ impl LinearSystem {
         self.prescribed.as_ref().map_or(0, |p| p.velocity.len())
     }
 
-    /// Kinetic energy of the kept dofs `½ vᵀ M v` (J).
-    pub fn kinetic_energy(&self, v: &[f64]) -> f64 {
-        0.5 * quadratic_form(self.mass.as_ref(), v)
+    /// Kinetic energy of the kept dofs `½ vᵀ M(q) v` (J; `q` matters only with a mass
+    /// part, [`system::NonlinearPart::mass_entries`]).
+    pub fn kinetic_energy(&self, q: &[f64], v: &[f64]) -> f64 {
+        let constant = 0.5 * quadratic_form(self.mass.as_ref(), v);
+        if self.nonlinear.is_empty() {
+            return constant;
+        }
+        constant
+            + self
+                .nonlinear
+                .iter()
+                .map(|p| p.kinetic_energy(q, v))
+                .sum::<f64>()
     }
 
     /// Potential energy of the kept dofs `½ qᵀ K q − fᵀ q` (J): elastic energy plus the
     /// potential of the constant external force, plus the energies of the nonlinear
-    /// internal forces ([`system::InternalForce::energy`]; NaN where a cell is inverted).
+    /// internal forces ([`system::NonlinearPart::energy`]; NaN where a cell is inverted).
     pub fn potential_energy(&self, q: &[f64]) -> f64 {
         let linear = 0.5 * quadratic_form(self.stiffness.as_ref(), q)
             - self.force.iter().zip(q).map(|(f, x)| f * x).sum::<f64>();

@@ -1,21 +1,29 @@
 //! What the θ-method needs of a structure beyond its constant matrices: whether it is
-//! linear, and the nonlinear internal forces of its large-deformation bodies with their
-//! tangents (issue 17 §1–2).
+//! linear, and its nonlinear parts with their tangents (issue 17 §1–3).
 //!
-//! A structure is `M v̇ = F(t, q, v) + G λ` (eq. 1) with, here,
-//! `F(t, q, v) = f(t) − C v − K q − r(q)`: the constant mass, damping, stiffness and loads
-//! of [`LinearSystem`], plus the sum `r(q)` of [`InternalForce`]s. A hyperelastic body
-//! contributes `r(q) = f_int(u) − K₀ u` ([`HyperelasticPart`]): its total-Lagrangian
-//! internal force minus its small-strain stiffness `K₀` (which stays in `K`, so Rayleigh
-//! damping `βK` and every linear formula keep their meaning), with tangent
-//! `∂r/∂q = K_t(u) − K₀`. The tangent stiffness of eq. 43 is then `Kⁿ = K + ∂r/∂q`.
+//! A structure is `M(q) v̇ = F(t, q, v) + G λ` (eq. 1) with, here,
+//! `M(q) = M + ΔM(q)` and `F(t, q, v) = f(t) − C v − K q − r(q, v)`: the constant mass,
+//! damping, stiffness and loads of [`LinearSystem`], plus the sum of its
+//! [`NonlinearPart`]s, each giving a force `r(q, v)` with its tangents `∂r/∂q`, `∂r/∂v`
+//! and possibly a mass `ΔM(q)`. Two kinds exist:
 //!
-//! Without internal forces the structure is [`Linearity::Linear`]: `M̂` is constant and
-//! factored once, and the schemes take their linear path, operation for operation as
-//! before (`tests/golden/`). With them it is [`Linearity::ConstantMass`]: the Newton loop
-//! of eq. 42–51 re-evaluates `F` and `Kⁿ` at every iterate
-//! ([`crate::integrators::structure`]). A configuration-dependent mass `M(q)` (rigid
-//! multibody in minimal coordinates) is not covered yet.
+//! - a hyperelastic body ([`HyperelasticPart`]): `r(q) = f_int(u) − K₀ u`, its
+//!   total-Lagrangian internal force minus its small-strain stiffness `K₀` (which stays
+//!   in `K`, so Rayleigh damping `βK` and every linear formula keep their meaning), with
+//!   tangent `∂r/∂q = K_t(u) − K₀`;
+//! - a rigid multibody model in minimal coordinates
+//!   ([`crate::model::multibody::SliderCrank`]): `ΔM(q)` from the kinematics, gyroscopic
+//!   forces quadratic in `v` and gravity, with nonsymmetric tangents.
+//!
+//! The tangents of eq. 43 are then `Kⁿ = K + ∂r/∂q` and `Cⁿ = C + ∂r/∂v`; following the
+//! paper's semi-Newton (sec. 4.3), the derivative of `M(q)` is not in the iteration matrix
+//! (`M(q_θ)` is updated at each iterate as a fixed point).
+//!
+//! Without parts the structure is [`Linearity::Linear`]: `M̂` is constant and factored
+//! once, and the schemes take their linear path, operation for operation as before
+//! (`tests/golden/`). With forces only it is [`Linearity::ConstantMass`]; with a mass
+//! part [`Linearity::Nonlinear`]: the Newton loop of eq. 42–51 re-evaluates `M`, `F`,
+//! `Kⁿ`, `Cⁿ` at every iterate ([`crate::integrators::structure`]).
 
 use std::sync::{Arc, Mutex};
 
@@ -28,9 +36,11 @@ use crate::error::Error;
 pub enum Linearity {
     /// `F = f(t) − Cv − Kq` with constant `M`, `C`, `K`: `M̂` factored once.
     Linear,
-    /// Constant `M` and `C`, internal forces nonlinear in `q`: the Newton loop refactors
-    /// `M̂ⁿ = M + hθC + h²θ²Kⁿ`.
+    /// Constant `M`, forces nonlinear in `q` (and `v`): the Newton loop refactors
+    /// `M̂ⁿ = M + hθCⁿ + h²θ²Kⁿ`.
     ConstantMass,
+    /// Configuration-dependent mass `M(q)` too: `M̂ⁿ = M(q_θⁿ) + hθCⁿ + h²θ²Kⁿ`.
+    Nonlinear,
 }
 
 impl Linearity {
@@ -39,27 +49,50 @@ impl Linearity {
         match self {
             Linearity::Linear => "linear",
             Linearity::ConstantMass => "nonlinear (constant mass)",
+            Linearity::Nonlinear => "nonlinear (configuration-dependent mass)",
         }
     }
 }
 
-/// A nonlinear internal force `r(q)` of a structure (module doc), evaluated into
-/// caller-owned buffers.
-pub trait InternalForce: Send + Sync + std::fmt::Debug {
-    /// The entries `(row, column)` of its tangent `∂r/∂q` in the structure's dofs, in the
-    /// order [`InternalForce::evaluate`] fills them (set-up only: allocates).
+/// A nonlinear part of a structure (module doc): a force `r(q, v)` with its tangents and,
+/// for multibody models, a mass `ΔM(q)`, evaluated into caller-owned buffers.
+pub trait NonlinearPart: Send + Sync + std::fmt::Debug {
+    /// The entries `(row, column)` of `∂r/∂q` in the structure's dofs, in the order
+    /// [`NonlinearPart::evaluate`] fills them (set-up only: allocates).
     fn tangent_entries(&self) -> Vec<(usize, usize)>;
-    /// Adds `r(q)` to `force` (one entry per structure dof) and, when given, overwrites
-    /// `tangent` (one value per [`InternalForce::tangent_entries`] entry) with `∂r/∂q`.
+    /// The entries of `∂r/∂v` (none for a force independent of `v`).
+    fn damping_entries(&self) -> Vec<(usize, usize)> {
+        Vec::new()
+    }
+    /// The entries of `ΔM(q)`, symmetric (none for a constant mass).
+    fn mass_entries(&self) -> Vec<(usize, usize)> {
+        Vec::new()
+    }
+    /// True when `∂r/∂q` and `∂r/∂v` are symmetric (then so is `M̂ⁿ`).
+    fn symmetric(&self) -> bool {
+        true
+    }
+    /// Adds `r(q, v)` to `force` (one entry per structure dof) and, when given, overwrites
+    /// `tangent` with `∂r/∂q` and `damping` with `∂r/∂v` (one value per entry of
+    /// [`NonlinearPart::tangent_entries`], [`NonlinearPart::damping_entries`]).
     /// Reserves nothing. An inverted element is an error naming the body and the cell.
     fn evaluate(
         &self,
         q: &[f64],
+        v: &[f64],
         force: &mut [f64],
         tangent: Option<&mut [f64]>,
+        damping: Option<&mut [f64]>,
     ) -> Result<(), Error>;
-    /// The energy whose gradient is `r` (J): the body's strain energy minus `½uᵀK₀u`, so
-    /// that with the linear system's `½qᵀKq` it sums to the strain energy.
+    /// Overwrites `values` (one per [`NonlinearPart::mass_entries`] entry) with `ΔM(q)`.
+    fn mass(&self, _q: &[f64], _values: &mut [f64]) {}
+    /// `½ vᵀ ΔM(q) v` (J).
+    fn kinetic_energy(&self, _q: &[f64], _v: &[f64]) -> f64 {
+        0.0
+    }
+    /// The energy whose gradient is the conservative part of `r` (J): for a body, its
+    /// strain energy minus `½uᵀK₀u`, so that with the linear system's `½qᵀKq` it sums to
+    /// the strain energy; for a multibody model, the potential of gravity.
     fn energy(&self, q: &[f64]) -> Result<f64, Error>;
     /// One phrase for `check` and summaries.
     fn describe(&self) -> String;
@@ -165,7 +198,7 @@ fn inverted(name: &str, tags: &[u64], c: super::hyperelastic::InvertedCell) -> E
     ))
 }
 
-impl InternalForce for HyperelasticPart {
+impl NonlinearPart for HyperelasticPart {
     fn tangent_entries(&self) -> Vec<(usize, usize)> {
         self.kept
             .iter()
@@ -181,8 +214,10 @@ impl InternalForce for HyperelasticPart {
     fn evaluate(
         &self,
         q: &[f64],
+        _v: &[f64],
         force: &mut [f64],
         tangent: Option<&mut [f64]>,
+        _damping: Option<&mut [f64]>,
     ) -> Result<(), Error> {
         let mut guard = self.scratch.lock().unwrap_or_else(|p| p.into_inner());
         let s = &mut *guard;
@@ -230,17 +265,24 @@ impl InternalForce for HyperelasticPart {
 }
 
 impl LinearSystem {
-    /// Linear, or nonlinear with a constant mass (module doc).
+    /// Linear, nonlinear with a constant mass, or with `M(q)` (module doc).
     pub fn linearity(&self) -> Linearity {
         if self.nonlinear.is_empty() {
             Linearity::Linear
-        } else {
+        } else if self.nonlinear.iter().all(|p| p.mass_entries().is_empty()) {
             Linearity::ConstantMass
+        } else {
+            Linearity::Nonlinear
         }
     }
 
-    /// Adds a nonlinear internal force (module doc).
-    pub fn add_internal_force(&mut self, f: Arc<dyn InternalForce>) {
+    /// True when the iteration matrix `M̂ⁿ` is symmetric (every part's tangents are).
+    pub fn symmetric(&self) -> bool {
+        self.nonlinear.iter().all(|p| p.symmetric())
+    }
+
+    /// Adds a nonlinear part (module doc).
+    pub fn add_nonlinear_part(&mut self, f: Arc<dyn NonlinearPart>) {
         self.nonlinear.push(f);
     }
 }

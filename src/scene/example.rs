@@ -1,14 +1,16 @@
 //! The paper's academic examples as scenes (`[example]` in a scene file): the bouncing
-//! ball (eq. 7), the impacting linear oscillator (eq. 8) and the rocking block
-//! (eq. 9–10). Every parameter defaults to the value the paper (or Ballard's example)
+//! ball (eq. 7), the impacting linear oscillator (eq. 8), the rocking block
+//! (eq. 9–10) and the slider–crank of sec. 6.3.1 (Table 2). Every parameter defaults to the value the paper (or Ballard's example)
 //! uses, so `[example] kind = "rocking-block"` alone reproduces Fig. 9's set-up.
 
 use serde::{Deserialize, Serialize};
 
 use crate::contact::block::BlockCorners;
 use crate::contact::plane::NodesOnPlane;
+use crate::contact::slider::SliderCorners;
 use crate::error::Error;
 use crate::io::frames::Geometry;
+use crate::model::multibody::SliderCrankParams;
 use crate::model::point_mass::{oscillator, point_mass, rigid_block};
 use crate::scene::Model;
 
@@ -84,6 +86,36 @@ pub enum ExampleSpec {
         #[serde(default = "block_v0")]
         v0: [f64; 3],
     },
+    /// The slider–crank of sec. 6.3.1 ([`crate::model::multibody`]); defaults: the
+    /// paper's Table 2 (J₂ = 8.9e-4; Siconos' example uses 5.9e-4), e = 0.4, μ = 0.01,
+    /// q₀ = 0, crank 150 rad/s and rod −75 rad/s.
+    SliderCrank {
+        /// Restitution of the slider's corners on the guides.
+        #[serde(default = "crank_restitution")]
+        restitution: f64,
+        /// Coulomb friction of the corners.
+        #[serde(default = "crank_friction")]
+        friction: f64,
+        /// Initial angles `[θ₁, θ₂, θ₃]` (rad).
+        #[serde(default)]
+        q0: [f64; 3],
+        /// Initial rates `[θ̇₁, θ̇₂, θ̇₃]` (rad/s).
+        #[serde(default = "crank_v0")]
+        v0: [f64; 3],
+        /// Geometry and inertia (`[example.mechanism]`).
+        #[serde(default)]
+        mechanism: SliderCrankParams,
+    },
+}
+
+fn crank_restitution() -> f64 {
+    0.4
+}
+fn crank_friction() -> f64 {
+    0.01
+}
+fn crank_v0() -> [f64; 3] {
+    [150.0, -75.0, 0.0]
 }
 
 fn one() -> f64 {
@@ -116,7 +148,7 @@ fn block_v0() -> [f64; 3] {
 
 impl ExampleSpec {
     /// The built-in example of that name with the paper's parameters:
-    /// `bouncing-ball`, `oscillator` or `rocking-block`.
+    /// `bouncing-ball`, `oscillator`, `rocking-block` or `slider-crank`.
     pub fn named(name: &str) -> Result<Self, Error> {
         // the name is a value, never TOML text: a name holding quotes or newlines must
         // not add keys to the spec
@@ -126,7 +158,8 @@ impl ExampleSpec {
             Error::invalid(
                 "example",
                 name,
-                "unknown example; the examples are bouncing-ball, oscillator, rocking-block",
+                "unknown example; the examples are bouncing-ball, oscillator, rocking-block, \
+                 slider-crank",
             )
         })
     }
@@ -184,6 +217,28 @@ impl ExampleSpec {
                     v0: v0.to_vec(),
                     geometry: Geometry::default(),
                 },
+                ExampleSpec::SliderCrank {
+                    restitution,
+                    friction,
+                    q0,
+                    v0,
+                    mechanism,
+                } => {
+                    mechanism.validate("mechanism.")?;
+                    for (name, x) in [("q0", q0), ("v0", v0)] {
+                        for (i, &xi) in x.iter().enumerate() {
+                            crate::error::require_in(&format!("{name}[{i}]"), xi, -1e6, 1e6)?;
+                        }
+                    }
+                    let corners = SliderCorners::new(&mechanism, restitution, friction)?;
+                    Model {
+                        system: mechanism.system()?,
+                        contacts: Box::new(corners),
+                        q0: q0.to_vec(),
+                        v0: v0.to_vec(),
+                        geometry: Geometry::default(),
+                    }
+                }
             })
         };
         build().map_err(prefix)

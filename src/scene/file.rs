@@ -883,7 +883,7 @@ impl Scene {
             let body = HyperBody::new(mesh, law).map_err(|e| at(prefix("mesh", e)))?;
             let part =
                 HyperelasticPart::new(&b.name, body, dofs, mesh.cell_ids.clone()).map_err(at)?;
-            system.add_internal_force(std::sync::Arc::new(part));
+            system.add_nonlinear_part(std::sync::Arc::new(part));
         }
         geometry.dof_of = map.clone();
         let v0: Vec<f64> = v0

@@ -39,9 +39,10 @@ impl Model {
     }
 }
 
-/// The built-in example scene `name` (`bouncing-ball`, `oscillator`, `rocking-block`):
-/// the same as `meshes/<name>.toml` (Algorithm 2, the paper's parameters; h = 1e-3 s to
-/// T = 5 s, 1e-3 s to 3 s, and 1e-2 s to 2 s), built as data (`name` is a value, never
+/// The built-in example scene `name` (`bouncing-ball`, `oscillator`, `rocking-block`,
+/// `slider-crank`): the same as `meshes/<name>.toml` (Algorithm 2, the paper's
+/// parameters; h = 1e-3 s to T = 5 s, 1e-3 s to 3 s, 1e-2 s to 2 s, and 1e-4 s to
+/// 0.2 s, Siconos' span of the slider–crank), built as data (`name` is a value, never
 /// scene text).
 pub fn builtin_scene(name: &str) -> Result<file::Scene, Error> {
     let spec = example::ExampleSpec::named(name)?;
@@ -49,6 +50,7 @@ pub fn builtin_scene(name: &str) -> Result<file::Scene, Error> {
         example::ExampleSpec::BouncingBall { .. } => (1e-3, 5.0),
         example::ExampleSpec::Oscillator { .. } => (1e-3, 3.0),
         example::ExampleSpec::RockingBlock { .. } => (1e-2, 2.0),
+        example::ExampleSpec::SliderCrank { .. } => (1e-4, 0.2),
     };
     let scene = file::Scene {
         time: file::TimeSpec { dt, t_end },

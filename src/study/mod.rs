@@ -25,9 +25,11 @@
 //!
 //! The impacting bar has its own studies in [`bar`]: `speed-accuracy` (error against
 //! cost for every scheme, size and Courant number) and `extremes` (stability at the
-//! brief's extremes, 10⁶ elements included).
+//! brief's extremes, 10⁶ elements included). The slider–crank of sec. 6.3.1 has
+//! `slider-crank` in [`slider_crank`] (Table 3, Figs. 21–24).
 
 pub mod bar;
+pub mod slider_crank;
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -43,13 +45,14 @@ use crate::model::point_mass::{oscillator, point_mass, rigid_block};
 use crate::plot::{Curve, lines};
 
 /// The studies `signorini study` knows.
-pub const NAMES: [&str; 6] = [
+pub const NAMES: [&str; 7] = [
     "convergence",
     "projection-multiplier",
     "chattering",
     "energy",
     "speed-accuracy",
     "extremes",
+    "slider-crank",
 ];
 
 /// A run of the ball: per step the time at the end of the step, height, velocity,
@@ -659,6 +662,7 @@ pub fn run(name: &str, dir: &Path) -> Result<Vec<String>, Error> {
         "energy" => energy(dir)?,
         "speed-accuracy" => bar::speed_accuracy(dir)?,
         "extremes" => bar::extremes(dir)?,
+        "slider-crank" => slider_crank::study(dir)?,
         other => {
             return Err(Error::invalid(
                 "study",

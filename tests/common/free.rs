@@ -22,7 +22,7 @@ pub fn free_body(
         let body = HyperBody::new(mesh, law).unwrap();
         let part =
             HyperelasticPart::new("body", body, (0..n).map(Some).collect(), Vec::new()).unwrap();
-        sys.add_internal_force(std::sync::Arc::new(part));
+        sys.add_nonlinear_part(std::sync::Arc::new(part));
     }
     let far = NodesOnPlane::new(
         vec![vec![0, 1, 2]],
