@@ -581,3 +581,33 @@ fn set_overrides_are_applied_and_checked() {
         expect(set, r, 2, needles);
     }
 }
+
+/// The slider–crank example's parameters (`[example] kind = "slider-crank"`) are checked
+/// like every scene value: exit 2 naming the key path, the value and the expectation.
+#[test]
+fn slider_crank_parameters_are_checked() {
+    let dir = tmp("slider-crank");
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/slider_crank.toml");
+    let scene = scene.to_str().unwrap();
+    for (set, needles) in [
+        (
+            "example.mechanism.j2=-1.0",
+            &["example.mechanism.j2", "-1", "> 0"][..],
+        ),
+        ("example.mechanism.c=nan", &["example.mechanism.c", "NaN"]),
+        (
+            "example.restitution=1.5",
+            &["example.restitution", "1.5", "[0, 1]"],
+        ),
+        ("example.v0=[1.0, nan, 0.0]", &["example.v0[1]", "NaN"]),
+        ("example.friction=-0.1", &["example.friction", "-0.1"]),
+        ("example.mechanism.j4=1.0", &["example", "j4", "`j2`"]),
+    ] {
+        expect(
+            set,
+            cli(&dir, &["check", scene, "--set", set, "--quiet"], &[]),
+            2,
+            needles,
+        );
+    }
+}

@@ -667,9 +667,16 @@ impl Scene {
                 cells: 0,
                 contacts: model.contacts.len(),
                 linear_contacts: model.contacts.is_linear(),
-                max_friction: 0.0,
+                max_friction: model
+                    .contacts
+                    .laws()
+                    .iter()
+                    .map(|l| l.friction)
+                    .fold(0.0, f64::max),
                 damping: model.system.damping.is_some(),
-                gravity: model.system.force.iter().any(|&f| f != 0.0),
+                gravity: model.system.force.iter().any(|&f| f != 0.0)
+                    || matches!(x, super::example::ExampleSpec::SliderCrank { mechanism, .. }
+                        if mechanism.gravity > 0.0),
                 fixed_dofs: 0,
                 linear_structure: model.system.nonlinear.is_empty(),
             };
