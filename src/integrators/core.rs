@@ -22,12 +22,16 @@
 //! recomputed every Newton iteration (`m` extra solves).
 //!
 //! A nonlinear structure ([`crate::model::system::Linearity::ConstantMass`]: bodies with
-//! a large-deformation law) has no constant `M̂`: the structural side of the Newton loop
-//! of eq. 41–48 ([`super::structure`]) evaluates `F` and `Kⁿ` at each iterate, refactors
-//! `M̂ⁿ` and gives the iteration's free velocity; `W` is condensed again on each new
+//! a large-deformation law; [`crate::model::system::Linearity::Nonlinear`]: a mass
+//! `M(q)`, the slider–crank) has no constant `M̂`: the structural side of the Newton loop
+//! of eq. 41–48 ([`super::structure`]) evaluates `M(q_θ)`, `F`, `Kⁿ` and `Cⁿ` at each
+//! iterate, refactors `M̂ⁿ` and gives the iteration's free velocity; `W` is condensed again on each new
 //! `M̂ⁿ` and the contact problems above are solved unchanged. The projection's feedback
 //! enters through `F(q_θ)` (whose `q` carries the last `τ`) instead of `−hθ W_D τⁿ`, the
 //! coupled position solve is not taken, and the loop converges on eq. 41's residual.
+//! A nonsymmetric `M̂ⁿ` (gyroscopic tangents) makes `W` nonsymmetric: the projection then
+//! takes the Euclidean metric of eq. 58 (`N = M̂⁻¹` is no metric) and the LCPs Lemke's
+//! method (block pivoting's Cholesky needs symmetry); the path names it.
 //!
 //! The operators live in [`Delassus`]: dense `n × m` blocks for the tens of contacts of
 //! the bar and the academic examples, per-active-column storage (columns computed when
