@@ -25,7 +25,6 @@
 //!
 //! The four slider corners against the guides are [`crate::contact::slider::SliderCorners`].
 
-use crate::assembly::{Accumulate, Assembler};
 use crate::error::{Error, require_in, require_positive};
 use crate::model::LinearSystem;
 use crate::model::system::NonlinearPart;
@@ -133,22 +132,7 @@ impl SliderCrankParams {
             p.j2 + (0.25 * p.m2 + p.m3) * p.l2 * p.l2,
             p.j3,
         ];
-        let mut am = Assembler::new(3, 3);
-        for (i, v) in diag.into_iter().enumerate() {
-            am.add(i, i, v);
-        }
-        let mut sys = LinearSystem {
-            mass: am.finish(),
-            stiffness: Assembler::new(3, 0).finish(),
-            damping: None,
-            force: vec![0.0; 3],
-            dofs_per_node: 3,
-            component: vec![0, 1, 2],
-            ordering: None,
-            loads: Vec::new(),
-            prescribed: None,
-            nonlinear: Vec::new(),
-        };
+        let mut sys = crate::model::point_mass::diagonal(&diag, &[0.0; 3])?;
         sys.add_nonlinear_part(std::sync::Arc::new(SliderCrank { p: *self }));
         Ok(sys)
     }

@@ -62,66 +62,35 @@ pub struct PaperRow {
 /// Table 3 of the paper, row by row: [`SCHEMES`] × [`STEPS`].
 pub const PAPER: [[PaperRow; 3]; 3] = [
     [
-        PaperRow {
-            violation: 1.324e-4,
-            newton: (2.95, 4),
-            projection: None,
-            index_set: None,
-        },
-        PaperRow {
-            violation: 1.234e-5,
-            newton: (1.99, 3),
-            projection: None,
-            index_set: None,
-        },
-        PaperRow {
-            violation: 1.119e-6,
-            newton: (1.96, 2),
-            projection: None,
-            index_set: None,
-        },
+        row(1.324e-4, (2.95, 4), None, None),
+        row(1.234e-5, (1.99, 3), None, None),
+        row(1.119e-6, (1.96, 2), None, None),
     ],
     [
-        PaperRow {
-            violation: 8.099e-11,
-            newton: (1.96, 2),
-            projection: Some((0.09, 2)),
-            index_set: None,
-        },
-        PaperRow {
-            violation: 4.833e-11,
-            newton: (1.01, 2),
-            projection: Some((0.11, 1)),
-            index_set: None,
-        },
-        PaperRow {
-            violation: 9.99e-11,
-            newton: (1.001, 2),
-            projection: Some((0.04, 1)),
-            index_set: None,
-        },
+        row(8.099e-11, (1.96, 2), Some((0.09, 2)), None),
+        row(4.833e-11, (1.01, 2), Some((0.11, 1)), None),
+        row(9.99e-11, (1.001, 2), Some((0.04, 1)), None),
     ],
     [
-        PaperRow {
-            violation: 8.410e-11,
-            newton: (2.15, 4),
-            projection: Some((0.20, 2)),
-            index_set: Some((1.18, 2)),
-        },
-        PaperRow {
-            violation: 9.940e-11,
-            newton: (1.127, 2),
-            projection: Some((0.019, 1)),
-            index_set: Some((1.127, 2)),
-        },
-        PaperRow {
-            violation: 8.650e-11,
-            newton: (1.12, 2),
-            projection: Some((0.00036, 1)),
-            index_set: Some((1.12, 2)),
-        },
+        row(8.410e-11, (2.15, 4), Some((0.20, 2)), Some((1.18, 2))),
+        row(9.940e-11, (1.127, 2), Some((0.019, 1)), Some((1.127, 2))),
+        row(8.650e-11, (1.12, 2), Some((0.00036, 1)), Some((1.12, 2))),
     ],
 ];
+
+const fn row(
+    violation: f64,
+    newton: (f64, usize),
+    projection: Option<(f64, usize)>,
+    index_set: Option<(f64, usize)>,
+) -> PaperRow {
+    PaperRow {
+        violation,
+        newton,
+        projection,
+        index_set,
+    }
+}
 
 /// The scheme parameters of the study (module doc).
 pub fn params(kind: SchemeKind) -> SchemeParams {
