@@ -11,10 +11,58 @@ committed files): `python meshes/make_meshes.py` from the repository root.
   plate.vtu         meshio's default .vtu (binary, zlib) of a quad4 plate 0.2 × 0.05 m,
                     point data "bottom" (1 on the y = 0 edge, else 0)
   plate.vtk         the same plate as meshio's default legacy .vtk (5.1, binary)
+  hertz_ball.msh    Gmsh 4.1 ASCII, the axisymmetric half section (x = r ≥ 0, y = axis) of a
+                    ball R = 0.01 m resting on y = 0, quad4 (recombined), graded from
+                    4e-5 m at the south pole (a tenth of the Hertz contact radius at
+                    1 m/s, 4.2e-4 m) to 1e-3 m beyond 6 mm; groups "ball" (2), "axis" and
+                    "surface" (1)
 """
 import gmsh
 import meshio
 import numpy as np
+
+
+
+def hertz_ball():
+    r = 0.01
+    gmsh.model.add("hertz")
+    occ = gmsh.model.occ
+    d = occ.addDisk(0, r, 0, r, r)
+    b = occ.addRectangle(0, 0, 0, r, 2 * r)
+    occ.intersect([(2, d)], [(2, b)])
+    occ.synchronize()
+    axis, arc = [], []
+    for dim, t in gmsh.model.getEntities(1):
+        xmax = gmsh.model.getBoundingBox(dim, t)[3]
+        (axis if xmax < 1e-6 else arc).append(t)
+    gmsh.model.addPhysicalGroup(2, [t for _, t in gmsh.model.getEntities(2)], name="ball")
+    gmsh.model.addPhysicalGroup(1, axis, name="axis")
+    gmsh.model.addPhysicalGroup(1, arc, name="surface")
+    pole = occ.addPoint(0, 0, 0)
+    occ.synchronize()
+    f = gmsh.model.mesh.field
+    f.add("Distance", 1)
+    f.setNumbers(1, "PointsList", [pole])
+    f.add("Threshold", 2)
+    f.setNumber(2, "InField", 1)
+    for k, v in [("SizeMin", 4e-5), ("SizeMax", 1e-3), ("DistMin", 1e-3), ("DistMax", 6e-3)]:
+        f.setNumber(2, k, v)
+    f.setAsBackgroundMesh(2)
+    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
+              "Mesh.MeshSizeFromCurvature"]:
+        gmsh.option.setNumber(k, 0)
+    gmsh.option.setNumber("Mesh.RecombineAll", 1)
+    gmsh.option.setNumber("Mesh.Algorithm", 8)
+    gmsh.model.mesh.generate(2)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.option.setNumber("Mesh.Binary", 0)
+    gmsh.write("meshes/hertz_ball.msh")
+    gmsh.model.remove()
+    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
+              "Mesh.MeshSizeFromCurvature"]:
+        gmsh.option.setNumber(k, 1)
+    gmsh.option.setNumber("Mesh.RecombineAll", 0)
+
 
 gmsh.initialize()
 gmsh.option.setNumber("General.Terminal", 0)
@@ -50,6 +98,9 @@ gmsh.write("meshes/disk.msh")
 gmsh.option.setNumber("Mesh.Binary", 1)
 gmsh.write("meshes/disk_binary.msh")
 gmsh.model.remove()
+
+# axisymmetric Hertz ball (tests/analytic_hertz_impact.rs)
+hertz_ball()
 gmsh.finalize()
 
 # plate of quads through meshio

@@ -611,3 +611,32 @@ fn slider_crank_parameters_are_checked() {
         );
     }
 }
+
+/// An axisymmetric body takes linear materials only: a large-deformation law is refused
+/// with exit 2, naming the key, the law and the formulations that take it.
+#[test]
+fn large_deformation_on_an_axisymmetric_body_is_refused() {
+    let dir = tmp("axisymmetric-svk");
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/hertz_ball.toml");
+    expect(
+        "axisymmetric svk",
+        cli(
+            &dir,
+            &[
+                "check",
+                scene.to_str().unwrap(),
+                "--set",
+                "bodies[0].material.model=\"svk\"",
+                "--quiet",
+            ],
+            &[],
+        ),
+        2,
+        &[
+            "bodies[0].material.model",
+            "svk",
+            "axisymmetric",
+            "linear only",
+        ],
+    );
+}

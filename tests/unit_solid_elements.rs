@@ -262,3 +262,59 @@ fn parallel_assembly_is_independent_of_threads() {
     let total: f64 = k.iter().map(|v| v.abs()).sum();
     assert!((seen - total).abs() <= 1e-12 * total);
 }
+
+/// Axisymmetric tri3 and quad4 (the ring `0.5 ≤ r ≤ 1`, `0 ≤ z ≤ 1`, interior nodes
+/// moved): the uniform dilatation `u = ε (r, z)` has strains `ε_rr = ε_zz = ε_θθ = ε`
+/// everywhere (the hoop strain `u_r / r` is exact because `u_r` is linear), so
+/// `½ uᵀKu = ½·3(3λ + 2μ)ε²·V` with `V = π(1 − 0.25)·1`, and the mass is `ρV`, both to
+/// rounding (the integrands are polynomials the rules integrate exactly on the
+/// undistorted ring; on the distorted one, within 1e-12 for the mass of the straight-
+/// sided cells and 1e-10 for the energy).
+#[test]
+fn axisymmetric_ring_dilatation_energy_and_mass() {
+    for kind in [CellKind::Tri3, CellKind::Quad4] {
+        for moved in [false, true] {
+            let mut mesh = rectangle_mesh(kind, [4, 6], [0.5, 1.0]);
+            if moved {
+                mesh = distort(mesh, 2);
+            }
+            for p in mesh.points.iter_mut() {
+                p[0] += 0.5;
+            }
+            let f = Formulation::Axisymmetric;
+            let sys = assemble(&mesh, &STEEL, f, MassKind::Consistent).unwrap();
+            let v = std::f64::consts::PI * (1.0 - 0.25);
+            let rel = sys.total_mass() / (STEEL.density * v) - 1.0;
+            assert!(rel.abs() < 1e-12, "{kind:?} moved {moved}: mass {rel:e}");
+            let eps = 1e-4;
+            let u: Vec<f64> = mesh
+                .points
+                .iter()
+                .flat_map(|p| [eps * p[0], eps * p[1]])
+                .collect();
+            let mut ku = vec![0.0; u.len()];
+            spmv(sys.stiffness.as_ref(), &u, &mut ku);
+            let energy: f64 = 0.5 * u.iter().zip(&ku).map(|(a, b)| a * b).sum::<f64>();
+            let (l, m) = STEEL.lame();
+            let exact = 0.5 * 3.0 * (3.0 * l + 2.0 * m) * eps * eps * v;
+            let rel = energy / exact - 1.0;
+            assert!(rel.abs() < 1e-10, "{kind:?} moved {moved}: energy {rel:e}");
+        }
+    }
+}
+
+/// An axisymmetric mesh must lie in `x = r ≥ 0`; a node at `r < 0` is refused by name.
+#[test]
+fn axisymmetric_mesh_left_of_the_axis_is_refused() {
+    let mut mesh = rectangle_mesh(CellKind::Quad4, [2, 2], [1.0, 1.0]);
+    mesh.points[4][0] = -0.1;
+    let e = assemble(
+        &mesh,
+        &STEEL,
+        Formulation::Axisymmetric,
+        MassKind::Consistent,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("node 4") && e.contains("r ≥ 0"), "{e}");
+}

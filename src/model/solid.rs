@@ -127,6 +127,11 @@ pub enum Formulation {
         /// Out-of-plane thickness (m).
         thickness: f64,
     },
+    /// Axisymmetric about the y axis (tri3, quad4 in the half plane x = r ≥ 0, y = z):
+    /// the hoop strain `u_r / r` joins the in-plane strains and every integral carries
+    /// `2π r` ([`axisymmetric_kernel`]); the body is the solid of revolution of its mesh,
+    /// so forces and masses are those of the whole ring.
+    Axisymmetric,
 }
 
 impl Formulation {
@@ -312,6 +317,15 @@ pub(super) fn tri3_points() -> [Point<3, 2>; 3] {
     [[0.5, 0.0], [0.5, 0.5], [0.0, 0.5]].map(|[r, s]| ([1.0 - r - s, r, s], g, 1.0 / 6.0))
 }
 
+/// Three interior points of the triangle (degree 2, at `(1/6, 1/6)` and permutations):
+/// the axisymmetric kernel needs `r > 0` at every point, which the edge-midpoint rule
+/// of [`tri3_points`] misses on a cell with an edge on the axis.
+fn tri3_interior_points() -> [Point<3, 2>; 3] {
+    let g = [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
+    let (a, b) = (1.0 / 6.0, 2.0 / 3.0);
+    [[a, a], [b, a], [a, b]].map(|[r, s]| ([1.0 - r - s, r, s], g, 1.0 / 6.0))
+}
+
 /// 2×2 Gauss points of the bilinear quadrilateral.
 pub(super) fn quad4_points() -> [Point<4, 2>; 4] {
     std::array::from_fn(|p| {
@@ -429,6 +443,74 @@ fn plane_kernel<const NN: usize, const ND: usize>(
     Ok(e)
 }
 
+/// Axisymmetric kernel: `K = ∫ Bᵀ D B 2πr dA`, `M = ∫ ρ Nᵀ N 2πr dA` with
+/// `ε = (ε_rr, ε_zz, ε_θθ = u_r/r, γ_rz)` and `D` the 3-D isotropic law restricted to
+/// those four strains; `ND = 2 NN`. Quadrature points lie inside the cell, so `r > 0`
+/// there even for cells touching the axis; a node on the axis needs no constraint on
+/// `u_r` (the hoop term keeps it at zero up to the discretization, as usual for this
+/// element).
+fn axisymmetric_kernel<const NN: usize, const ND: usize>(
+    x: &[[f64; 3]],
+    pts: &[Point<NN, 2>],
+    mat: &Material,
+    inverted: &dyn Fn(f64) -> Error,
+) -> Result<ElementMatrices<ND>, Error> {
+    debug_assert_eq!(ND, 2 * NN);
+    let (l, m) = mat.lame();
+    let mut d = SMatrix::<f64, 4, 4>::zeros();
+    for i in 0..3 {
+        for j in 0..3 {
+            d[(i, j)] = l;
+        }
+        d[(i, i)] = l + 2.0 * m;
+    }
+    d[(3, 3)] = m;
+    let mut e = ElementMatrices {
+        k: SMatrix::<f64, ND, ND>::zeros(),
+        m: SMatrix::<f64, ND, ND>::zeros(),
+        volume: 0.0,
+    };
+    for (n, g, w) in pts {
+        let mut jac = Matrix2::<f64>::zeros();
+        let mut r = 0.0;
+        for a in 0..NN {
+            r += n[a] * x[a][0];
+            for i in 0..2 {
+                for j in 0..2 {
+                    jac[(i, j)] += x[a][i] * g[a][j];
+                }
+            }
+        }
+        let det: f64 = jac.determinant();
+        if det.is_nan() || det <= 0.0 || r.is_nan() || r <= 0.0 {
+            return Err(inverted(det));
+        }
+        let jinv = jac.try_inverse().ok_or_else(|| inverted(det))?;
+        let dv = 2.0 * std::f64::consts::PI * r * det * w;
+        e.volume += dv;
+        let mut b = SMatrix::<f64, 4, ND>::zeros();
+        for a in 0..NN {
+            let gx = jinv[(0, 0)] * g[a][0] + jinv[(1, 0)] * g[a][1];
+            let gy = jinv[(0, 1)] * g[a][0] + jinv[(1, 1)] * g[a][1];
+            b[(0, 2 * a)] = gx;
+            b[(1, 2 * a + 1)] = gy;
+            b[(2, 2 * a)] = n[a] / r;
+            b[(3, 2 * a)] = gy;
+            b[(3, 2 * a + 1)] = gx;
+        }
+        let db = d * b * dv;
+        e.k += b.transpose() * db;
+        for a in 0..NN {
+            for c in 0..NN {
+                let v = mat.density * n[a] * n[c] * dv;
+                e.m[(2 * a, 2 * c)] += v;
+                e.m[(2 * a + 1, 2 * c + 1)] += v;
+            }
+        }
+    }
+    Ok(e)
+}
+
 /// Solid (3-D) kernel: `K = ∫ Bᵀ D B dV`, `M = ∫ ρ Nᵀ N dV`; `ND = 3 NN`.
 fn solid_kernel<const NN: usize, const ND: usize>(
     x: &[[f64; 3]],
@@ -503,6 +585,26 @@ pub fn element_matrices(
         )
     };
     let rho = mat.density;
+    if f == Formulation::Axisymmetric {
+        return Ok(match kind {
+            CellKind::Tri3 => AnyElement::Tri3(axisymmetric_kernel(
+                x,
+                &tri3_interior_points(),
+                mat,
+                &inverted,
+            )?),
+            CellKind::Quad4 => {
+                AnyElement::Quad4(axisymmetric_kernel(x, &quad4_points(), mat, &inverted)?)
+            }
+            _ => {
+                return Err(Error::invalid(
+                    &format!("cell {id}"),
+                    kind.name(),
+                    "does not fit an axisymmetric formulation (tri3 or quad4)",
+                ));
+            }
+        });
+    }
     Ok(match kind {
         CellKind::Tri3 => AnyElement::Tri3(plane_kernel(
             x,
@@ -568,6 +670,13 @@ pub fn assemble_with_contacts(
                 &format!("node {i}"),
                 format!("{p:?}"),
                 "coordinates must be finite",
+            ));
+        }
+        if f == Formulation::Axisymmetric && p[0] < 0.0 {
+            return Err(Error::invalid(
+                &format!("node {i}"),
+                format!("{p:?}"),
+                "an axisymmetric mesh lies in the half plane x = r ≥ 0 (y is the axis)",
             ));
         }
     }
@@ -699,6 +808,13 @@ pub fn centre_strain(
         Formulation::Solid => e(2, 2),
         Formulation::PlaneStrain => 0.0,
         Formulation::PlaneStress { .. } => -mat.poisson / (1.0 - mat.poisson) * (e(0, 0) + e(1, 1)),
+        Formulation::Axisymmetric => {
+            // hoop strain u_r / r at the centre (the mean of the nodes for tri3, quad4)
+            let k = kind.nodes() as f64;
+            let r = x.iter().map(|p| p[0]).sum::<f64>() / k;
+            let ur = u.iter().map(|p| p[0]).sum::<f64>() / k;
+            if r > 0.0 { ur / r } else { 0.0 }
+        }
     };
     [e(0, 0), e(1, 1), zz, e(0, 1), e(1, 2), e(0, 2)]
 }

@@ -525,14 +525,18 @@ impl Scene {
                 .map_err(|e| prefix(&format!("bodies[{i}].material"), e))?;
             let rod = matches!(b.mesh, MeshSpec::Rod { .. });
             if b.material.model != MaterialModel::Linear
-                && (rod || matches!(b.formulation, Formulation::PlaneStress { .. }))
+                && (rod
+                    || matches!(
+                        b.formulation,
+                        Formulation::PlaneStress { .. } | Formulation::Axisymmetric
+                    ))
             {
                 return Err(Error::invalid(
                     &format!("bodies[{i}].material.model"),
                     b.material.model.name(),
                     "large-deformation laws take solid bodies (tet4, hex8) and plane-strain \
-                     bodies (tri3, quad4); rods and plane-stress bodies are linear only \
-                     (model = \"linear\")",
+                     bodies (tri3, quad4); rods, plane-stress and axisymmetric bodies are \
+                     linear only (model = \"linear\")",
                 ));
             }
             if let Some(r) = b.damping {
