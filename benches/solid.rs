@@ -72,8 +72,10 @@ fn hyperelastic(c: &mut Criterion) {
             BenchmarkId::new(format!("tangent_{threads}_threads"), dofs),
             |b| {
                 b.iter(|| {
-                    pool.install(|| body.evaluate_batched(&u, Some(&mut k), &mut f, &mut batch))
-                        .unwrap()
+                    pool.install(|| {
+                        body.evaluate_batched((None, &u), Some(&mut k), &mut f, &mut batch)
+                    })
+                    .unwrap()
                 })
             },
         );
@@ -81,7 +83,7 @@ fn hyperelastic(c: &mut Criterion) {
             BenchmarkId::new(format!("force_{threads}_threads"), dofs),
             |b| {
                 b.iter(|| {
-                    pool.install(|| body.evaluate_batched(&u, None, &mut f, &mut batch))
+                    pool.install(|| body.evaluate_batched((None, &u), None, &mut f, &mut batch))
                         .unwrap()
                 })
             },

@@ -329,7 +329,7 @@ const CASES: &[Case] = &[
         &[
             "bodies[0].material.model",
             "svk",
-            "plane-stress bodies are linear only",
+            "plane-stress and axisymmetric bodies are linear only",
         ],
     ),
     (
@@ -638,5 +638,31 @@ fn large_deformation_on_an_axisymmetric_body_is_refused() {
             "axisymmetric",
             "linear only",
         ],
+    );
+}
+
+/// The energy–momentum option is a midpoint rule: with θ ≠ 1/2 it is refused with exit 2,
+/// naming the key, the value and the θ it needs.
+#[test]
+fn energy_momentum_needs_the_midpoint() {
+    let dir = tmp("energy-momentum-theta");
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/ball_crush.toml");
+    expect(
+        "energy-momentum at theta 0.6",
+        cli(
+            &dir,
+            &[
+                "check",
+                scene.to_str().unwrap(),
+                "--set",
+                "scheme.energy_momentum=true",
+                "--set",
+                "scheme.theta=0.6",
+                "--quiet",
+            ],
+            &[],
+        ),
+        2,
+        &["scheme.energy_momentum", "true", "theta = 0.5", "0.6"],
     );
 }

@@ -325,7 +325,8 @@ fn hyperelastic_assembly_does_not_allocate() {
 /// A neo-Hookean cube dropped at 1 m/s onto a plane (impact after 10 steps, then
 /// compression and rebound): the steps of a nonlinear structure (each Newton iterate
 /// assembles, refactors `M̂ⁿ` and condenses `W` again) do not allocate, in Moreau–Jean and
-/// Algorithms 1 and 2, with full and modified Newton. Counted on the worker thread of a
+/// Algorithms 1 and 2, with full and modified Newton and with the energy–momentum
+/// option (discrete-gradient forces). Counted on the worker thread of a
 /// one-thread rayon pool, where the parallel assembly runs.
 #[test]
 fn nonlinear_structure_steps_do_not_allocate() {
@@ -338,7 +339,7 @@ fn nonlinear_structure_steps_do_not_allocate() {
         SchemeKind::DirectProjection,
         SchemeKind::CombinedProjection,
     ] {
-        for modified in [false, true] {
+        for (modified, em) in [(false, false), (true, false), (false, true)] {
             let text = format!(
                 r#"
 [time]
@@ -346,6 +347,7 @@ dt = 1e-4
 t_end = 0.02
 [scheme]
 kind = "{}"
+energy_momentum = {em}
 newton = {{ modified = {modified} }}
 [[bodies]]
 name = "cube"
@@ -380,7 +382,7 @@ obstacle = "floor"
             assert_eq!(
                 allocated,
                 0,
-                "{} (modified Newton: {modified}) allocated {allocated} times",
+                "{} (modified Newton: {modified}, energy–momentum: {em}) allocated {allocated} times",
                 kind.name()
             );
         }

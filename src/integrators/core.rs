@@ -540,8 +540,13 @@ impl ThetaCore {
             params
         };
         let theta = params.theta;
-        let structure = (sys.linearity() != Linearity::Linear)
-            .then(|| Box::new(Structure::new(&sys, params.newton.modified)));
+        let structure = (sys.linearity() != Linearity::Linear).then(|| {
+            Box::new(Structure::new(
+                &sys,
+                params.newton.modified,
+                params.energy_momentum,
+            ))
+        });
         let factor = match &structure {
             None => factor_step_matrix(
                 params,
@@ -701,7 +706,7 @@ impl ThetaCore {
                 self.n
             ),
             Some(st) => format!(
-                "nonlinear structure ({}): {} Newton on eq. 41–48, M̂ⁿ = M + hθC + h²θ²Kⁿ \
+                "nonlinear structure ({}): {} Newton on eq. 41–48{}, M̂ⁿ = M + hθC + h²θ²Kⁿ \
                  refactored {} ({}, n = {}){}",
                 self.sys
                     .nonlinear
@@ -710,6 +715,11 @@ impl ThetaCore {
                     .collect::<Vec<_>>()
                     .join(", "),
                 if st.modified { "modified" } else { "full" },
+                if st.energy_momentum {
+                    " with discrete-gradient internal forces (energy–momentum)"
+                } else {
+                    ""
+                },
                 if st.modified {
                     "at each step's first iterate and when the iterates stop contracting"
                 } else {

@@ -31,6 +31,13 @@
 //! loop converged to, on the iteration matrix in hand. `W_D` is not formed: nothing
 //! reads it on this path.
 //!
+//! With [`super::SchemeParams::energy_momentum`] (θ = 1/2) a part that offers it gives
+//! its force as the discrete gradient between `q_k` and `q` instead of `r(q_θ)`
+//! ([`crate::model::system::NonlinearPart::evaluate_discrete_gradient`]), with the
+//! midpoint tangent in `Kⁿ` (an approximation of the exact Jacobian, good to `O(Δq)`:
+//! the loop converges a little slower, to the same tolerance); then
+//! `½v₁ᵀMv₁ − ½v₀ᵀMv₀ = −r·Δq = −ΔW` for a free body, exactly at convergence.
+//!
 //! Set-up builds one pattern, the union of `M`, `K`, `C` and the parts' tangents and
 //! masses, with the position of every source entry in it; an iterate then only adds
 //! values into buffers sized at set-up (no allocation in the step). A symmetric `M̂ⁿ`
@@ -108,6 +115,8 @@ pub(crate) struct Structure {
     pub step_matrix: SparseMatrix,
     /// Modified Newton (module doc).
     pub modified: bool,
+    /// Discrete-gradient internal forces where a part has them (module doc).
+    pub energy_momentum: bool,
     /// `K q_θ + r(q_θ)` of the last evaluation.
     internal: Vec<f64>,
     /// `|K| |q_θ|` (row sums of the magnitudes of the terms of `K q_θ`).
@@ -142,7 +151,7 @@ fn position(col_ptr: &[usize], row_idx: &[usize], i: usize, j: usize) -> usize {
 
 impl Structure {
     /// The union pattern of `sys`'s matrices and internal forces, and the buffers.
-    pub fn new(sys: &LinearSystem, modified: bool) -> Self {
+    pub fn new(sys: &LinearSystem, modified: bool, energy_momentum: bool) -> Self {
         let n = sys.ndof();
         let mut cols: Vec<Vec<usize>> = (0..n).map(|j| vec![j]).collect();
         let mats: Vec<&SparseMatrix> =
@@ -212,6 +221,7 @@ impl Structure {
             has_mass,
             symmetric: sys.symmetric(),
             modified,
+            energy_momentum,
             internal: vec![0.0; n],
             size: vec![0.0; n],
             ext: vec![0.0; n],
@@ -260,13 +270,22 @@ impl Structure {
             .zip(self.tan.val.iter_mut())
             .zip(self.damp.val.iter_mut())
         {
-            f.evaluate(
-                &self.q_theta,
-                &self.v_theta,
-                &mut self.internal,
-                tangent.then_some(&mut t[..]),
-                tangent.then_some(&mut d[..]),
-            )?;
+            if self.energy_momentum && f.has_discrete_gradient() {
+                f.evaluate_discrete_gradient(
+                    q_k,
+                    q,
+                    &mut self.internal,
+                    tangent.then_some(&mut t[..]),
+                )?;
+            } else {
+                f.evaluate(
+                    &self.q_theta,
+                    &self.v_theta,
+                    &mut self.internal,
+                    tangent.then_some(&mut t[..]),
+                    tangent.then_some(&mut d[..]),
+                )?;
+            }
         }
         if self.has_mass {
             // M(q_θ) (v − v_k), column by column on the union pattern

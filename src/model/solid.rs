@@ -129,7 +129,7 @@ pub enum Formulation {
     },
     /// Axisymmetric about the y axis (tri3, quad4 in the half plane x = r ≥ 0, y = z):
     /// the hoop strain `u_r / r` joins the in-plane strains and every integral carries
-    /// `2π r` ([`axisymmetric_kernel`]); the body is the solid of revolution of its mesh,
+    /// `2π r`; the body is the solid of revolution of its mesh,
     /// so forces and masses are those of the whole ring.
     Axisymmetric,
 }

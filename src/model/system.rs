@@ -84,6 +84,26 @@ pub trait NonlinearPart: Send + Sync + std::fmt::Debug {
         tangent: Option<&mut [f64]>,
         damping: Option<&mut [f64]>,
     ) -> Result<(), Error>;
+    /// True when the part offers [`NonlinearPart::evaluate_discrete_gradient`].
+    fn has_discrete_gradient(&self) -> bool {
+        false
+    }
+    /// Adds the discrete gradient `r(q₀, q₁)` of the part's energy between the step's
+    /// start `q₀` and end `q₁` to `force` (so that `r · (q₁ − q₀)` is the change of the
+    /// energy, exactly), and overwrites `tangent` with `∂r/∂q` at the midpoint; for parts
+    /// with [`NonlinearPart::has_discrete_gradient`] only.
+    fn evaluate_discrete_gradient(
+        &self,
+        _q0: &[f64],
+        _q1: &[f64],
+        _force: &mut [f64],
+        _tangent: Option<&mut [f64]>,
+    ) -> Result<(), Error> {
+        Err(Error::Numerical(format!(
+            "{}: no discrete gradient",
+            self.describe()
+        )))
+    }
     /// Overwrites `values` (one per [`NonlinearPart::mass_entries`] entry) with `ΔM(q)`.
     fn mass(&self, _q: &[f64], _values: &mut [f64]) {}
     /// `½ vᵀ ΔM(q) v` (J).
@@ -120,6 +140,8 @@ pub struct HyperelasticPart {
 #[derive(Debug)]
 struct Scratch {
     u: Vec<f64>,
+    /// The step's start displacement (discrete gradient).
+    u0: Vec<f64>,
     force: Vec<f64>,
     tangent: Vec<f64>,
     batch: crate::assembly::ElementBatch,
@@ -163,6 +185,7 @@ impl HyperelasticPart {
             cell_tags,
             scratch: Mutex::new(Scratch {
                 u: vec![0.0; n],
+                u0: vec![0.0; n],
                 force: vec![0.0; n],
                 tangent: vec![0.0; nnz],
                 batch,
@@ -224,8 +247,46 @@ impl NonlinearPart for HyperelasticPart {
         self.gather(q, &mut s.u);
         let want = tangent.is_some().then_some(&mut s.tangent[..]);
         self.body
-            .evaluate_batched(&s.u, want, &mut s.force, &mut s.batch)
+            .evaluate_batched((None, &s.u), want, &mut s.force, &mut s.batch)
             .map_err(|c| inverted(&self.name, &self.cell_tags, c))?;
+        self.k0_mul_add(-1.0, &s.u, &mut s.force);
+        for (f, d) in s.force.iter().zip(&self.dof) {
+            if let Some(d) = d {
+                force[*d] += f;
+            }
+        }
+        if let Some(t) = tangent {
+            for (out, &k) in t.iter_mut().zip(&self.kept) {
+                *out = s.tangent[k] - self.k0[k];
+            }
+        }
+        Ok(())
+    }
+
+    fn has_discrete_gradient(&self) -> bool {
+        true
+    }
+
+    fn evaluate_discrete_gradient(
+        &self,
+        q0: &[f64],
+        q1: &[f64],
+        force: &mut [f64],
+        tangent: Option<&mut [f64]>,
+    ) -> Result<(), Error> {
+        let mut guard = self.scratch.lock().unwrap_or_else(|p| p.into_inner());
+        let s = &mut *guard;
+        self.gather(q0, &mut s.u0);
+        self.gather(q1, &mut s.u);
+        let want = tangent.is_some().then_some(&mut s.tangent[..]);
+        self.body
+            .evaluate_batched((Some(&s.u0), &s.u), want, &mut s.force, &mut s.batch)
+            .map_err(|c| inverted(&self.name, &self.cell_tags, c))?;
+        // − K₀ u_m: the linear part K₀ stays in K, which the structure applies at the
+        // midpoint (its quadratic energy is conserved there)
+        for (a, b) in s.u.iter_mut().zip(&s.u0) {
+            *a = 0.5 * (*a + b);
+        }
         self.k0_mul_add(-1.0, &s.u, &mut s.force);
         for (f, d) in s.force.iter().zip(&self.dof) {
             if let Some(d) = d {

@@ -16,6 +16,18 @@ pub fn free_body(
     (q0, v0): (&[f64], &[f64]),
     h: f64,
 ) -> Box<dyn Integrator> {
+    free_body_with(mesh, mat, law, (q0, v0), h, (false, 1e-10))
+}
+
+/// [`free_body`] with the energy–momentum option of the schemes and a Newton tolerance.
+pub fn free_body_with(
+    mesh: &Mesh,
+    mat: &Material,
+    law: Option<Hyperelastic>,
+    (q0, v0): (&[f64], &[f64]),
+    h: f64,
+    (energy_momentum, tol): (bool, f64),
+) -> Box<dyn Integrator> {
     let n = 3 * mesh.points.len();
     let mut sys = assemble(mesh, mat, Formulation::Solid, MassKind::Consistent).unwrap();
     if let Some(law) = law {
@@ -32,9 +44,11 @@ pub fn free_body(
         0.0,
     )
     .unwrap();
-    let params = SchemeParams {
+    let mut params = SchemeParams {
         kind: SchemeKind::MoreauJean,
+        energy_momentum,
         ..SchemeParams::default()
     };
+    params.newton.tol = tol;
     build(&params, sys, Box::new(far), q0, v0, h).unwrap()
 }
