@@ -456,15 +456,12 @@ fn axisymmetric_kernel<const NN: usize, const ND: usize>(
     inverted: &dyn Fn(f64) -> Error,
 ) -> Result<ElementMatrices<ND>, Error> {
     debug_assert_eq!(ND, 2 * NN);
-    let (l, m) = mat.lame();
+    // the 3-D law on (ε_rr, ε_zz, ε_θθ) and one shear
+    let d3 = mat.d3();
     let mut d = SMatrix::<f64, 4, 4>::zeros();
-    for i in 0..3 {
-        for j in 0..3 {
-            d[(i, j)] = l;
-        }
-        d[(i, i)] = l + 2.0 * m;
-    }
-    d[(3, 3)] = m;
+    d.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&d3.fixed_view::<3, 3>(0, 0));
+    d[(3, 3)] = d3[(3, 3)];
     let mut e = ElementMatrices {
         k: SMatrix::<f64, ND, ND>::zeros(),
         m: SMatrix::<f64, ND, ND>::zeros(),

@@ -200,6 +200,48 @@ impl HyperelasticPart {
         }
     }
 
+    /// `r(q)` (no `q0`) or the discrete gradient `r(q0, q)` added to `force`, and the
+    /// tangent (at `q`, or at the midpoint) into `tangent` ([`NonlinearPart::evaluate`],
+    /// [`NonlinearPart::evaluate_discrete_gradient`]).
+    fn evaluate_from(
+        &self,
+        q0: Option<&[f64]>,
+        q: &[f64],
+        force: &mut [f64],
+        tangent: Option<&mut [f64]>,
+    ) -> Result<(), Error> {
+        let mut guard = self.scratch.lock().unwrap_or_else(|p| p.into_inner());
+        let s = &mut *guard;
+        if let Some(q0) = q0 {
+            self.gather(q0, &mut s.u0);
+        }
+        self.gather(q, &mut s.u);
+        let want = tangent.is_some().then_some(&mut s.tangent[..]);
+        let u0 = q0.is_some().then_some(&s.u0[..]);
+        self.body
+            .evaluate_batched((u0, &s.u), want, &mut s.force, &mut s.batch)
+            .map_err(|c| inverted(&self.name, &self.cell_tags, c))?;
+        if q0.is_some() {
+            // − K₀ u_m: the linear part K₀ stays in K, which the structure applies at
+            // the midpoint (its quadratic energy is conserved there)
+            for (a, b) in s.u.iter_mut().zip(&s.u0) {
+                *a = 0.5 * (*a + b);
+            }
+        }
+        self.k0_mul_add(-1.0, &s.u, &mut s.force);
+        for (f, d) in s.force.iter().zip(&self.dof) {
+            if let Some(d) = d {
+                force[*d] += f;
+            }
+        }
+        if let Some(t) = tangent {
+            for (out, &k) in t.iter_mut().zip(&self.kept) {
+                *out = s.tangent[k] - self.k0[k];
+            }
+        }
+        Ok(())
+    }
+
     /// `K₀ u` added to `out` with factor `s` (body dofs).
     fn k0_mul_add(&self, s: f64, u: &[f64], out: &mut [f64]) {
         for ((&k, &i), &j) in self.k0.iter().zip(&self.row).zip(&self.col) {
@@ -242,25 +284,7 @@ impl NonlinearPart for HyperelasticPart {
         tangent: Option<&mut [f64]>,
         _damping: Option<&mut [f64]>,
     ) -> Result<(), Error> {
-        let mut guard = self.scratch.lock().unwrap_or_else(|p| p.into_inner());
-        let s = &mut *guard;
-        self.gather(q, &mut s.u);
-        let want = tangent.is_some().then_some(&mut s.tangent[..]);
-        self.body
-            .evaluate_batched((None, &s.u), want, &mut s.force, &mut s.batch)
-            .map_err(|c| inverted(&self.name, &self.cell_tags, c))?;
-        self.k0_mul_add(-1.0, &s.u, &mut s.force);
-        for (f, d) in s.force.iter().zip(&self.dof) {
-            if let Some(d) = d {
-                force[*d] += f;
-            }
-        }
-        if let Some(t) = tangent {
-            for (out, &k) in t.iter_mut().zip(&self.kept) {
-                *out = s.tangent[k] - self.k0[k];
-            }
-        }
-        Ok(())
+        self.evaluate_from(None, q, force, tangent)
     }
 
     fn has_discrete_gradient(&self) -> bool {
@@ -274,31 +298,7 @@ impl NonlinearPart for HyperelasticPart {
         force: &mut [f64],
         tangent: Option<&mut [f64]>,
     ) -> Result<(), Error> {
-        let mut guard = self.scratch.lock().unwrap_or_else(|p| p.into_inner());
-        let s = &mut *guard;
-        self.gather(q0, &mut s.u0);
-        self.gather(q1, &mut s.u);
-        let want = tangent.is_some().then_some(&mut s.tangent[..]);
-        self.body
-            .evaluate_batched((Some(&s.u0), &s.u), want, &mut s.force, &mut s.batch)
-            .map_err(|c| inverted(&self.name, &self.cell_tags, c))?;
-        // − K₀ u_m: the linear part K₀ stays in K, which the structure applies at the
-        // midpoint (its quadratic energy is conserved there)
-        for (a, b) in s.u.iter_mut().zip(&s.u0) {
-            *a = 0.5 * (*a + b);
-        }
-        self.k0_mul_add(-1.0, &s.u, &mut s.force);
-        for (f, d) in s.force.iter().zip(&self.dof) {
-            if let Some(d) = d {
-                force[*d] += f;
-            }
-        }
-        if let Some(t) = tangent {
-            for (out, &k) in t.iter_mut().zip(&self.kept) {
-                *out = s.tangent[k] - self.k0[k];
-            }
-        }
-        Ok(())
+        self.evaluate_from(Some(q0), q1, force, tangent)
     }
 
     fn energy(&self, q: &[f64]) -> Result<f64, Error> {
