@@ -5,6 +5,9 @@
 //! from a real checkpoint of a killed run and changes one thing; the untouched copy
 //! resumes (exit 0), so each refusal is due to the change alone.
 
+mod common;
+
+use common::scratch::Scratch;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -12,10 +15,8 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_signorini"))
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("signorini-ckint-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+fn tmp(name: &str) -> Scratch {
+    Scratch::new("ckint", name)
 }
 
 /// A ball-drop run (scene and mesh copied into `work`) killed after step 30 of its

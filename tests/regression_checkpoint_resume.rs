@@ -7,6 +7,9 @@
 //! one test sends a real SIGKILL. Old and corrupt checkpoints get clear errors. With the
 //! `hdf5` feature every dataset of `fields.vtkhdf` is compared too.
 
+mod common;
+
+use common::scratch::Scratch;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -14,10 +17,8 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_signorini"))
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("signorini-ckpt-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+fn tmp(name: &str) -> Scratch {
+    Scratch::new("ckpt", name)
 }
 
 /// Runs the CLI with `args` (the out dir appended), optionally aborting after a step.
@@ -203,8 +204,9 @@ fn every_scheme_resumes_to_the_uninterrupted_bar() {
     }
 }
 
-/// A scene copy with a shorter `t_end`, its mesh paths kept.
-fn short_scene(name: &str, t_end: f64) -> PathBuf {
+/// A scene copy with a shorter `t_end`, its mesh paths kept: its directory (removed when
+/// dropped) and the scene file.
+fn short_scene(name: &str, t_end: f64) -> (Scratch, PathBuf) {
     let src = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("meshes")
         .join(name);
@@ -225,17 +227,17 @@ fn short_scene(name: &str, t_end: f64) -> PathBuf {
     for mesh in ["ball.msh", "disk.msh"] {
         let _ = std::fs::copy(src.with_file_name(mesh), dir.join(mesh));
     }
-    p
+    (dir, p)
 }
 
 #[test]
 fn frictional_and_curved_scenes_resume_exactly() {
     // Coulomb friction (NSGS warm-started from the previous step's impulses), 3-D
-    let slide = short_scene("sliding_block.toml", 0.04);
+    let (_slide_dir, slide) = short_scene("sliding_block.toml", 0.04);
     let args = ["run", slide.to_str().unwrap(), "--checkpoint-every", "37"];
     check_resume("sliding", &args, &[40, 111, 199]);
     // a curved obstacle: G(q) and the Delassus data re-formed every step
-    let cyl = short_scene("block_on_cylinder.toml", 0.03);
+    let (_cyl_dir, cyl) = short_scene("block_on_cylinder.toml", 0.03);
     let args = ["run", cyl.to_str().unwrap(), "--checkpoint-every", "64"];
     check_resume("cylinder", &args, &[70, 250]);
 }
@@ -246,7 +248,7 @@ fn frictional_and_curved_scenes_resume_exactly() {
 /// would have to hold: kills before, during and after the impact resume bit for bit.
 #[test]
 fn nonlinear_structures_resume_exactly() {
-    let ball = short_scene("ball_crush.toml", 0.012);
+    let (_ball_dir, ball) = short_scene("ball_crush.toml", 0.012);
     for modified in ["false", "true"] {
         let set = format!("scheme.newton.modified={modified}");
         let args = [

@@ -2,7 +2,7 @@
 //! Helpers of the bad-input tests: run the CLI, require an exit code, no panic, and
 //! every expected piece of the message.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 /// A valid scene: a hex8 box above a floor, contacts on its bottom face. `MESH` is the
@@ -29,11 +29,10 @@ obstacle = "floor"
 pub const BOX_MESH: &str =
     "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }";
 
-/// A fresh temporary directory for one test.
-pub fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("signorini-bad-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
+/// A fresh temporary directory for one test (removed when the test passes).
+pub fn tmp(name: &str) -> super::scratch::Scratch {
+    let d = super::scratch::Scratch::new("bad", name);
+    std::fs::create_dir_all(&*d).unwrap();
     d
 }
 

@@ -5,6 +5,7 @@
 pub mod bad;
 pub mod blocks;
 pub mod free;
+pub mod scratch;
 
 use std::collections::HashMap;
 use std::path::Path;
