@@ -25,8 +25,8 @@
 //! a large-deformation law; [`crate::model::system::Linearity::Nonlinear`]: a mass
 //! `M(q)`, the slider–crank) has no constant `M̂`: the structural side of the Newton loop
 //! of eq. 41–48 ([`super::structure`]) evaluates `M(q_θ)`, `F`, `Kⁿ` and `Cⁿ` at each
-//! iterate, refactors `M̂ⁿ` and gives the iteration's free velocity; `W` is condensed again on each new
-//! `M̂ⁿ` and the contact problems above are solved unchanged. The projection's feedback
+//! iterate, refactors `M̂ⁿ` and gives the iteration's free velocity; `W` is condensed
+//! again on each new `M̂ⁿ` and the contact problems above are solved unchanged. The projection's feedback
 //! enters through `F(q_θ)` (whose `q` carries the last `τ`) instead of `−hθ W_D τⁿ`, the
 //! coupled position solve is not taken, and the loop converges on eq. 41's residual.
 //! A nonsymmetric `M̂ⁿ` (gyroscopic tangents) makes `W` nonsymmetric: the projection then
@@ -524,9 +524,8 @@ impl ThetaCore {
         // no metric (eq. 59 needs N positive definite) and block pivoting's Cholesky
         // does not apply, so the projection takes eq. 58's Euclidean metric and the
         // LCPs Lemke's method (which needs no symmetry).
-        let nonsymmetric = sys.linearity() != Linearity::Linear && !sys.symmetric();
         let adjusted;
-        let params = if nonsymmetric {
+        let params = if !sys.symmetric() {
             adjusted = SchemeParams {
                 metric: crate::delassus::Metric::Euclidean,
                 lcp: match params.lcp {
@@ -706,8 +705,8 @@ impl ThetaCore {
                 self.n
             ),
             Some(st) => format!(
-                "nonlinear structure ({}): {} Newton on eq. 41–48{}, M̂ⁿ = M + hθC + h²θ²Kⁿ \
-                 refactored {} ({}, n = {}){}",
+                "nonlinear structure ({}): {} Newton on eq. 41–48{}, M̂ⁿ = M(q) + hθCⁿ + \
+                 h²θ²Kⁿ refactored {} ({}, n = {}){}",
                 self.sys
                     .nonlinear
                     .iter()
@@ -884,7 +883,7 @@ impl ThetaCore {
             let t0 = std::time::Instant::now();
             self.del
                 .factor
-                .refactor(st.step_matrix.as_ref(), "iteration matrix M + hθC + h²θ²Kⁿ")
+                .refactor(st.step_matrix.as_ref(), super::structure::MATRIX_NAME)
                 .map_err(|e| step_error(s, self.h, e))?;
             stats.factorizations += 1;
             stats.factorization_seconds += t0.elapsed().as_secs_f64();

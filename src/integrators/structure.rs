@@ -50,6 +50,9 @@ use crate::error::Error;
 use crate::linalg::{LinearSolver, SolverKind, SparseMatrix};
 use crate::model::LinearSystem;
 
+/// The name of `M̂ⁿ` in errors and summaries.
+pub const MATRIX_NAME: &str = "iteration matrix M(q) + hθCⁿ + h²θ²Kⁿ";
+
 /// Largest structure factored by the dense LU when `M̂ⁿ` is nonsymmetric (module doc).
 pub const DENSE_MAX: usize = 64;
 
@@ -75,11 +78,11 @@ impl Entries {
         }
     }
 
-    /// `out += Σ values` at their positions.
-    fn add_to(&self, out: &mut [f64]) {
+    /// `out += scale · values` at their positions.
+    fn add_to(&self, scale: f64, out: &mut [f64]) {
         for (p, v) in self.pos.iter().zip(&self.val) {
             for (&k, &x) in p.iter().zip(v) {
-                out[k] += x;
+                out[k] += scale * x;
             }
         }
     }
@@ -100,8 +103,7 @@ pub(crate) struct Structure {
     tan: Entries,
     damp: Entries,
     dmass: Entries,
-    /// Some part has `∂r/∂v` / `ΔM(q)` entries.
-    has_damping: bool,
+    /// Some part has `ΔM(q)` entries.
     has_mass: bool,
     /// `M̂ⁿ` is symmetric (module doc).
     pub symmetric: bool,
@@ -204,7 +206,7 @@ impl Structure {
         let tan = Entries::new(&entries, &col_ptr, &row_idx);
         let damp = Entries::new(&damping_entries, &col_ptr, &row_idx);
         let dmass = Entries::new(&mass_entries, &col_ptr, &row_idx);
-        let (has_damping, has_mass) = (!damp.is_empty(), !dmass.is_empty());
+        let has_mass = !dmass.is_empty();
         let sym = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
         Structure {
             tangent: SparseMatrix::new(sym.clone(), stiffness.clone()),
@@ -217,7 +219,6 @@ impl Structure {
             tan,
             damp,
             dmass,
-            has_damping,
             has_mass,
             symmetric: sys.symmetric(),
             modified,
@@ -293,7 +294,7 @@ impl Structure {
                 f.mass(&self.q_theta, m);
             }
             self.mass_now.copy_from_slice(&self.mass);
-            self.dmass.add_to(&mut self.mass_now);
+            self.dmass.add_to(1.0, &mut self.mass_now);
             let p = self.step_matrix.as_ref();
             let (cp, ri) = (p.col_ptr(), p.row_idx());
             self.mdv.fill(0.0);
@@ -335,7 +336,7 @@ impl Structure {
         if tangent {
             let t = self.tangent.val_mut();
             t.copy_from_slice(&self.stiffness);
-            self.tan.add_to(t);
+            self.tan.add_to(1.0, t);
             let (a, b) = (h * h * th * th, h * th);
             let t = self.tangent.val();
             let mass = if self.has_mass {
@@ -353,15 +354,8 @@ impl Structure {
             {
                 *s = mm + a * kk + b * cc;
             }
-            if self.has_damping {
-                // hθ ∂r/∂v
-                let s = self.step_matrix.val_mut();
-                for (p, v) in self.damp.pos.iter().zip(&self.damp.val) {
-                    for (&k, &x) in p.iter().zip(v) {
-                        s[k] += b * x;
-                    }
-                }
-            }
+            // hθ ∂r/∂v
+            self.damp.add_to(b, self.step_matrix.val_mut());
         }
         Ok(())
     }
@@ -377,11 +371,6 @@ impl Structure {
         } else {
             SolverKind::Lu
         };
-        crate::linalg::solver::factor(
-            self.step_matrix.as_ref(),
-            "iteration matrix M(q) + hθCⁿ + h²θ²Kⁿ",
-            kind,
-            None,
-        )
+        crate::linalg::solver::factor(self.step_matrix.as_ref(), MATRIX_NAME, kind, None)
     }
 }

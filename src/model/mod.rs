@@ -650,11 +650,8 @@ impl LinearSystem {
     /// Kinetic energy of the kept dofs `½ vᵀ M(q) v` (J; `q` matters only with a mass
     /// part, [`system::NonlinearPart::mass_entries`]).
     pub fn kinetic_energy(&self, q: &[f64], v: &[f64]) -> f64 {
-        let constant = 0.5 * quadratic_form(self.mass.as_ref(), v);
-        if self.nonlinear.is_empty() {
-            return constant;
-        }
-        constant
+        // without parts the sum is a zero, which keeps the constant term bit for bit
+        0.5 * quadratic_form(self.mass.as_ref(), v)
             + self
                 .nonlinear
                 .iter()

@@ -1,7 +1,8 @@
 //! The paper's academic examples as scenes (`[example]` in a scene file): the bouncing
 //! ball (eq. 7), the impacting linear oscillator (eq. 8), the rocking block
-//! (eq. 9–10) and the slider–crank of sec. 6.3.1 (Table 2). Every parameter defaults to the value the paper (or Ballard's example)
-//! uses, so `[example] kind = "rocking-block"` alone reproduces Fig. 9's set-up.
+//! (eq. 9–10) and the slider–crank of sec. 6.3.1 (Table 2). Every parameter defaults to
+//! the value the paper (or Ballard's example) uses, so `[example] kind = "rocking-block"`
+//! alone reproduces Fig. 9's set-up.
 
 use serde::{Deserialize, Serialize};
 

@@ -341,96 +341,78 @@ fn revolutions(s: &Sample) -> f64 {
     s.q[0] / (2.0 * std::f64::consts::PI)
 }
 
+/// A curve of `run`'s samples, `point` giving each one's point (or skipping it).
+fn curve(name: String, run: &CrankRun, point: impl Fn(&Sample) -> Option<(f64, f64)>) -> Curve {
+    Curve {
+        name,
+        points: run.samples.iter().filter_map(point).collect(),
+    }
+}
+
 fn plots(dir: &Path, runs: &[[Option<CrankRun>; 3]]) -> Result<(), Error> {
     let mech = SliderCrankParams::default();
     let run = |si: usize, hi: usize| runs[si][hi].as_ref().expect("every run ran");
     let fine = run(0, 2);
-    lines(
-        &dir.join("fig21_speeds"),
-        "Slider–crank, Moreau–Jean, h = 1e-6: crank and rod speeds (Fig. 21)",
-        "crank revolutions",
-        "angular speed (rad/s)",
-        &[
-            Curve {
-                name: "crank θ̇₁".into(),
-                points: fine
-                    .samples
-                    .iter()
-                    .map(|s| (revolutions(s), s.v[0]))
-                    .collect(),
-            },
-            Curve {
-                name: "rod θ̇₂".into(),
-                points: fine
-                    .samples
-                    .iter()
-                    .map(|s| (revolutions(s), s.v[1]))
-                    .collect(),
-            },
-        ],
-        false,
-    )?;
-    let c = mech.c;
-    let corners: Vec<Curve> = STEPS
-        .iter()
-        .enumerate()
-        .map(|(hi, h)| Curve {
-            name: format!("corner 1, h = {h:e}"),
-            points: run(0, hi)
-                .samples
-                .iter()
-                .map(|s| (revolutions(s), s.gap[0] / c))
-                .collect(),
+    let speeds = [
+        curve("crank θ̇₁".into(), fine, |s| {
+            Some((revolutions(s), s.v[0]))
+        }),
+        curve("rod θ̇₂".into(), fine, |s| {
+            Some((revolutions(s), s.v[1]))
+        }),
+    ];
+    let corners: Vec<Curve> = (0..STEPS.len())
+        .map(|hi| {
+            curve(format!("corner 1, h = {:e}", STEPS[hi]), run(0, hi), |s| {
+                Some((revolutions(s), s.gap[0] / mech.c))
+            })
         })
         .collect();
-    lines(
-        &dir.join("fig22_corners"),
-        "Slider–crank, Moreau–Jean: gap of corner 1 over the clearance c (Fig. 22)",
-        "crank revolutions",
-        "g / c",
-        &corners,
-        false,
-    )?;
-    let portraits: Vec<Curve> = SCHEMES
-        .iter()
-        .enumerate()
-        .map(|(si, k)| Curve {
-            name: k.name().into(),
-            points: run(si, 0)
-                .samples
-                .iter()
-                .map(|s| mech.slider_centre(&s.q))
-                .collect(),
+    let portraits: Vec<Curve> = (0..SCHEMES.len())
+        .map(|si| {
+            curve(SCHEMES[si].name().into(), run(si, 0), |s| {
+                Some(mech.slider_centre(&s.q))
+            })
         })
         .collect();
-    lines(
-        &dir.join("fig23_portrait"),
-        "Slider–crank, h = 1e-4: slider portrait y_s against x_s (Fig. 23)",
-        "x_s (m)",
-        "y_s (m)",
-        &portraits,
-        false,
-    )?;
-    let velocities: Vec<Curve> = SCHEMES
-        .iter()
-        .enumerate()
-        .map(|(si, k)| Curve {
-            name: k.name().into(),
-            points: run(si, 0)
-                .samples
-                .iter()
-                .filter(|s| revolutions(s) <= 0.25)
-                .map(|s| (revolutions(s), s.u[0]))
-                .collect(),
+    let velocities: Vec<Curve> = (0..SCHEMES.len())
+        .map(|si| {
+            curve(SCHEMES[si].name().into(), run(si, 0), |s| {
+                (revolutions(s) <= 0.25).then(|| (revolutions(s), s.u[0]))
+            })
         })
         .collect();
-    lines(
-        &dir.join("fig24_corner_velocity"),
-        "Slider–crank, h = 1e-4: normal relative velocity of corner 1 (Fig. 24)",
-        "crank revolutions",
-        "U_N (m/s)",
-        &velocities,
-        false,
-    )?;
+    for (stem, title, x, y, curves) in [
+        (
+            "fig21_speeds",
+            "Slider–crank, Moreau–Jean, h = 1e-6: crank and rod speeds (Fig. 21)",
+            "crank revolutions",
+            "angular speed (rad/s)",
+            &speeds[..],
+        ),
+        (
+            "fig22_corners",
+            "Slider–crank, Moreau–Jean: gap of corner 1 over the clearance c (Fig. 22)",
+            "crank revolutions",
+            "g / c",
+            &corners[..],
+        ),
+        (
+            "fig23_portrait",
+            "Slider–crank, h = 1e-4: slider portrait y_s against x_s (Fig. 23)",
+            "x_s (m)",
+            "y_s (m)",
+            &portraits[..],
+        ),
+        (
+            "fig24_corner_velocity",
+            "Slider–crank, h = 1e-4: normal relative velocity of corner 1 (Fig. 24)",
+            "crank revolutions",
+            "U_N (m/s)",
+            &velocities[..],
+        ),
+    ] {
+        lines(&dir.join(stem), title, x, y, curves, false)?;
+    }
     Ok(())
 }
