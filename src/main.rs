@@ -679,6 +679,9 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
         if report.gravity { "yes" } else { "none" },
         friction
     );
+    for line in &report.interfaces {
+        out!("interface           {line}");
+    }
     out!(
         "time                {} steps of {:e} s, scheme {}, θ = {}",
         scene.steps(),
@@ -693,7 +696,8 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
                 "not needed for the dynamics (linear structure, constant G): factor once, never refactor"
             }
             (true, false) => {
-                "needed: curved obstacle, G(q) re-linearized every iteration (M̂ still factored once)"
+                "needed: G(q) changes with q (curved obstacle or contact between bodies), \
+                 re-linearized every iteration (M̂ still factored once)"
             }
             (false, _) if scene.scheme.newton.modified => {
                 "nonlinear structure: modified Newton (M̂ⁿ formed at each step's first iterate, \

@@ -17,6 +17,7 @@
 //! depend on `q`, so the Newton loop of eq. 42–51 re-linearizes them every iteration).
 
 pub mod block;
+pub mod bodies;
 pub mod frame;
 pub mod linear;
 pub mod plane;
@@ -92,6 +93,13 @@ pub trait ContactSet: Send {
     fn evaluate(&self, q: &[f64], gap: &mut [f64], jac: &mut ContactJacobian);
     /// The law of each contact.
     fn laws(&self) -> &[ContactLaw];
+    /// Brings the set's search data up to date at `q` at the start of a step (the
+    /// candidate facets of contacts between bodies, [`bodies`]); `true` when it rebuilt
+    /// them. It may allocate, so the integrators call it outside the step's Newton loop;
+    /// a set with fixed geometry does nothing.
+    fn update(&mut self, _q: &[f64]) -> Result<bool, crate::error::Error> {
+        Ok(false)
+    }
     /// Rows over all blocks.
     fn rows(&self) -> usize {
         (0..self.len()).map(|a| self.dim(a)).sum()
@@ -213,6 +221,14 @@ impl ContactJacobian {
         (&self.dofs[r.clone()], &self.values[r])
     }
 
+    /// Mutable dofs and values of column `alpha`: for sets whose columns move to other
+    /// dofs (a node sliding from one facet to the next, [`bodies`]); the column keeps
+    /// its length.
+    pub fn col_mut(&mut self, alpha: usize) -> (&mut [usize], &mut [f64]) {
+        let r = self.col_ptr[alpha]..self.col_ptr[alpha + 1];
+        (&mut self.dofs[r.clone()], &mut self.values[r])
+    }
+
     /// Mutable values of column `alpha` (pattern as in [`ContactJacobian::col`]).
     pub fn col_values_mut(&mut self, alpha: usize) -> &mut [f64] {
         let r = self.col_ptr[alpha]..self.col_ptr[alpha + 1];
@@ -310,7 +326,10 @@ impl ContactSet for Composite {
             let m = s.len();
             s.evaluate(q, &mut gap[off..off + m], j);
             for c in 0..j.ncols() {
-                jac.col_values_mut(row + c).copy_from_slice(j.col(c).1);
+                let (dofs, vals) = jac.col_mut(row + c);
+                let (d, v) = j.col(c);
+                dofs.copy_from_slice(d);
+                vals.copy_from_slice(v);
             }
             off += m;
             row += j.ncols();
@@ -318,6 +337,13 @@ impl ContactSet for Composite {
     }
     fn laws(&self) -> &[ContactLaw] {
         &self.laws
+    }
+    fn update(&mut self, q: &[f64]) -> Result<bool, crate::error::Error> {
+        let mut any = false;
+        for s in &mut self.sets {
+            any |= s.update(q)?;
+        }
+        Ok(any)
     }
 }
 

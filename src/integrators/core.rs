@@ -413,6 +413,9 @@ macro_rules! delegate_to_core {
             let name = self.name();
             self.core.restore(name, s)
         }
+        fn prepare(&mut self) -> Result<(), $crate::error::Error> {
+            self.core.update_contacts()
+        }
     };
 }
 pub(crate) use delegate_to_core;
@@ -765,6 +768,7 @@ impl ThetaCore {
     /// Free velocity and the contact-space data at the start of a step (for a
     /// nonlinear structure, at its first Newton iterate: [`super::structure`]).
     pub fn begin_step(&mut self, stats: &mut StepStats) -> Result<(), Error> {
+        self.update_contacts()?;
         if self.structure.is_some() {
             return self.begin_nonlinear_step(stats);
         }
@@ -1613,7 +1617,24 @@ impl ThetaCore {
         s: &crate::integrators::saved::IntegratorState,
     ) -> Result<(), Error> {
         self.state.restore(scheme, s)?;
+        self.contacts
+            .update(&self.state.q)
+            .map_err(|e| step_error(&self.state, self.h, e))?;
         self.evaluate_at_state();
+        Ok(())
+    }
+
+    /// Brings the contact set's search data up to date at `q_k` ([`ContactSet::update`]);
+    /// after a rebuild the gaps, Jacobian and Delassus data are evaluated again (they
+    /// change only for contacts that had no facet within the search distance).
+    pub fn update_contacts(&mut self) -> Result<(), Error> {
+        let rebuilt = self
+            .contacts
+            .update(&self.state.q)
+            .map_err(|e| step_error(&self.state, self.h, e))?;
+        if rebuilt && !self.g_constant {
+            self.evaluate_at_state();
+        }
         Ok(())
     }
 

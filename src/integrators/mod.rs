@@ -167,8 +167,18 @@ pub struct StepStats {
 pub trait Integrator {
     /// Short name, as on the command line.
     fn name(&self) -> &'static str;
-    /// Advances one step of size `h`. Does not allocate.
+    /// Advances one step of size `h`. Does not allocate, unless the contact search had
+    /// to be rebuilt in it (then [`Integrator::prepare`] was not called before).
     fn step(&mut self) -> Result<StepStats, Error>;
+    /// Brings the contact search up to date before a step ([`ContactSet::update`]: the
+    /// candidate facets of contacts between bodies), so that [`Integrator::step`] finds
+    /// it fresh; [`crate::run::driver::drive`] calls it before every step. It may
+    /// allocate (a rebuilt tree).
+    ///
+    /// [`ContactSet::update`]: crate::contact::ContactSet::update
+    fn prepare(&mut self) -> Result<(), Error> {
+        Ok(())
+    }
     /// The current state.
     fn state(&self) -> &State;
     /// The mechanical system being integrated.

@@ -150,6 +150,7 @@ impl Integrator for SchatzmanPaoli {
 
     fn step(&mut self) -> Result<StepStats, Error> {
         let mut st = StepStats::default();
+        self.contacts.update(&self.state.q)?;
         let (h, th, n, m) = (self.h, self.theta, self.n, self.m);
         // M_SP Δ = M(q_k − q_{k−1}) − h²K q_k + h² f − h²(1−θ) C v_k − (hθ/2) C (q_k − q_{k−1})
         for i in 0..n {
@@ -258,6 +259,9 @@ impl Integrator for SchatzmanPaoli {
     fn state(&self) -> &State {
         &self.state
     }
+    fn prepare(&mut self) -> Result<(), Error> {
+        self.contacts.update(&self.state.q).map(|_| ())
+    }
     fn save(&self) -> crate::integrators::saved::IntegratorState {
         let mut s = self.state.save(self.name());
         for (name, v) in [
@@ -280,6 +284,7 @@ impl Integrator for SchatzmanPaoli {
         self.q_prev.copy_from_slice(s.vector("q_prev", n)?);
         self.g_prev.copy_from_slice(s.vector("g_prev", m)?);
         self.q_lin.copy_from_slice(s.vector("q_lin", n)?);
+        self.contacts.update(&self.state.q)?;
         if !self.g_constant {
             self.contacts
                 .evaluate(&self.q_lin, &mut self.g_lin, &mut self.del.jac);

@@ -248,6 +248,94 @@ impl Mesh {
     }
 }
 
+impl Mesh {
+    /// The boundary facets (edges in 2-D, faces in 3-D: those of exactly one cell) whose
+    /// nodes all lie in `set`, each ordered so that its normal points out of its cell:
+    /// an edge `(a, b)` has the body on its left (outward normal `(b − a)` turned by
+    /// −90°), a face is counter-clockwise seen from outside (outward normal
+    /// `(x₁ − x₀) × (x₂ − x₀)`, or `x_ξ × x_η` for a quadrilateral). The orientation is
+    /// taken from the cell's centroid, so it holds for any node order of the cells.
+    pub fn boundary_facets(&self, set: &[usize]) -> Vec<Vec<usize>> {
+        let mut inside = vec![false; self.points.len()];
+        for &v in set {
+            if let Some(f) = inside.get_mut(v) {
+                *f = true;
+            }
+        }
+        // sorted nodes → (oriented facet, count)
+        let mut seen: std::collections::BTreeMap<Vec<usize>, (Vec<usize>, usize)> =
+            Default::default();
+        for (kind, c) in &self.cells {
+            let faces: &[&[usize]] = match kind {
+                CellKind::Tri3 => &[&[0, 1], &[1, 2], &[2, 0]],
+                CellKind::Quad4 => &[&[0, 1], &[1, 2], &[2, 3], &[3, 0]],
+                CellKind::Tet4 => &[&[0, 1, 2], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]],
+                CellKind::Hex8 => &[
+                    &[0, 1, 2, 3],
+                    &[4, 5, 6, 7],
+                    &[0, 1, 5, 4],
+                    &[1, 2, 6, 5],
+                    &[2, 3, 7, 6],
+                    &[3, 0, 4, 7],
+                ],
+            };
+            let centroid = mean(c.iter().map(|&v| self.points[v]));
+            for f in faces {
+                let mut nodes: Vec<usize> = f.iter().map(|&a| c[a]).collect();
+                let mut key = nodes.clone();
+                key.sort_unstable();
+                if let Some(e) = seen.get_mut(&key) {
+                    e.1 += 1;
+                    continue;
+                }
+                let x: Vec<[f64; 3]> = nodes.iter().map(|&v| self.points[v]).collect();
+                let out = sub3(mean(x.iter().copied()), centroid);
+                let normal = match x.len() {
+                    2 => {
+                        let t = sub3(x[1], x[0]);
+                        [t[1], -t[0], 0.0]
+                    }
+                    3 => cross3(sub3(x[1], x[0]), sub3(x[2], x[0])),
+                    _ => cross3(sub3(x[2], x[0]), sub3(x[3], x[1])),
+                };
+                if normal.iter().zip(&out).map(|(a, b)| a * b).sum::<f64>() < 0.0 {
+                    nodes.reverse();
+                    if nodes.len() == 4 {
+                        // keep the first node first (a cyclic order either way)
+                        nodes.rotate_right(1);
+                    }
+                }
+                seen.insert(key, (nodes, 1));
+            }
+        }
+        seen.into_values()
+            .filter(|(f, n)| *n == 1 && f.iter().all(|&v| inside[v]))
+            .map(|(f, _)| f)
+            .collect()
+    }
+}
+
+fn mean(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
+    let (mut s, mut n) = ([0.0; 3], 0.0);
+    for p in points {
+        for i in 0..3 {
+            s[i] += p[i];
+        }
+        n += 1.0;
+    }
+    s.map(|x| x / n)
+}
+fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
 /// Element matrices of one cell on fixed-size matrices, `ND = nodes·dim` square.
 #[derive(Clone, Debug)]
 pub struct ElementMatrices<const ND: usize> {

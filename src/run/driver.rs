@@ -207,6 +207,7 @@ pub fn drive(
     let first = integ.state().step;
     progress.start(steps);
     for k in first..steps {
+        integ.prepare()?;
         let st = integ.step()?;
         checks.check(integ, &st)?;
         let last = k + 1 == steps;

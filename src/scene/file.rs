@@ -208,6 +208,9 @@ pub enum MeshSpec {
         length: f64,
         /// Cross-section (m²).
         area: f64,
+        /// Abscissa of node 0 (m; default 0): where a second rod starts.
+        #[serde(default)]
+        origin: f64,
     },
 }
 
@@ -317,18 +320,24 @@ impl ObstacleSpec {
     }
 }
 
-/// `[[contacts]]`: candidate nodes of a body against an obstacle.
+/// `[[contacts]]`: candidate nodes of a body against an obstacle or against the surface
+/// of another body (exactly one of `obstacle` and `target`).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
-    /// Body name.
+    /// Body name (the slave side of a contact between bodies).
     pub body: String,
     /// Obstacle name.
-    pub obstacle: String,
+    #[serde(default)]
+    pub obstacle: Option<String>,
+    /// Another body's surface ([`crate::contact::bodies`]).
+    #[serde(default)]
+    pub target: Option<TargetSpec>,
     /// A node set of the body's mesh; `"boundary"` (computed from the cells when the
     /// mesh has no set of that name); or `"all"`. Combine with `within`.
     pub nodes: String,
-    /// Keep only the nodes whose initial gap to the obstacle is at most this (m).
+    /// Keep only the nodes whose initial gap to the obstacle (or distance to the target
+    /// surface) is at most this (m).
     #[serde(default)]
     pub within: Option<f64>,
     /// Newton restitution coefficient.
@@ -337,6 +346,42 @@ pub struct ContactSpec {
     /// Coulomb friction coefficient μ (default 0: frictionless, no friction solver).
     #[serde(default)]
     pub friction: f64,
+}
+
+/// `target = { body, surface, … }` of a contact between bodies.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TargetSpec {
+    /// The master body.
+    pub body: String,
+    /// A node set of the master body's mesh (or `boundary`): its boundary facets whose
+    /// nodes all lie in the set form the master surface.
+    pub surface: String,
+    /// `node-to-surface` (default) or `node-to-node`.
+    #[serde(default)]
+    pub pairing: Pairing,
+    /// Search distance (m): facets farther than this from a node are not looked at,
+    /// and the candidate lists are rebuilt when a node has moved half of it (default:
+    /// half the mean edge length of the master facets; node-to-node: the largest
+    /// normal distance accepted between paired nodes).
+    #[serde(default)]
+    pub search: Option<f64>,
+    /// Candidate facets kept per node (default [`crate::contact::bodies::DEFAULT_CAPACITY`]).
+    #[serde(default)]
+    pub capacity: Option<usize>,
+}
+
+/// How the nodes of a contact between bodies meet the target.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Pairing {
+    /// Each node against the nearest facet of the target surface, found again as the
+    /// bodies move (nonlinear in `q`, except a rod's end against a rod's end).
+    #[default]
+    NodeToSurface,
+    /// Each node with the coincident node of the target surface (matching meshes), along
+    /// the surface's normal there: constant `G`, factor-once fast path.
+    NodeToNode,
 }
 
 /// `[[forces]]`: a force on a node set, split evenly over its nodes, scaled by a
@@ -405,6 +450,8 @@ pub struct ModelReport {
     pub fixed_dofs: usize,
     /// Whether the structure is linear (no body with a large-deformation law).
     pub linear_structure: bool,
+    /// One line per contact between bodies: the sides, the pairing and the search.
+    pub interfaces: Vec<String>,
 }
 
 impl Scene {
@@ -586,12 +633,58 @@ impl Scene {
                     "names no body",
                 ));
             }
-            if !self.obstacles.iter().any(|o| o.name() == c.obstacle) {
-                return Err(Error::invalid(
-                    &format!("contacts[{i}].obstacle"),
-                    &c.obstacle,
-                    "names no obstacle",
-                ));
+            match (&c.obstacle, &c.target) {
+                (Some(o), None) => {
+                    if !self.obstacles.iter().any(|x| x.name() == o) {
+                        return Err(Error::invalid(
+                            &format!("contacts[{i}].obstacle"),
+                            o,
+                            "names no obstacle",
+                        ));
+                    }
+                }
+                (None, Some(t)) => {
+                    if !self.bodies.iter().any(|b| b.name == t.body) {
+                        return Err(Error::invalid(
+                            &format!("contacts[{i}].target.body"),
+                            &t.body,
+                            "names no body",
+                        ));
+                    }
+                    if t.body == c.body {
+                        return Err(Error::invalid(
+                            &format!("contacts[{i}].target.body"),
+                            &t.body,
+                            "is the contact's own body: self-contact is not modelled",
+                        ));
+                    }
+                    if let Some(sd) = t.search {
+                        require_positive(&format!("contacts[{i}].target.search"), sd)?;
+                    }
+                    if let Some(k) = t.capacity
+                        && !(1..=4096).contains(&k)
+                    {
+                        return Err(Error::invalid(
+                            &format!("contacts[{i}].target.capacity"),
+                            k,
+                            "must lie in 1..=4096",
+                        ));
+                    }
+                }
+                (Some(_), Some(_)) => {
+                    return Err(Error::invalid(
+                        &format!("contacts[{i}]"),
+                        "obstacle and target",
+                        "give one: `obstacle` (a rigid obstacle) or `target` (another body)",
+                    ));
+                }
+                (None, None) => {
+                    return Err(Error::invalid(
+                        &format!("contacts[{i}]"),
+                        "neither obstacle nor target",
+                        "give `obstacle = \"name\"` or `target = { body = \"name\", surface = \"set\" }`",
+                    ));
+                }
             }
             crate::contact::check_restitution(
                 &format!("contacts[{i}].restitution"),
@@ -683,12 +776,12 @@ impl Scene {
                         if mechanism.gravity > 0.0),
                 fixed_dofs: 0,
                 linear_structure: model.system.nonlinear.is_empty(),
+                interfaces: Vec::new(),
             };
             return Ok((model, report));
         }
         self.validate()?;
         let mut systems = Vec::new();
-        let mut meshes = Vec::new();
         let mut v0 = Vec::new();
         let mut fixed = Vec::new();
         let mut cells = 0;
@@ -700,6 +793,8 @@ impl Scene {
         // each contact's nodes, found once with its body's mesh: they take no mass under
         // the redistributed mass, then become the contact set below
         let mut nodes_of: Vec<Vec<usize>> = vec![Vec::new(); self.contacts.len()];
+        // every mesh first: a contact between bodies needs both sides' meshes
+        let mut all_meshes = Vec::with_capacity(self.bodies.len());
         for (bi, b) in self.bodies.iter().enumerate() {
             let at = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
             if b.dim() != dim {
@@ -709,7 +804,21 @@ impl Scene {
                     "all bodies need one dimension",
                 )));
             }
-            let mesh = b.mesh(&self.base_dir).map_err(at)?;
+            all_meshes.push(b.mesh(&self.base_dir).map_err(at)?);
+        }
+        // the master surface of each contact between bodies (facets over its body's
+        // node numbers, outward)
+        let mut facets_of: Vec<Vec<Vec<usize>>> = vec![Vec::new(); self.contacts.len()];
+        for (ci, c) in self.contacts.iter().enumerate() {
+            if let Some(t) = &c.target {
+                let ti = self.body_index(&t.body);
+                facets_of[ci] = target_facets(&all_meshes[ti], &self.bodies[ti], t)
+                    .map_err(|e| prefix(&format!("contacts[{ci}].target"), e))?;
+            }
+        }
+        for (bi, b) in self.bodies.iter().enumerate() {
+            let at = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
+            let mesh = &all_meshes[bi];
             cells += mesh.cells.len().max(match b.mesh {
                 MeshSpec::Rod { elements, .. } => elements,
                 _ => 0,
@@ -726,27 +835,38 @@ impl Scene {
                 .filter(|(_, c)| c.body == b.name)
             {
                 nodes_of[ci] = self
-                    .contact_nodes(&mesh, c, dim)
+                    .contact_nodes(mesh, c, dim, &facets_of[ci], &all_meshes)
                     .map_err(|e| prefix(&format!("contacts[{ci}]"), e))?;
+                let other = match (&c.obstacle, &c.target) {
+                    (Some(o), _) => format!("obstacle \"{o}\""),
+                    (_, Some(t)) => format!("body \"{}\"", t.body),
+                    _ => unreachable!("validated"),
+                };
                 for &v in &nodes_of[ci] {
                     // the same constraint twice makes two equal rows of G: a singular
                     // contact problem that the solvers report only as a breakdown
-                    if let Some(first) = first_of.insert((c.obstacle.as_str(), v), ci) {
+                    if let Some(first) = first_of.insert((other.clone(), v), ci) {
                         return Err(prefix(
                             &format!("contacts[{ci}]"),
                             Error::invalid(
                                 "nodes",
                                 format!("node {v}"),
                                 &format!(
-                                    "already meets obstacle \"{}\" through contacts[{first}]; \
-                                     list each node once per obstacle",
-                                    c.obstacle
+                                    "already meets {other} through contacts[{first}]; \
+                                     list each node once per obstacle or body",
                                 ),
                             ),
                         ));
                     }
                 }
                 contact_nodes.extend_from_slice(&nodes_of[ci]);
+            }
+            // the master surfaces on this body take no mass either (both sides of an
+            // interface, as Khenous–Laborde–Renard redistribute it)
+            for (ci, c) in self.contacts.iter().enumerate() {
+                if c.target.as_ref().is_some_and(|t| t.body == b.name) {
+                    contact_nodes.extend(facets_of[ci].iter().flatten().copied());
+                }
             }
             contact_nodes.sort_unstable();
             contact_nodes.dedup();
@@ -755,6 +875,7 @@ impl Scene {
                     elements,
                     length,
                     area,
+                    ..
                 } => Rod {
                     length: *length,
                     area: *area,
@@ -765,14 +886,10 @@ impl Scene {
                 }
                 .assemble()
                 .map_err(at)?,
-                _ => assemble_with_contacts(
-                    &mesh,
-                    &b.material,
-                    b.formulation,
-                    b.mass,
-                    &contact_nodes,
-                )
-                .map_err(at)?,
+                _ => {
+                    assemble_with_contacts(mesh, &b.material, b.formulation, b.mass, &contact_nodes)
+                        .map_err(at)?
+                }
             };
             if let Some(r) = b.damping {
                 sys = sys.with_rayleigh(r.alpha, r.beta).map_err(at)?;
@@ -792,7 +909,7 @@ impl Scene {
             v0.extend((0..n).map(|i| vel[i % dim]));
             let mut fx = vec![false; n];
             for name in &b.fixed {
-                let set = node_set(&mesh, name).map_err(|e| at(prefix("fixed", e)))?;
+                let set = node_set(mesh, name).map_err(|e| at(prefix("fixed", e)))?;
                 for &v in &set {
                     for i in 0..dim {
                         fx[v * dim + i] = true;
@@ -821,8 +938,8 @@ impl Scene {
             geometry.points.extend_from_slice(&mesh.points);
             geometry.bodies.push((b.material, b.formulation));
             systems.push(sys);
-            meshes.push(mesh);
         }
+        let meshes = all_meshes;
         let offsets: Vec<usize> = systems
             .iter()
             .scan(0, |acc, s| {
@@ -939,6 +1056,7 @@ impl Scene {
         }
         // contacts
         let mut sets: Vec<Box<dyn ContactSet>> = Vec::new();
+        let mut interfaces = Vec::new();
         for (ci, c) in self.contacts.iter().enumerate() {
             let at = |e: Error| prefix(&format!("contacts[{ci}]"), e);
             let bi = self
@@ -947,12 +1065,43 @@ impl Scene {
                 .position(|b| b.name == c.body)
                 .expect("validated");
             let mesh = &meshes[bi];
-            let obstacle = self
-                .obstacles
-                .iter()
-                .find(|o| o.name() == c.obstacle)
-                .expect("validated");
             let nodes = std::mem::take(&mut nodes_of[ci]);
+            if let Some(t) = &c.target {
+                let ti = self.body_index(&t.body);
+                let node_dofs = |body: usize, v: usize| -> [Option<usize>; 3] {
+                    let mut d = [None; 3];
+                    for (i, di) in d.iter_mut().enumerate().take(dim) {
+                        *di = map[offsets[body] + v * dim + i];
+                    }
+                    d
+                };
+                let set = crate::contact::bodies::build(
+                    crate::contact::bodies::Interface {
+                        dim,
+                        slave: &nodes,
+                        slave_points: &mesh.points,
+                        slave_dofs: &|v| node_dofs(bi, v),
+                        facets: &facets_of[ci],
+                        master_points: &meshes[ti].points,
+                        master_dofs: &|v| node_dofs(ti, v),
+                    },
+                    t.pairing == Pairing::NodeToNode,
+                    (c.restitution, c.friction),
+                    t.search,
+                    t.capacity
+                        .unwrap_or(crate::contact::bodies::DEFAULT_CAPACITY),
+                )
+                .map_err(at)?;
+                interfaces.push(format!(
+                    "contacts[{ci}]: {} nodes of \"{}\" against {}",
+                    set.0.len(),
+                    c.body,
+                    set.1
+                ));
+                sets.push(set.0);
+                continue;
+            }
+            let obstacle = self.obstacle(c);
             let mut dofs = Vec::new();
             let mut refs = Vec::new();
             for &v in &nodes {
@@ -997,6 +1146,7 @@ impl Scene {
             gravity: self.loads.gravity.is_some(),
             fixed_dofs,
             linear_structure: system.nonlinear.is_empty(),
+            interfaces,
         };
         let n = system.ndof();
         if crate::model::ordering::worth_ordering(&geometry) {
@@ -1016,7 +1166,14 @@ impl Scene {
 
     /// The nodes of contact `c` on `mesh`: its node set (`boundary` and `all`
     /// included), kept where the initial gap to the obstacle is at most `within`.
-    fn contact_nodes(&self, mesh: &Mesh, c: &ContactSpec, dim: usize) -> Result<Vec<usize>, Error> {
+    fn contact_nodes(
+        &self,
+        mesh: &Mesh,
+        c: &ContactSpec,
+        dim: usize,
+        facets: &[Vec<usize>],
+        meshes: &[Mesh],
+    ) -> Result<Vec<usize>, Error> {
         let nodes = node_set(mesh, &c.nodes)?;
         if nodes.is_empty() {
             return Err(Error::invalid("nodes", &c.nodes, "the node set is empty"));
@@ -1025,11 +1182,36 @@ impl Scene {
             return Ok(nodes);
         };
         require_positive("within", d)?;
-        let obstacle = self
-            .obstacles
-            .iter()
-            .find(|o| o.name() == c.obstacle)
-            .expect("validated");
+        if let Some(t) = &c.target {
+            // the distance to the nearest facet's box (a lower bound of the distance to
+            // the surface: keeps every node within `d`, and a few more)
+            let master = &meshes[self.body_index(&t.body)];
+            let dist = crate::contact::bodies::box_distances(
+                nodes.iter().map(|&v| mesh.points[v]),
+                facets,
+                &master.points,
+            );
+            let kept: Vec<usize> = nodes
+                .iter()
+                .zip(&dist)
+                .filter(|(_, x)| **x <= d)
+                .map(|(&v, _)| v)
+                .collect();
+            if kept.is_empty() {
+                return Err(Error::invalid(
+                    "within",
+                    crate::error::num(d),
+                    &format!(
+                        "no node of `{}` lies that close to the target surface (the nearest \
+                         is {:.3e} m away)",
+                        c.nodes,
+                        dist.iter().copied().fold(f64::INFINITY, f64::min)
+                    ),
+                ));
+            }
+            return Ok(kept);
+        }
+        let obstacle = self.obstacle(c);
         // the gaps at the reference positions, through the obstacle's own gap function
         // (node-local dofs: q = 0 there)
         let dofs: Vec<Vec<usize>> = (0..nodes.len())
@@ -1061,6 +1243,22 @@ impl Scene {
             ));
         }
         Ok(kept)
+    }
+
+    /// The index of the body named `name` (validated to exist).
+    fn body_index(&self, name: &str) -> usize {
+        self.bodies
+            .iter()
+            .position(|b| b.name == name)
+            .expect("validated body name")
+    }
+
+    /// The obstacle of contact `c` (validated to exist).
+    fn obstacle(&self, c: &ContactSpec) -> &ObstacleSpec {
+        self.obstacles
+            .iter()
+            .find(|o| Some(o.name()) == c.obstacle.as_deref())
+            .expect("validated obstacle name")
     }
 
     fn obstacle_set(
@@ -1158,8 +1356,12 @@ impl BodySpec {
                 Ok(m)
             }
             MeshSpec::Rod {
-                elements, length, ..
+                elements,
+                length,
+                origin,
+                ..
             } => {
+                crate::error::require_finite("mesh.origin", *origin)?;
                 if *elements == 0 {
                     return Err(Error::invalid("mesh.elements", 0, "must be at least 1"));
                 }
@@ -1170,7 +1372,7 @@ impl BodySpec {
                 let n = *elements;
                 for i in 0..=n {
                     m.points
-                        .push([*length * i as f64 / n.max(1) as f64, 0.0, 0.0]);
+                        .push([origin + *length * i as f64 / n.max(1) as f64, 0.0, 0.0]);
                 }
                 m.node_sets =
                     BTreeMap::from([("x0".to_string(), vec![0]), ("x1".to_string(), vec![n])]);
@@ -1367,6 +1569,35 @@ fn node_set(mesh: &crate::model::solid::Mesh, name: &str) -> Result<Vec<usize>, 
             )
         })
     }
+}
+
+/// The master surface of a contact between bodies: the boundary facets of `target`'s
+/// surface set on `mesh` (a rod's ends in the set, each with its outward direction).
+fn target_facets(mesh: &Mesh, body: &BodySpec, t: &TargetSpec) -> Result<Vec<Vec<usize>>, Error> {
+    let set = node_set(mesh, &t.surface).map_err(|e| prefix("surface", e))?;
+    let facets = if let MeshSpec::Rod { .. } = body.mesh {
+        // a rod's facets are its end nodes; the direction is recovered by `bodies::build`
+        // from the neighbouring node
+        let last = mesh.points.len() - 1;
+        set.iter()
+            .filter(|&&v| v == 0 || v == last)
+            .map(|&v| vec![v])
+            .collect()
+    } else {
+        mesh.boundary_facets(&set)
+    };
+    if facets.is_empty() {
+        return Err(Error::invalid(
+            "surface",
+            &t.surface,
+            &format!(
+                "holds no boundary facet of body \"{}\" (a facet counts when all its nodes \
+                 are in the set)",
+                t.body
+            ),
+        ));
+    }
+    Ok(facets)
 }
 
 /// The first line of a parser's message (toml's messages carry a source excerpt after it).
