@@ -181,6 +181,22 @@ pub struct Delassus {
     blk2: Vec<f64>,
     /// `blk[n..2n]` holds `Â⁻¹G τ` for the position correction.
     ng_ready: bool,
+    /// The contact zone's condensed data ([`Delassus::condense_zone`]).
+    zone: Option<Zone>,
+}
+
+/// The step matrix condensed once onto the contact-zone dofs `S` (every dof a Jacobian
+/// column can touch): `Y = Â⁻¹S` and `E = Â⁻¹K N S` (`n × z` each). With `G = S B`,
+/// `Â⁻¹G = Y B` and `Â⁻¹K N G = E B`, so re-linearizing a nonlinear `G` costs a few
+/// axpys per column instead of one or two sparse solves.
+#[derive(Debug)]
+struct Zone {
+    /// Zone index of each dof (`NONE` outside the zone).
+    pos: Vec<usize>,
+    /// The zone's dofs.
+    dofs: Vec<usize>,
+    y: Vec<f64>,
+    e: Vec<f64>,
 }
 
 impl Delassus {
@@ -282,7 +298,79 @@ impl Delassus {
             blk: vec![0.0; nb],
             blk2: vec![0.0; if with_d { nb } else { 0 }],
             ng_ready: false,
+            zone: None,
         })
+    }
+
+    /// Condenses the step matrix onto the contact zone `zone` (sorted dofs) for a
+    /// nonlinear `G` on a constant `Â` (see [`Zone`]): `z` solves (`2z` with `W_D`),
+    /// once, instead of `m` (`2m`) at every re-linearization. Taken on the dense path
+    /// when the zone's blocks fit the dense budget; returns whether it was.
+    pub fn condense_zone(&mut self, zone: &[usize], stiffness: &SparseMatrix) -> bool {
+        let (n, z) = (self.n, zone.len());
+        let per = if self.with_d && self.need_wd { 2 } else { 1 };
+        if !self.dense
+            || self.g_constant
+            || z == 0
+            || n.saturating_mul(z).saturating_mul(8 * per) > AUTO_DENSE_MAX_BYTES
+            || zone.iter().any(|&d| d >= n)
+        {
+            return false;
+        }
+        let mut pos = vec![NONE; n];
+        for (k, &d) in zone.iter().enumerate() {
+            pos[d] = k;
+        }
+        let mut y = vec![0.0; n * z];
+        for (k, &d) in zone.iter().enumerate() {
+            y[k * n + d] = 1.0;
+        }
+        // at set-up: the threaded blocked solves
+        solve_columns(self.factor.as_mut(), &mut y, z, true);
+        self.column_solves += z;
+        let mut e = Vec::new();
+        if per == 2 {
+            e = vec![0.0; n * z];
+            let k = stiffness.as_ref();
+            match self.metric {
+                Metric::Mass => k_times_columns(k, &y, &mut e, n),
+                Metric::Euclidean => {
+                    for (c, &d) in zone.iter().enumerate() {
+                        let col = &mut e[c * n..(c + 1) * n];
+                        for p in k.col_ptr()[d]..k.col_ptr()[d + 1] {
+                            col[k.row_idx()[p]] += k.val()[p];
+                        }
+                    }
+                }
+            }
+            solve_columns(self.factor.as_mut(), &mut e, z, true);
+            self.column_solves += z;
+        }
+        self.zone = Some(Zone {
+            pos,
+            dofs: zone.to_vec(),
+            y,
+            e,
+        });
+        true
+    }
+
+    /// `out = X B_a` for the zone's `X` (`Y` or `E`): column `a` of `Â⁻¹G` or
+    /// `Â⁻¹K N G` from the condensed zone.
+    fn zone_column(jac: &ContactJacobian, zone: &Zone, x: &[f64], a: usize, out: &mut [f64]) {
+        let n = out.len();
+        out.iter_mut().for_each(|v| *v = 0.0);
+        let (dofs, vals) = jac.col(a);
+        for (&d, &g) in dofs.iter().zip(vals) {
+            if g == 0.0 {
+                continue;
+            }
+            let k = zone.pos[d];
+            debug_assert!(k != NONE, "a Jacobian dof outside the condensed zone");
+            for (o, &v) in out.iter_mut().zip(&x[k * n..(k + 1) * n]) {
+                *o += g * v;
+            }
+        }
     }
 
     /// Number of contacts `m`.
@@ -312,7 +400,20 @@ impl Delassus {
 
     /// One phrase for summaries: which path runs.
     pub fn describe(&self) -> String {
-        if self.dense {
+        if let Some(z) = &self.zone {
+            format!(
+                "Delassus dense on the contact zone: Â⁻¹S {}×{} condensed once ({} zone \
+                 dofs), Â⁻¹G = (Â⁻¹S)B {}×{} and W {}×{} re-formed per linearization \
+                 without a solve",
+                self.n,
+                z.dofs.len(),
+                z.dofs.len(),
+                self.n,
+                self.m,
+                self.m,
+                self.m
+            )
+        } else if self.dense {
             format!(
                 "Delassus dense: Â⁻¹G {}×{} and W {}×{} condensed per linearization",
                 self.n, self.m, self.m, self.m
@@ -336,14 +437,20 @@ impl Delassus {
             return;
         }
         let (n, m) = (self.n, self.m);
-        for a in 0..m {
-            let col = &mut self.cg[a * n..(a + 1) * n];
-            col.iter_mut().for_each(|x| *x = 0.0);
-            self.jac.axpy(a, 1.0, col);
+        if let Some(zone) = &self.zone {
+            for (a, col) in self.cg.chunks_mut(n).enumerate() {
+                Self::zone_column(&self.jac, zone, &zone.y, a, col);
+            }
+        } else {
+            for a in 0..m {
+                let col = &mut self.cg[a * n..(a + 1) * n];
+                col.iter_mut().for_each(|x| *x = 0.0);
+                self.jac.axpy(a, 1.0, col);
+            }
+            let once = self.condensing_once();
+            solve_columns(self.factor.as_mut(), &mut self.cg, m, once);
+            self.column_solves += m;
         }
-        let once = self.condensing_once();
-        solve_columns(self.factor.as_mut(), &mut self.cg, m, once);
-        self.column_solves += m;
         for b in 0..m {
             for a in 0..m {
                 self.w[a + b * m] = self.jac.dot(a, &self.cg[b * n..(b + 1) * n]);
@@ -371,6 +478,17 @@ impl Delassus {
     /// The dense path's `Â⁻¹K N G` and `W_D` (after `Â⁻¹G`).
     fn form_dense_wd(&mut self, stiffness: &SparseMatrix) {
         let (n, m) = (self.n, self.m);
+        if let Some(zone) = &self.zone {
+            for (b, col) in self.d.chunks_mut(n).enumerate() {
+                Self::zone_column(&self.jac, zone, &zone.e, b, col);
+            }
+            for b in 0..m {
+                for a in 0..m {
+                    self.wd[a + b * m] = self.jac.dot(a, &self.d[b * n..(b + 1) * n]);
+                }
+            }
+            return;
+        }
         // K N G column by column: K (Â⁻¹G_b) for the mass metric, K G_b (a combination
         // of the few columns of K that G_b touches) for the Euclidean one. Sequential:
         // the products are bound by memory bandwidth, and on two threads the 98k-dof

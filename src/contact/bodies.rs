@@ -551,6 +551,21 @@ impl ContactSet for NodesOnSurface {
             self.write(s, s * self.block, hit, &mut gap[s], jac);
         }
     }
+    fn condensed(&self) -> bool {
+        true
+    }
+    fn zone(&self) -> Vec<usize> {
+        let mut z: Vec<usize> = self
+            .slave
+            .dofs
+            .iter()
+            .chain(&self.master.dofs)
+            .flat_map(|d| d[..self.dim].iter().flatten().copied())
+            .collect();
+        z.sort_unstable();
+        z.dedup();
+        z
+    }
     fn update(&mut self, q: &[f64]) -> Result<bool, Error> {
         if self.trivial() && self.ready {
             return Ok(false);

@@ -100,6 +100,24 @@ pub trait ContactSet: Send {
     fn update(&mut self, _q: &[f64]) -> Result<bool, crate::error::Error> {
         Ok(false)
     }
+    /// Every dof a Jacobian column can touch (sorted, no repeats): the contact zone the
+    /// Delassus data are condensed onto ([`crate::delassus::Delassus::condense_zone`]).
+    /// By default the dofs of [`ContactSet::pattern`]; a set whose columns move to
+    /// other dofs lists them all.
+    fn zone(&self) -> Vec<usize> {
+        let mut z: Vec<usize> = self.pattern().into_iter().flatten().collect();
+        z.sort_unstable();
+        z.dedup();
+        z
+    }
+    /// Whether the integrators should condense the step matrix onto [`ContactSet::zone`]
+    /// once instead of solving for `Â⁻¹G` at every re-linearization of a nonlinear `G`.
+    /// Contacts between bodies do; the rigid obstacles keep the per-linearization solves
+    /// (the same numbers to round-off, but their committed golden histories are pinned
+    /// to that arithmetic).
+    fn condensed(&self) -> bool {
+        false
+    }
     /// Rows over all blocks.
     fn rows(&self) -> usize {
         (0..self.len()).map(|a| self.dim(a)).sum()
@@ -337,6 +355,15 @@ impl ContactSet for Composite {
     }
     fn laws(&self) -> &[ContactLaw] {
         &self.laws
+    }
+    fn condensed(&self) -> bool {
+        self.sets.iter().any(|s| s.condensed())
+    }
+    fn zone(&self) -> Vec<usize> {
+        let mut z: Vec<usize> = self.sets.iter().flat_map(|s| s.zone()).collect();
+        z.sort_unstable();
+        z.dedup();
+        z
     }
     fn update(&mut self, q: &[f64]) -> Result<bool, crate::error::Error> {
         let mut any = false;

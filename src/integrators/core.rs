@@ -687,6 +687,10 @@ impl ThetaCore {
         core.contacts
             .evaluate(&core.state.q, &mut core.state.gap, &mut core.del.jac);
         if core.structure.is_none() {
+            if !g_constant && core.contacts.condensed() {
+                let zone = core.contacts.zone();
+                core.del.condense_zone(&zone, &core.sys.stiffness);
+            }
             core.del.refresh(&core.sys.stiffness);
         } else {
             // a nonlinear structure condenses with each step's first iteration matrix,

@@ -134,6 +134,10 @@ impl SchatzmanPaoli {
             .evaluate(&sp.q_prev, &mut sp.g_prev, &mut sp.del.jac);
         sp.contacts
             .evaluate(&sp.state.q, &mut sp.state.gap, &mut sp.del.jac);
+        if !sp.g_constant && sp.contacts.condensed() {
+            let zone = sp.contacts.zone();
+            sp.del.condense_zone(&zone, &sp.sys.stiffness);
+        }
         sp.del.refresh(&sp.sys.stiffness);
         sp.del
             .jac
