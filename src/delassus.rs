@@ -186,9 +186,11 @@ pub struct Delassus {
 }
 
 /// The step matrix condensed once onto the contact-zone dofs `S` (every dof a Jacobian
-/// column can touch): `Y = Â⁻¹S` and `E = Â⁻¹K N S` (`n × z` each). With `G = S B`,
-/// `Â⁻¹G = Y B` and `Â⁻¹K N G = E B`, so re-linearizing a nonlinear `G` costs a few
-/// axpys per column instead of one or two sparse solves.
+/// column can touch): `Y = Â⁻¹S` and `E = Â⁻¹K N S` (`n × z` each) and the zone's
+/// flexibilities `F = SᵀY`, `F_E = SᵀE` (`z × z`). With `G = S B` (`B` the few entries
+/// of each column), a re-linearization is `W = BᵀFB`, `W_D = BᵀF_E B` (no solve, no
+/// `n`-vector), and a correction `Â⁻¹G x = Y (B x)` touches only the columns of `Y`
+/// under the contacts that carry an impulse.
 #[derive(Debug)]
 struct Zone {
     /// Zone index of each dof (`NONE` outside the zone).
@@ -197,6 +199,61 @@ struct Zone {
     dofs: Vec<usize>,
     y: Vec<f64>,
     e: Vec<f64>,
+    f: Vec<f64>,
+    fe: Vec<f64>,
+    /// `F B` and `F_E B` (`z × m`), and a zone vector.
+    fb: Vec<f64>,
+    r: Vec<f64>,
+}
+
+impl Zone {
+    /// `out[:, b] = X B_b` for every column `b` (`X` is `F` or `F_E`, `z × z`).
+    fn times_b(jac: &ContactJacobian, pos: &[usize], z: usize, x: &[f64], out: &mut [f64]) {
+        for (b, col) in out.chunks_mut(z).enumerate() {
+            col.iter_mut().for_each(|v| *v = 0.0);
+            let (dofs, vals) = jac.col(b);
+            for (&d, &g) in dofs.iter().zip(vals) {
+                if g != 0.0 {
+                    let k = pos[d];
+                    for (o, &f) in col.iter_mut().zip(&x[k * z..(k + 1) * z]) {
+                        *o += g * f;
+                    }
+                }
+            }
+        }
+    }
+
+    /// `B_aᵀ v` for a zone vector `v`.
+    fn dot(jac: &ContactJacobian, pos: &[usize], a: usize, v: &[f64]) -> f64 {
+        let (dofs, vals) = jac.col(a);
+        dofs.iter()
+            .zip(vals)
+            .filter(|(_, g)| **g != 0.0)
+            .map(|(&d, &g)| g * v[pos[d]])
+            .sum()
+    }
+
+    /// `y += s X (B x)` for the zone's `X` (`Y` or `E`, `n × z`).
+    fn apply(&mut self, jac: &ContactJacobian, use_e: bool, s: f64, x: &[f64], y: &mut [f64]) {
+        let n = y.len();
+        self.r.iter_mut().for_each(|v| *v = 0.0);
+        for (a, &xa) in x.iter().enumerate() {
+            if xa != 0.0 {
+                let (dofs, vals) = jac.col(a);
+                for (&d, &g) in dofs.iter().zip(vals) {
+                    if g != 0.0 {
+                        self.r[self.pos[d]] += xa * g;
+                    }
+                }
+            }
+        }
+        let cols = if use_e { &self.e } else { &self.y };
+        for (k, &rk) in self.r.iter().enumerate() {
+            if rk != 0.0 {
+                axpy(s * rk, &cols[k * n..(k + 1) * n], y);
+            }
+        }
+    }
 }
 
 impl Delassus {
@@ -346,31 +403,35 @@ impl Delassus {
             solve_columns(self.factor.as_mut(), &mut e, z, true);
             self.column_solves += z;
         }
+        let restrict = |x: &[f64]| -> Vec<f64> {
+            let mut f = vec![0.0; z * z];
+            for j in 0..z {
+                for (i, &d) in zone.iter().enumerate() {
+                    f[i + j * z] = x[j * n + d];
+                }
+            }
+            f
+        };
+        let f = restrict(&y);
+        let fe = if e.is_empty() {
+            Vec::new()
+        } else {
+            restrict(&e)
+        };
+        // the n × m blocks are never formed on this path
+        self.cg = Vec::new();
+        self.d = Vec::new();
         self.zone = Some(Zone {
             pos,
             dofs: zone.to_vec(),
             y,
             e,
+            f,
+            fe,
+            fb: vec![0.0; z * self.m],
+            r: vec![0.0; z],
         });
         true
-    }
-
-    /// `out = X B_a` for the zone's `X` (`Y` or `E`): column `a` of `Â⁻¹G` or
-    /// `Â⁻¹K N G` from the condensed zone.
-    fn zone_column(jac: &ContactJacobian, zone: &Zone, x: &[f64], a: usize, out: &mut [f64]) {
-        let n = out.len();
-        out.iter_mut().for_each(|v| *v = 0.0);
-        let (dofs, vals) = jac.col(a);
-        for (&d, &g) in dofs.iter().zip(vals) {
-            if g == 0.0 {
-                continue;
-            }
-            let k = zone.pos[d];
-            debug_assert!(k != NONE, "a Jacobian dof outside the condensed zone");
-            for (o, &v) in out.iter_mut().zip(&x[k * n..(k + 1) * n]) {
-                *o += g * v;
-            }
-        }
     }
 
     /// Number of contacts `m`.
@@ -437,11 +498,42 @@ impl Delassus {
             return;
         }
         let (n, m) = (self.n, self.m);
-        if let Some(zone) = &self.zone {
-            for (a, col) in self.cg.chunks_mut(n).enumerate() {
-                Self::zone_column(&self.jac, zone, &zone.y, a, col);
+        if let Some(zone) = &mut self.zone {
+            // W = Bᵀ (F B)
+            let z = zone.dofs.len();
+            Zone::times_b(&self.jac, &zone.pos, z, &zone.f, &mut zone.fb);
+            for b in 0..m {
+                for a in 0..m {
+                    self.w[a + b * m] =
+                        Zone::dot(&self.jac, &zone.pos, a, &zone.fb[b * z..(b + 1) * z]);
+                }
+                self.slot[b] = b;
+                self.owner[b] = b;
             }
-        } else {
+            self.used = m;
+            if !self.with_d {
+                return;
+            }
+            if self.need_wd {
+                Zone::times_b(&self.jac, &zone.pos, z, &zone.fe, &mut zone.fb);
+                for b in 0..m {
+                    for a in 0..m {
+                        self.wd[a + b * m] =
+                            Zone::dot(&self.jac, &zone.pos, a, &zone.fb[b * z..(b + 1) * z]);
+                    }
+                }
+            }
+            for b in 0..m {
+                for a in 0..m {
+                    self.wn[a + b * m] = match self.metric {
+                        Metric::Euclidean => self.jac.col_dot_col(a, b),
+                        Metric::Mass => self.w[a + b * m],
+                    };
+                }
+            }
+            return;
+        }
+        {
             for a in 0..m {
                 let col = &mut self.cg[a * n..(a + 1) * n];
                 col.iter_mut().for_each(|x| *x = 0.0);
@@ -478,17 +570,6 @@ impl Delassus {
     /// The dense path's `Â⁻¹K N G` and `W_D` (after `Â⁻¹G`).
     fn form_dense_wd(&mut self, stiffness: &SparseMatrix) {
         let (n, m) = (self.n, self.m);
-        if let Some(zone) = &self.zone {
-            for (b, col) in self.d.chunks_mut(n).enumerate() {
-                Self::zone_column(&self.jac, zone, &zone.e, b, col);
-            }
-            for b in 0..m {
-                for a in 0..m {
-                    self.wd[a + b * m] = self.jac.dot(a, &self.d[b * n..(b + 1) * n]);
-                }
-            }
-            return;
-        }
         // K N G column by column: K (Â⁻¹G_b) for the mass metric, K G_b (a combination
         // of the few columns of K that G_b touches) for the Euclidean one. Sequential:
         // the products are bound by memory bandwidth, and on two threads the 98k-dof
@@ -700,6 +781,10 @@ impl Delassus {
         if x.iter().all(|&v| v == 0.0) {
             return;
         }
+        if let Some(zone) = &mut self.zone {
+            zone.apply(&self.jac, false, s, x, y);
+            return;
+        }
         if self.dense {
             let n = self.n;
             for (a, &xa) in x.iter().enumerate() {
@@ -733,7 +818,9 @@ impl Delassus {
         let any_tau = tau.iter().any(|&t| t != 0.0);
         if self.dense {
             self.add_inverse_g(1.0, p, v);
-            if feedback {
+            if feedback && let Some(zone) = &mut self.zone {
+                zone.apply(&self.jac, true, kfac, tau_used, v);
+            } else if feedback {
                 for (a, &xa) in tau_used.iter().enumerate() {
                     if xa != 0.0 {
                         axpy(kfac * xa, &self.d[a * n..(a + 1) * n], v);

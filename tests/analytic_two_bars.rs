@@ -239,3 +239,119 @@ fn node_to_node_pairing_gives_the_node_to_surface_history() {
     // round-off apart
     assert!(diff <= 1e-9 * scale, "{diff} of {scale}");
 }
+
+/// `meshes/hex_bars.toml` coarsened (striker 100 × 1 × 1 hex8 cells, target 75 × 2 × 2:
+/// non-matching at the interface, each of the striker's 4 end nodes against the
+/// target's 4 end quads) at `h = 1e-6 s`, with `--set`-style overrides.
+fn hex_scene(extra: &[&str]) -> Scene {
+    let mut set: Vec<String> = [
+        "bodies[0].mesh.cells=[100,1,1]",
+        "bodies[1].mesh.cells=[75,2,2]",
+        "time.dt=1e-6",
+        "time.t_end=6e-4",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    set.extend(extra.iter().map(|s| s.to_string()));
+    Scene::from_file_with(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/hex_bars.toml"),
+        &set,
+    )
+    .unwrap()
+}
+
+#[test]
+fn hex8_bars_meshed_non_matching_give_the_rod_plateau() {
+    use signorini::run::{Quiet, run_scene};
+    let f_ref = E * AREA * V0 / (2.0 * c0());
+    let t_ref = 2.0 / c0();
+    for kind in ["moreau-jean", "combined-projection"] {
+        let s = hex_scene(&[&format!("scheme.kind=\"{kind}\"")]);
+        let r = run_scene(&s, None, &mut Quiet).unwrap();
+        let o = Outcome {
+            force: r.force.clone(),
+            mean_velocity: [0.0; 2],
+            spread: [(0.0, 0.0); 2],
+            h: s.time.dt,
+        };
+        let (f, t) = plateau(&o);
+        let [e0, e1] = r.summary.energy;
+        eprintln!(
+            "{kind}: plateau {f:.4} N, duration {t:.4e} s, energy {e0:.9e} → {e1:.9e}, \
+             violation {:e}",
+            r.summary.max_violation
+        );
+        // ν = 0: plane sections stay plane and the 3-D bars carry the rods' waves; the
+        // non-matching interface and the coarse mesh cost little (measured +2.2e-5 and
+        // +0.9 %): issue 3's tolerances for the hex bar on a wall, 1 % and 2 %
+        assert!((f / f_ref - 1.0).abs() < 0.01, "{kind}: plateau {f}");
+        assert!((t / t_ref - 1.0).abs() < 0.02, "{kind}: duration {t}");
+        // no damping, but the e = 0 impact law takes the interface nodes' relative
+        // velocity when the discrete interface first closes (the consistent mass puts
+        // mass on them): measured 4.1e-4 (Moreau–Jean) and 2.5e-4 (Algorithm 2), all of
+        // it in the first step; then the energy is kept (4e-8)
+        assert!(
+            e1 < e0 && (e1 / e0 - 1.0).abs() < 1e-3,
+            "{kind}: energy {e0} → {e1}"
+        );
+        if kind == "combined-projection" {
+            assert!(r.summary.max_violation <= 1e-14, "{kind}");
+        }
+    }
+}
+
+#[test]
+fn redistributed_mass_on_both_sides_removes_the_impact_loss() {
+    use signorini::run::{Quiet, run_scene};
+    // Khenous–Laborde–Renard: no mass on the contact nodes of either side, so the
+    // closing interface has no inertia to lose. Algorithm 2, energy lost over the run:
+    // consistent mass 2.5e-4, redistributed on the striker only 1.2e-4, on both sides
+    // 5.0e-6 (measured)
+    let loss = |extra: &[&str]| {
+        let mut set = vec!["scheme.kind=\"combined-projection\""];
+        set.extend_from_slice(extra);
+        let r = run_scene(&hex_scene(&set), None, &mut Quiet).unwrap();
+        let [e0, e1] = r.summary.energy;
+        1.0 - e1 / e0
+    };
+    let both = loss(&[
+        "bodies[0].mass=\"redistributed\"",
+        "bodies[1].mass=\"redistributed\"",
+    ]);
+    let one = loss(&["bodies[0].mass=\"redistributed\""]);
+    eprintln!("energy lost: both sides {both:e}, striker only {one:e}");
+    assert!(both >= 0.0 && both < 2e-5, "{both}");
+    assert!(one > 5.0 * both, "{one} against {both}");
+}
+
+#[test]
+fn condensed_zone_and_per_column_delassus_agree() {
+    use signorini::run::{Quiet, run_scene};
+    // the zone condensation (auto, dense) against the columns path, which solves with
+    // the factor for every column: the same iterates to round-off (measured 5e-15)
+    let a = run_scene(&hex_scene(&[]), None, &mut Quiet).unwrap();
+    let b = run_scene(
+        &hex_scene(&["scheme.delassus=\"columns\""]),
+        None,
+        &mut Quiet,
+    )
+    .unwrap();
+    assert!(
+        a.summary.path.contains("contact zone"),
+        "{}",
+        a.summary.path
+    );
+    assert!(
+        b.summary.path.contains("per-active-column"),
+        "{}",
+        b.summary.path
+    );
+    let scale = a.force.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let diff = a
+        .force
+        .iter()
+        .zip(&b.force)
+        .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()));
+    assert!(diff <= 1e-9 * scale, "{diff} of {scale}");
+}
