@@ -183,6 +183,9 @@ pub struct Delassus {
     ng_ready: bool,
     /// The contact zone's condensed data ([`Delassus::condense_zone`]).
     zone: Option<Zone>,
+    /// The path was chosen by [`DelassusKind::Auto`] (the zone may then switch a
+    /// per-active-column choice to the dense one).
+    auto: bool,
 }
 
 /// The step matrix condensed once onto the contact-zone dofs `S` (every dof a Jacobian
@@ -356,23 +359,44 @@ impl Delassus {
             blk2: vec![0.0; if with_d { nb } else { 0 }],
             ng_ready: false,
             zone: None,
+            auto: kind == DelassusKind::Auto,
         })
     }
 
     /// Condenses the step matrix onto the contact zone `zone` (sorted dofs) for a
     /// nonlinear `G` on a constant `Â` (see [`Zone`]): `z` solves (`2z` with `W_D`),
     /// once, instead of `m` (`2m`) at every re-linearization. Taken on the dense path
-    /// when the zone's blocks fit the dense budget; returns whether it was.
+    /// (also when [`DelassusKind::Auto`] had chosen the per-active-column path for a
+    /// nonlinear `G`: its reason, `m` solves per re-linearization, is gone) when the
+    /// zone's `n × z` blocks and the `m × m` operators fit the dense budget; returns
+    /// whether it was.
     pub fn condense_zone(&mut self, zone: &[usize], stiffness: &SparseMatrix) -> bool {
-        let (n, z) = (self.n, zone.len());
+        let (n, z, m) = (self.n, zone.len(), self.m);
         let per = if self.with_d && self.need_wd { 2 } else { 1 };
-        if !self.dense
+        let blocks = n
+            .saturating_mul(z)
+            .saturating_mul(8 * per)
+            .saturating_add(m.saturating_mul(m).saturating_mul(8 * (per + 1)))
+            .saturating_add(z.saturating_mul(z).saturating_mul(8 * per));
+        if (!self.dense && !self.auto)
             || self.g_constant
             || z == 0
-            || n.saturating_mul(z).saturating_mul(8 * per) > AUTO_DENSE_MAX_BYTES
+            || blocks > AUTO_DENSE_MAX_BYTES
             || zone.iter().any(|&d| d >= n)
         {
             return false;
+        }
+        if !self.dense {
+            // the per-active-column choice becomes the dense one: m × m operators
+            self.dense = true;
+            self.cap = m;
+            self.w = vec![0.0; m * m];
+            self.wd = vec![0.0; if self.with_d { m * m } else { 0 }];
+            self.wn = vec![0.0; if self.with_d { m * m } else { 0 }];
+            self.owner = vec![NONE; m];
+            self.stamp = vec![0; m];
+            self.blk = Vec::new();
+            self.blk2 = Vec::new();
         }
         let mut pos = vec![NONE; n];
         for (k, &d) in zone.iter().enumerate() {

@@ -666,3 +666,106 @@ fn energy_momentum_needs_the_midpoint() {
         &["scheme.energy_momentum", "true", "theta = 0.5", "0.6"],
     );
 }
+
+/// Contacts between bodies (issue 18): each mistake refused with exit 2, naming the key,
+/// the value and what was expected.
+#[test]
+fn bad_contacts_between_bodies_are_refused() {
+    const TWO_BOXES: &str = r#"[time]
+dt = 1e-4
+t_end = 1e-3
+[[bodies]]
+name = "a"
+mesh = { generator = "box", cell = "hex8", cells = [2, 2, 1], size = [0.1, 0.1, 0.1], origin = [0.0, 0.0, 0.1] }
+material = { young = 1e6, poisson = 0.3, density = 1000.0 }
+[[bodies]]
+name = "b"
+mesh = { generator = "box", cell = "hex8", cells = [3, 3, 1], size = [0.1, 0.1, 0.1] }
+material = { young = 1e6, poisson = 0.3, density = 1000.0 }
+fixed = ["z0"]
+[[contacts]]
+body = "a"
+nodes = "z0"
+target = { body = "b", surface = "z1" }
+"#;
+    let cases: &[(&str, (&str, &str), &[&str])] = &[
+        (
+            "unknown target body",
+            ("body = \"b\", surface", "body = \"c\", surface"),
+            &["contacts[0].target.body", "value c", "names no body"],
+        ),
+        (
+            "self-contact",
+            ("body = \"b\", surface", "body = \"a\", surface"),
+            &["contacts[0].target.body", "self-contact is not modelled"],
+        ),
+        (
+            "obstacle and target",
+            ("nodes = \"z0\"", "nodes = \"z0\"\nobstacle = \"floor\""),
+            &["contacts[0]", "obstacle and target", "give one"],
+        ),
+        (
+            "unknown surface set",
+            ("surface = \"z1\"", "surface = \"top\""),
+            &["contacts[0].target.surface", "top", "no such node set"],
+        ),
+        (
+            "negative search distance",
+            ("surface = \"z1\"", "surface = \"z1\", search = -1.0"),
+            &["contacts[0].target.search", "-1", "> 0"],
+        ),
+        (
+            "zero capacity",
+            ("surface = \"z1\"", "surface = \"z1\", capacity = 0"),
+            &["contacts[0].target.capacity", "0", "1..=4096"],
+        ),
+        (
+            "unknown pairing",
+            ("surface = \"z1\"", "surface = \"z1\", pairing = \"mortar\""),
+            &["pairing", "mortar"],
+        ),
+        (
+            "node-to-node on non-matching meshes",
+            (
+                "surface = \"z1\"",
+                "surface = \"z1\", pairing = \"node-to-node\"",
+            ),
+            &[
+                "contacts[0].target.pairing",
+                "node-to-node",
+                "do not match",
+                "node-to-surface",
+            ],
+        ),
+        (
+            "too few candidates kept",
+            (
+                "surface = \"z1\"",
+                "surface = \"z1\", search = 0.2, capacity = 2",
+            ),
+            &["contacts[0].target.search", "candidate facets", "capacity"],
+        ),
+    ];
+    let dir = tmp("bodies");
+    for (class, (from, to), needles) in cases {
+        assert!(TWO_BOXES.contains(from), "{class}");
+        let text = TWO_BOXES.replace(from, to);
+        std::fs::write(dir.join("scene.toml"), &text).unwrap();
+        let mut want = vec!["scene.toml"];
+        want.extend_from_slice(needles);
+        expect(class, cli(&dir, &["check", "scene.toml"], &[]), 2, &want);
+    }
+    // the good scene passes, and `check` shows the interface and its search
+    std::fs::write(dir.join("scene.toml"), TWO_BOXES).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .current_dir(&*dir)
+        .args(["check", "scene.toml"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("interface") && text.contains("9 nodes of \"a\" against 9 facets"),
+        "{text}"
+    );
+}

@@ -443,3 +443,81 @@ fn nonlinear_bodies_write_green_lagrange_strain_and_cauchy_stress() {
         assert!(f.cell["cauchy_stress"].iter().all(|s| s.abs() < 1e-3));
     }
 }
+
+/// A box falling onto a deformable slab (contact between bodies, issue 18): the gap and
+/// the contact force show on both sides of the interface. Matching 2 × 2 faces, so each
+/// of the box's 9 base nodes sits over a slab node: in every frame the slab's top nodes
+/// show the gap of the box node above them (`1e-5 − 0.1 t` in free flight, the same
+/// number), its other nodes NaN; once in contact the slab's top face carries the
+/// opposite of the box's summed contact force.
+#[test]
+fn contacts_between_bodies_show_on_both_sides() {
+    let text = FREE_BOX
+        .replace(
+            "[[obstacles]]\nname = \"floor\"\ntype = \"plane\"\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n",
+            "[[bodies]]\nname = \"slab\"\nmesh = { generator = \"box\", cell = \"hex8\", cells = [2, 2, 1], size = [0.1, 0.1, 0.05], origin = [0.0, 0.0, -0.05] }\nmaterial = { young = 210e9, poisson = 0.3, density = 7800.0 }\nfixed = [\"z0\"]\n",
+        )
+        .replace("obstacle = \"floor\"", "target = { body = \"slab\", surface = \"z1\" }")
+        .replace("t_end = 5e-5", "t_end = 2e-4")
+        .replace("origin = [0.0, 0.0, 1e-3]", "origin = [0.0, 0.0, 1e-5]");
+    let mut scene = Scene::from_toml(&text).unwrap();
+    scene.base_dir = PathBuf::from(".");
+    let dir = tmp("bodies");
+    let options = OutputOptions {
+        stride: 1,
+        ..OutputOptions::default()
+    };
+    run_scene(
+        &scene,
+        Some(Output {
+            dir: &dir,
+            options: &options,
+        }),
+        &mut Quiet,
+    )
+    .unwrap();
+    let pvd = read_pvd(&dir.join("fields.pvd"));
+    assert_eq!(pvd.len(), 21);
+    let mut touched = false;
+    for (t, file) in &pvd {
+        let f = read_frame(&dir.join(file));
+        // points: the box's 27, then the slab's 18
+        assert_eq!(f.points.len(), 45 * 3);
+        let gap = &f.point["gap"];
+        let force = &f.point["contact_force"];
+        for p in 0..27 {
+            let z = f.points[3 * p + 2];
+            if z == 1e-5 {
+                // the box's base node and the slab node under it show one gap
+                let (x, y) = (f.points[3 * p], f.points[3 * p + 1]);
+                let under = (27..45)
+                    .find(|&s| {
+                        f.points[3 * s] == x
+                            && f.points[3 * s + 1] == y
+                            && f.points[3 * s + 2] == 0.0
+                    })
+                    .unwrap();
+                assert_eq!(gap[p].to_bits(), gap[under].to_bits(), "t = {t}");
+                if *t < 9e-5 {
+                    assert!((gap[p] - (1e-5 - 0.1 * t)).abs() < 1e-15, "gap {}", gap[p]);
+                }
+            } else {
+                assert!(gap[p].is_nan());
+            }
+        }
+        for s in 27..45 {
+            if f.points[3 * s + 2] < 0.0 {
+                assert!(gap[s].is_nan(), "a slab node off the interface");
+            }
+        }
+        let fz = |r: std::ops::Range<usize>| r.map(|p| force[3 * p + 2]).sum::<f64>();
+        let (fb, fs) = (fz(0..27), fz(27..45));
+        assert!(
+            (fb + fs).abs() <= 1e-9 * fb.abs().max(1.0),
+            "t = {t}: {fb} against {fs}"
+        );
+        touched |= fb > 0.0;
+    }
+    assert!(touched, "the box never reached the slab");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

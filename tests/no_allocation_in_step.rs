@@ -424,3 +424,67 @@ fn slider_crank_steps_do_not_allocate() {
         assert_eq!(allocated, 0, "{} allocated {allocated} times", kind.name());
     }
 }
+
+/// Contacts between bodies (issue 18): the coarse hex8 bars of `meshes/hex_bars.toml`
+/// (node-to-surface, the zone-condensed dense path and the per-column path) and the
+/// two rods (a constant `G`), under every scheme. The candidate lists are brought up to
+/// date by `prepare()` before each step (it may rebuild the tree and allocate); the step
+/// itself does not allocate.
+#[test]
+fn steps_of_contacts_between_bodies_do_not_allocate() {
+    use signorini::scene::file::Scene;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    for kind in SchemeKind::ALL {
+        for (file, delassus) in [
+            ("hex_bars.toml", "auto"),
+            ("hex_bars.toml", "columns"),
+            ("two_bars.toml", "auto"),
+        ] {
+            let set: Vec<String> = [
+                format!("scheme.kind=\"{}\"", kind.name()),
+                format!("scheme.delassus=\"{delassus}\""),
+            ]
+            .into_iter()
+            .chain(
+                (file == "hex_bars.toml")
+                    .then(|| {
+                        [
+                            "bodies[0].mesh.cells=[20,1,1]".to_string(),
+                            "bodies[1].mesh.cells=[15,2,2]".to_string(),
+                            "time.dt=5e-6".to_string(),
+                        ]
+                    })
+                    .into_iter()
+                    .flatten(),
+            )
+            .chain(
+                (file == "two_bars.toml")
+                    .then(|| {
+                        [
+                            "bodies[0].mesh.elements=50".to_string(),
+                            "bodies[1].mesh.elements=50".to_string(),
+                            "time.dt=4e-6".to_string(),
+                        ]
+                    })
+                    .into_iter()
+                    .flatten(),
+            )
+            .collect();
+            let scene = Scene::from_file_with(&root.join("meshes").join(file), &set).unwrap();
+            let (model, _) = scene.build().unwrap();
+            let mut integ = model.into_integrator(&scene.scheme, scene.time.dt).unwrap();
+            // 150 steps: contact (2L/c ≈ 77 and 96 steps), release, flight
+            let mut n = 0;
+            for _ in 0..150 {
+                integ.prepare().unwrap();
+                n += count_steps(integ.as_mut(), 1);
+            }
+            assert_eq!(
+                n,
+                0,
+                "{file} {} {delassus}: allocated {n} times",
+                kind.name()
+            );
+        }
+    }
+}

@@ -242,6 +242,18 @@ fn frictional_and_curved_scenes_resume_exactly() {
     check_resume("cylinder", &args, &[70, 250]);
 }
 
+/// Contacts between bodies (issue 18): the block sliding on the deformable slab moves its
+/// base nodes over the slab's facets and rebuilds its candidate lists every 6.25 mm of
+/// travel (about every 30 steps here). A resumed run rebuilds them at the restored state,
+/// at other steps than the uninterrupted run, and still picks the same facets: kills
+/// between rebuilds resume bit for bit.
+#[test]
+fn contacts_between_bodies_resume_exactly() {
+    let (_dir, slab) = short_scene("sliding_block_on_slab.toml", 0.04);
+    let args = ["run", slab.to_str().unwrap(), "--checkpoint-every", "37"];
+    check_resume("slab", &args, &[40, 111]);
+}
+
 /// A nonlinear structure (the neo-Hookean ball crushed at 5 m/s, `meshes/ball_crush.toml`
 /// cut to 0.012 s, in contact from step 2 to about 100): full Newton refactors at every iterate; modified Newton forms M̂ⁿ at
 /// each step's first iterate, so neither keeps anything across steps that a checkpoint

@@ -17,8 +17,10 @@
 //! as a node slides (unused entries hold a slave dof with the value 0).
 //!
 //! **Tangent frames that do not jump.** In 2-D `t = n` turned by +90° ([`super::frame`]).
-//! In 3-D each slave node keeps the direction `t_ref` it was given at set-up (the first
-//! edge of the facet nearest to it) and `t₁ = (t_ref − (t_ref·n) n)/|…|`, `t₂ = n × t₁`:
+//! In 3-D each slave node keeps the direction `t_ref` it was given at set-up (the
+//! first tangent of [`super::frame::tangents`] for the normal of the facet nearest to it,
+//! so the nodes of a flat interface share one frame) and
+//! `t₁ = (t_ref − (t_ref·n) n)/|…|`, `t₂ = n × t₁`:
 //! a function of `q` alone (so a resumed run rebuilds it exactly) that is continuous in
 //! `n`, also from one facet to the next, where the global "least aligned axis" rule of
 //! [`super::frame::tangents`] jumps. It falls back to that rule only if the normal turns
@@ -121,8 +123,6 @@ struct Projection {
     normal: [f64; 3],
     /// Shape function values at the closest point.
     weights: [f64; 4],
-    /// First edge direction of the facet (the 3-D frames' fallback reference).
-    edge: [f64; 3],
 }
 
 /// Slave nodes against the boundary facets of a master body (see the module doc).
@@ -255,7 +255,7 @@ impl NodesOnSurface {
             let f = tree.nearest_neighbor(x).map_or(0, |h| h.data as usize);
             let p = set.project(&set.facets[f], &x, &q0);
             set.rest_normal[s] = p.normal;
-            set.t_ref[s] = p.edge;
+            set.t_ref[s] = super::frame::tangents(&p.normal)[0];
         }
         set.build(&q0, 2.0 * search)?;
         Ok(set)
@@ -393,23 +393,17 @@ impl NodesOnSurface {
         for (k, node) in f.nodes().enumerate() {
             p[k] = self.master.position(node, q, dim);
         }
-        let finish = |y: [f64; 3], normal: [f64; 3], weights: [f64; 4], edge: [f64; 3]| {
+        let finish = |y: [f64; 3], normal: [f64; 3], weights: [f64; 4]| {
             let d = sub(x, &y);
             Projection {
                 dist: norm(&d),
                 gap: dot(&normal, &d),
                 normal,
                 weights,
-                edge,
             }
         };
         match f.len {
-            1 => finish(
-                p[0],
-                [f.sign, 0.0, 0.0],
-                [1.0, 0.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-            ),
+            1 => finish(p[0], [f.sign, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]),
             2 => {
                 let t = sub(&p[1], &p[0]);
                 let l2 = dot(&t, &t);
@@ -419,14 +413,14 @@ impl NodesOnSurface {
                 // counter-clockwise boundary of the body: the outward normal is t turned
                 // by −90°
                 let n = [t[1] / l, -t[0] / l, 0.0];
-                finish(y, n, [1.0 - xi, xi, 0.0, 0.0], [t[0] / l, t[1] / l, 0.0])
+                finish(y, n, [1.0 - xi, xi, 0.0, 0.0])
             }
             3 => {
                 let (e1, e2) = (sub(&p[1], &p[0]), sub(&p[2], &p[0]));
                 let n = unit(&cross(&e1, &e2));
                 let (b1, b2) = closest_on_triangle(x, &p[0], &e1, &e2);
                 let y = axpy(&axpy(&p[0], b1, &e1), b2, &e2);
-                finish(y, n, [1.0 - b1 - b2, b1, b2, 0.0], unit(&e1))
+                finish(y, n, [1.0 - b1 - b2, b1, b2, 0.0])
             }
             _ => {
                 let (xi, eta) = closest_on_quad(x, &p);
@@ -440,7 +434,7 @@ impl NodesOnSurface {
                         b[j] += deta[k] * p[k][j];
                     }
                 }
-                finish(y, unit(&cross(&a, &b)), w, unit(&sub(&p[1], &p[0])))
+                finish(y, unit(&cross(&a, &b)), w)
             }
         }
     }

@@ -195,6 +195,8 @@ pub struct FrameWriter {
     encoding: Encoding,
     /// point index of each contact (from the Jacobian pattern)
     contact_point: Vec<usize>,
+    /// The point of each dof (for the other side of a contact between bodies).
+    point_of_dof: Vec<usize>,
     /// `contact_status` point field (frictional scenes: 0 open, 1 stick, 2 slip, 3 closed without friction; NaN
     /// away from contacts), written only when the snapshots carry statuses
     status: Vec<f64>,
@@ -301,7 +303,7 @@ impl FrameWriter {
             }
         }
         // the point of each contact: the first dof of its normal column
-        let contact_point = (0..jac.contacts())
+        let contact_point: Vec<usize> = (0..jac.contacts())
             .map(|a| {
                 jac.col(jac.block(a).start)
                     .0
@@ -318,6 +320,7 @@ impl FrameWriter {
             stem: stem.to_string(),
             encoding,
             contact_point,
+            point_of_dof,
             frames: Vec::new(),
             disp: vec![0.0; 3 * np],
             vel: vec![0.0; 3 * np],
@@ -489,26 +492,30 @@ impl FrameWriter {
             self.vel[3 * p + i] = w * phi.eval(s.time);
         }
         self.gap.iter_mut().for_each(|f| *f = f64::NAN);
+        self.status.iter_mut().for_each(|f| *f = f64::NAN);
         for (a, &p) in self.contact_point.iter().enumerate() {
             if p == usize::MAX || a >= s.gap.len() {
                 continue;
             }
-            self.gap[p] = if self.gap[p].is_nan() {
-                s.gap[a]
-            } else {
-                self.gap[p].min(s.gap[a])
-            };
-        }
-        if !self.status.is_empty() {
-            self.status.iter_mut().for_each(|f| *f = f64::NAN);
-            for (a, &p) in self.contact_point.iter().enumerate() {
-                if p != usize::MAX && a < s.status.len() {
+            // the contact's node, and the master node across a contact between bodies
+            let other = s
+                .partner
+                .get(a)
+                .and_then(|&d| self.point_of_dof.get(d).copied())
+                .filter(|&o| o != p);
+            for q in std::iter::once(p).chain(other) {
+                self.gap[q] = if self.gap[q].is_nan() {
+                    s.gap[a]
+                } else {
+                    self.gap[q].min(s.gap[a])
+                };
+                if !self.status.is_empty() && a < s.status.len() {
                     // a node in several contacts shows its most engaged status
                     let v = s.status[a] as f64;
-                    self.status[p] = if self.status[p].is_nan() {
+                    self.status[q] = if self.status[q].is_nan() {
                         v
                     } else {
-                        self.status[p].max(v)
+                        self.status[q].max(v)
                     };
                 }
             }
@@ -770,6 +777,10 @@ pub struct Snapshot {
     pub gap: Vec<f64>,
     /// Open / stick / slip code per contact (frictional scenes; empty otherwise).
     pub status: Vec<u8>,
+    /// Per contact, a dof of the other side of a contact between bodies (the master
+    /// node that weighs most in the normal column), `usize::MAX` for an obstacle: the
+    /// frames show the gap and the status on both sides.
+    pub partner: Vec<usize>,
 }
 
 impl Snapshot {
@@ -789,6 +800,7 @@ impl Snapshot {
             reaction: vec![0.0; n],
             gap: vec![0.0; m],
             status: vec![0; statuses],
+            partner: vec![usize::MAX; m],
         }
     }
 
@@ -802,6 +814,22 @@ impl Snapshot {
         if self.status.len() == state.status.len() {
             for (o, s) in self.status.iter_mut().zip(&state.status) {
                 *o = s.code();
+            }
+        }
+        // the other side: the entry of the normal column most opposed to its largest one
+        // (a master node's `−N_i n` against the slave's `n`)
+        for (a, o) in self.partner.iter_mut().enumerate().take(jac.contacts()) {
+            let (dofs, vals) = jac.col(jac.block(a).start);
+            let r = vals
+                .iter()
+                .fold(0.0_f64, |m, &v| if v.abs() > m.abs() { v } else { m });
+            *o = usize::MAX;
+            let mut best = 0.0;
+            for (&d, &v) in dofs.iter().zip(vals) {
+                if v * r < best {
+                    best = v * r;
+                    *o = d;
+                }
             }
         }
         self.reaction.iter_mut().for_each(|r| *r = 0.0);
