@@ -16,6 +16,8 @@ committed files): `python meshes/make_meshes.py` from the repository root.
                     4e-5 m at the south pole (a tenth of the Hertz contact radius at
                     1 m/s, 4.2e-4 m) to 1e-3 m beyond 6 mm; groups "ball" (2), "axis" and
                     "surface" (1)
+  hertz_ball_lower.msh  its mirror image below y = 0 (north pole at the origin), the
+                    second ball of meshes/hertz_spheres.toml
 """
 import gmsh
 import meshio
@@ -23,12 +25,15 @@ import numpy as np
 
 
 
-def hertz_ball():
+def hertz_ball(lower=False):
     r = 0.01
     gmsh.model.add("hertz")
     occ = gmsh.model.occ
-    d = occ.addDisk(0, r, 0, r, r)
-    b = occ.addRectangle(0, 0, 0, r, 2 * r)
+    # the ball above y = 0 (south pole at the origin), or with `lower` its mirror image
+    # below (north pole at the origin)
+    s = -1.0 if lower else 1.0
+    d = occ.addDisk(0, s * r, 0, r, r)
+    b = occ.addRectangle(0, -2 * r if lower else 0, 0, r, 2 * r)
     occ.intersect([(2, d)], [(2, b)])
     occ.synchronize()
     axis, arc = [], []
@@ -56,7 +61,7 @@ def hertz_ball():
     gmsh.model.mesh.generate(2)
     gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
     gmsh.option.setNumber("Mesh.Binary", 0)
-    gmsh.write("meshes/hertz_ball.msh")
+    gmsh.write("meshes/hertz_ball_lower.msh" if lower else "meshes/hertz_ball.msh")
     gmsh.model.remove()
     for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
               "Mesh.MeshSizeFromCurvature"]:
@@ -101,6 +106,7 @@ gmsh.model.remove()
 
 # axisymmetric Hertz ball (tests/analytic_hertz_impact.rs)
 hertz_ball()
+hertz_ball(lower=True)
 gmsh.finalize()
 
 # plate of quads through meshio

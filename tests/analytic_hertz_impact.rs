@@ -92,3 +92,49 @@ fn peak_force_and_contact_time_follow_hertz() {
         "{coarse} at 1e-7, {peak} at 2.5e-8"
     );
 }
+
+/// Two equal balls in head-on impact (issue 18, contact between bodies):
+/// `meshes/hertz_spheres.toml`, the ball of `hertz_ball.toml` at 0.5 m/s against its
+/// mirror image at −0.5 m/s, the upper ball's surface nodes against the lower one's
+/// surface segments. Hertz for two equal spheres, `E* = E/(2(1 − ν²))`, `R* = R/2`,
+/// `m* = m/2` at 1 m/s relative, is the single ball at 0.5 m/s on a rigid frictionless
+/// wall (the symmetry plane): peak force `2300.9 · 0.5^{6/5}` = 1001.5 N and contact time
+/// `5.224e-5 · 0.5^{−1/5}` = 6.001e-5 s. The issue asks for 5 %. Measured at
+/// h = 2.5e-8 s: Moreau–Jean +1.71 % and −1.68 %, Algorithm 2 +1.56 % and −1.18 %
+/// (README, "Two balls"); the step error falls with h as for one ball (+6.3 %, +3.1 %,
+/// +1.7 %, +1.4 % on the peak at h = 1e-7, 5e-8, 2.5e-8, 1.25e-8): 3 % here.
+#[test]
+fn two_equal_balls_meet_with_the_hertz_force_and_duration() {
+    let (f1, t1) = hertz();
+    // the same law at half the speed: F ∝ v^{6/5}, t_c ∝ v^{−1/5}
+    let (f_ref, t_ref) = (f1 * 0.5f64.powf(1.2), t1 * 0.5f64.powf(-0.2));
+    assert!((f_ref - 1001.5).abs() < 0.1 && (t_ref - 6.001e-5).abs() < 1e-8);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/hertz_spheres.toml");
+    for kind in ["moreau-jean", "combined-projection"] {
+        let scene = Scene::from_file_with(&path, &[format!("scheme.kind=\"{kind}\"")]).unwrap();
+        let h = scene.time.dt;
+        let (model, _) = scene.build().unwrap();
+        let mut integ = model.into_integrator(&scene.scheme, h).unwrap();
+        let (mut peak, mut first, mut last) = (0.0_f64, None, 0.0);
+        for _ in 0..scene.steps() {
+            integ.prepare().unwrap();
+            let st = integ.step().unwrap();
+            assert_eq!(st.caps_hit, 0, "{kind}");
+            let s = integ.state();
+            let force: f64 = s.impulse.iter().sum::<f64>() / h;
+            if force > 0.0 {
+                peak = peak.max(force);
+                first.get_or_insert(s.time - h);
+                last = s.time;
+            }
+        }
+        let dur = last - first.unwrap();
+        eprintln!(
+            "{kind}: peak {peak:.1} N ({:+.2} %), contact {dur:.4e} s ({:+.2} %)",
+            100.0 * (peak / f_ref - 1.0),
+            100.0 * (dur / t_ref - 1.0)
+        );
+        assert!((peak / f_ref - 1.0).abs() < 0.03, "{kind}: peak {peak}");
+        assert!((dur / t_ref - 1.0).abs() < 0.03, "{kind}: duration {dur}");
+    }
+}

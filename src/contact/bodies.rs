@@ -31,9 +31,14 @@
 //! twice the search distance `s`, queried with the slave's position; they are rebuilt
 //! only when some node of either side has moved more than `s/2` since the last build
 //! (a Verlet list). Between builds every facet within `s` of a slave is therefore among
-//! its candidates, and the narrow phase picks the nearest of them (the lowest facet
-//! index on a tie), so the choice does not depend on when the lists were built: a
-//! resumed run picks the same facets. A slave with no facet within `s` has the gap `s`
+//! its candidates. At the start of each step ([`ContactSet::update`]) each slave is
+//! paired with the nearest of them at `q_k` (the lowest facet index on a tie), so the
+//! pairing does not depend on when the lists were built and a resumed run pairs alike;
+//! the pairing holds through the step's Newton iterations, where the closest point moves
+//! on the paired facet (clamped to its edges) and the normal turns with it. Re-pairing
+//! inside the Newton loop ping-pongs between the two segments at a vertex of a convex
+//! master surface: the two Hertz balls of `meshes/hertz_spheres.toml` stopped at the
+//! Newton cap at step 877 that way. A slave with no facet within `s` has the gap `s`
 //! and a column on its own dofs along the normal of its set-up facet: it cannot close
 //! within the step (the rebuild rule guarantees that no facet is nearer than `s/2`).
 //! Each slave holds at most [`NodesOnSurface::capacity`] candidates; a build that
@@ -59,6 +64,9 @@ use crate::error::{Error, require_positive};
 /// node at a vertex of a structured hex mesh's face sees 4 quads, of a tet mesh's face
 /// up to about 10 triangles).
 pub const DEFAULT_CAPACITY: usize = 32;
+
+/// A slave paired with no facet.
+const NO_FACET: u32 = u32::MAX;
 
 /// A boundary facet of the master body: its nodes (indices into the master nodes) in
 /// the order that makes its normal point out of the body.
@@ -145,6 +153,9 @@ pub struct NodesOnSurface {
     built: Vec<[f64; 3]>,
     /// Whether the lists were ever built.
     ready: bool,
+    /// The facet each slave is paired with for the step ([`NO_FACET`]: none within the
+    /// search distance).
+    pair: Vec<u32>,
     /// Normal and tangent reference of each slave's set-up facet.
     rest_normal: Vec<[f64; 3]>,
     t_ref: Vec<[f64; 3]>,
@@ -240,6 +251,7 @@ impl NodesOnSurface {
             count: vec![0; m],
             built: vec![[0.0; 3]; nodes],
             ready: false,
+            pair: vec![0; m],
             rest_normal: vec![[0.0; 3]; m],
             t_ref: vec![[0.0; 3]; m],
             builds: 0,
@@ -258,6 +270,7 @@ impl NodesOnSurface {
             set.t_ref[s] = super::frame::tangents(&p.normal)[0];
         }
         set.build(&q0, 2.0 * search)?;
+        set.pair_at(&q0);
         Ok(set)
     }
 
@@ -371,6 +384,25 @@ impl NodesOnSurface {
             })
             .collect();
         RTree::bulk_load(boxes)
+    }
+
+    /// Pairs each slave with its nearest candidate facet at `q` (none beyond the search
+    /// distance); `true` when a pairing changed.
+    fn pair_at(&mut self, q: &[f64]) -> bool {
+        let mut changed = false;
+        for s in 0..self.len() {
+            let x = self.slave.position(s, q, self.dim);
+            let f = if self.trivial() {
+                0
+            } else {
+                self.nearest(s, &x, q)
+                    .filter(|(_, p)| p.dist <= self.search)
+                    .map_or(NO_FACET, |(f, _)| f as u32)
+            };
+            changed |= f != self.pair[s];
+            self.pair[s] = f;
+        }
+        changed
     }
 
     /// The nearest candidate facet of slave `s` at `x` and its projection.
@@ -535,13 +567,11 @@ impl ContactSet for NodesOnSurface {
     fn evaluate(&self, q: &[f64], gap: &mut [f64], jac: &mut ContactJacobian) {
         let dim = self.dim;
         for s in 0..self.len() {
-            let x = self.slave.position(s, q, dim);
-            let hit = if self.trivial() {
-                Some((0, self.project(&self.facets[0], &x, q)))
-            } else {
-                self.nearest(s, &x, q)
-                    .filter(|(_, p)| p.dist <= self.search)
-            };
+            let f = self.pair[s];
+            let hit = (f != NO_FACET).then(|| {
+                let x = self.slave.position(s, q, dim);
+                (f as usize, self.project(&self.facets[f as usize], &x, q))
+            });
             self.write(s, s * self.block, hit, &mut gap[s], jac);
         }
     }
@@ -561,7 +591,7 @@ impl ContactSet for NodesOnSurface {
         z
     }
     fn update(&mut self, q: &[f64]) -> Result<bool, Error> {
-        if self.trivial() && self.ready {
+        if self.trivial() {
             return Ok(false);
         }
         let dim = self.dim;
@@ -578,7 +608,7 @@ impl ContactSet for NodesOnSurface {
         if stale {
             self.build(q, 2.0 * self.search)?;
         }
-        Ok(stale)
+        Ok(self.pair_at(q))
     }
     fn laws(&self) -> &[ContactLaw] {
         &self.laws

@@ -94,9 +94,10 @@ pub trait ContactSet: Send {
     /// The law of each contact.
     fn laws(&self) -> &[ContactLaw];
     /// Brings the set's search data up to date at `q` at the start of a step (the
-    /// candidate facets of contacts between bodies, [`bodies`]); `true` when it rebuilt
-    /// them. It may allocate, so the integrators call it outside the step's Newton loop;
-    /// a set with fixed geometry does nothing.
+    /// candidate facets and the pairing of contacts between bodies, [`bodies`]); `true`
+    /// when the Jacobian at `q` may have changed (a node paired with another facet). It
+    /// may allocate (a rebuilt tree), so the integrators call it outside the step's
+    /// Newton loop; a set with fixed geometry does nothing.
     fn update(&mut self, _q: &[f64]) -> Result<bool, crate::error::Error> {
         Ok(false)
     }

@@ -1629,14 +1629,13 @@ impl ThetaCore {
     }
 
     /// Brings the contact set's search data up to date at `q_k` ([`ContactSet::update`]);
-    /// after a rebuild the gaps, Jacobian and Delassus data are evaluated again (they
-    /// change only for contacts that had no facet within the search distance).
+    /// when a pairing changed the gaps, Jacobian and Delassus data are evaluated again.
     pub fn update_contacts(&mut self) -> Result<(), Error> {
-        let rebuilt = self
+        let changed = self
             .contacts
             .update(&self.state.q)
             .map_err(|e| step_error(&self.state, self.h, e))?;
-        if rebuilt && !self.g_constant {
+        if changed && !self.g_constant {
             self.evaluate_at_state();
         }
         Ok(())
