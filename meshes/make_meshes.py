@@ -18,6 +18,9 @@ committed files): `python meshes/make_meshes.py` from the repository root.
                     "surface" (1)
   hertz_ball_lower.msh  its mirror image below y = 0 (north pole at the origin), the
                     second ball of meshes/hertz_spheres.toml
+  hertz_plate.msh   Gmsh 4.1 ASCII, the axisymmetric section of a thick plate under
+                    the ball (r ≤ 4 cm, 4 cm thick, top at y = 0), quad4 graded from
+                    4e-5 m at the origin to 2e-3 m; groups "plate" (2), "top", "bottom" (1)
 """
 import gmsh
 import meshio
@@ -69,6 +72,50 @@ def hertz_ball(lower=False):
     gmsh.option.setNumber("Mesh.RecombineAll", 0)
 
 
+def hertz_plate():
+    """The axisymmetric section of a thick steel plate under the ball: r in [0, 4 cm],
+    y in [-4 cm, 0], quad4 graded from 4e-5 m at the origin to 2e-3 m beyond 1 cm."""
+    w = 0.04
+    gmsh.model.add("plate")
+    occ = gmsh.model.occ
+    occ.addRectangle(0, -w, 0, w, w)
+    occ.synchronize()
+    top, bottom = [], []
+    for dim, t in gmsh.model.getEntities(1):
+        b = gmsh.model.getBoundingBox(dim, t)
+        if b[1] > -1e-6 and b[4] > -1e-6:
+            top.append(t)
+        elif b[1] < -w + 1e-6 and b[4] < -w + 1e-6:
+            bottom.append(t)
+    gmsh.model.addPhysicalGroup(2, [t for _, t in gmsh.model.getEntities(2)], name="plate")
+    gmsh.model.addPhysicalGroup(1, top, name="top")
+    gmsh.model.addPhysicalGroup(1, bottom, name="bottom")
+    origin = occ.addPoint(0, 0, 0)
+    occ.synchronize()
+    f = gmsh.model.mesh.field
+    f.add("Distance", 1)
+    f.setNumbers(1, "PointsList", [origin])
+    f.add("Threshold", 2)
+    f.setNumber(2, "InField", 1)
+    for k, v in [("SizeMin", 4e-5), ("SizeMax", 2e-3), ("DistMin", 1e-3), ("DistMax", 1e-2)]:
+        f.setNumber(2, k, v)
+    f.setAsBackgroundMesh(2)
+    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
+              "Mesh.MeshSizeFromCurvature"]:
+        gmsh.option.setNumber(k, 0)
+    gmsh.option.setNumber("Mesh.RecombineAll", 1)
+    gmsh.option.setNumber("Mesh.Algorithm", 8)
+    gmsh.model.mesh.generate(2)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.option.setNumber("Mesh.Binary", 0)
+    gmsh.write("meshes/hertz_plate.msh")
+    gmsh.model.remove()
+    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
+              "Mesh.MeshSizeFromCurvature"]:
+        gmsh.option.setNumber(k, 1)
+    gmsh.option.setNumber("Mesh.RecombineAll", 0)
+
+
 gmsh.initialize()
 gmsh.option.setNumber("General.Terminal", 0)
 
@@ -107,6 +154,7 @@ gmsh.model.remove()
 # axisymmetric Hertz ball (tests/analytic_hertz_impact.rs)
 hertz_ball()
 hertz_ball(lower=True)
+hertz_plate()
 gmsh.finalize()
 
 # plate of quads through meshio

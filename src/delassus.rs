@@ -30,6 +30,14 @@
 //!   pool is allocated at construction; when it is full, the column of the contact
 //!   inactive for longest is recomputed on demand, so the step loop never allocates.
 //!
+//! * **dense on the contact zone** (contacts between bodies, [`Delassus::condense_zone`]):
+//!   for a nonlinear `G` on a constant `Â`, every contact being nodal, `G = S B` with `S`
+//!   the fixed selection of the `z` dofs any column can touch and `B` a few entries per
+//!   column. `Y = Â⁻¹S`, `E = Â⁻¹K N S` (`n × z`) and the zone flexibilities `F = SᵀY`,
+//!   `F_E = SᵀE` (`z × z`) are formed once (`z` or `2z` solves); a re-linearization is
+//!   then `W = BᵀFB`, `W_D = BᵀF_E B` without a solve, and a correction `Â⁻¹G x` is
+//!   `Y (B x)` over the zone columns under the rows that carry an impulse.
+//!
 //! The `Auto` choice takes the dense path while the dense blocks stay under 2 GiB and
 //! either `G` is constant (the blocks are formed once, by blocked solves) or there are
 //! at most [`AUTO_DENSE_MAX_CONTACTS`] contacts (a nonlinear `G` re-forms every block at
@@ -206,13 +214,51 @@ struct Zone {
     fe: Vec<f64>,
     /// `F B` and `F_E B` (`z × m`), and a zone vector.
     fb: Vec<f64>,
+    feb: Vec<f64>,
     r: Vec<f64>,
+    /// Rows whose column `B_α` never changes (a plane contact beside contacts between
+    /// bodies): their `F B` columns and their `W`, `W_D` entries with each other are
+    /// formed once.
+    fixed: Vec<bool>,
+    /// `W` and `W_D` formed once already.
+    formed: [bool; 2],
 }
 
 impl Zone {
-    /// `out[:, b] = X B_b` for every column `b` (`X` is `F` or `F_E`, `z × z`).
-    fn times_b(jac: &ContactJacobian, pos: &[usize], z: usize, x: &[f64], out: &mut [f64]) {
-        for (b, col) in out.chunks_mut(z).enumerate() {
+    /// `out = Bᵀ X B` (`m × m`, column-major) with `X = F_E` (`e`) or `F`; after the
+    /// first time only the entries of a changing row (not [`Zone::fixed`]).
+    fn condensed(&mut self, jac: &ContactJacobian, e: bool, out: &mut [f64]) {
+        let z = self.dofs.len();
+        let m = jac.ncols();
+        let all = !self.formed[usize::from(e)];
+        let (x, xb) = if e {
+            (&self.fe, &mut self.feb)
+        } else {
+            (&self.f, &mut self.fb)
+        };
+        Self::times_b(jac, &self.pos, z, x, xb, |b| all || !self.fixed[b]);
+        for b in 0..m {
+            let col = &xb[b * z..(b + 1) * z];
+            for a in 0..m {
+                if all || !self.fixed[a] || !self.fixed[b] {
+                    out[a + b * m] = Self::dot(jac, &self.pos, a, col);
+                }
+            }
+        }
+        self.formed[usize::from(e)] = true;
+    }
+
+    /// `out[:, b] = X B_b` for the columns `b` that `which` selects (`X` is `F` or
+    /// `F_E`, `z × z`).
+    fn times_b(
+        jac: &ContactJacobian,
+        pos: &[usize],
+        z: usize,
+        x: &[f64],
+        out: &mut [f64],
+        which: impl Fn(usize) -> bool,
+    ) {
+        for (b, col) in out.chunks_mut(z).enumerate().filter(|(b, _)| which(*b)) {
             col.iter_mut().for_each(|v| *v = 0.0);
             let (dofs, vals) = jac.col(b);
             for (&d, &g) in dofs.iter().zip(vals) {
@@ -364,20 +410,27 @@ impl Delassus {
     }
 
     /// Condenses the step matrix onto the contact zone `zone` (sorted dofs) for a
-    /// nonlinear `G` on a constant `Â` (see [`Zone`]): `z` solves (`2z` with `W_D`),
-    /// once, instead of `m` (`2m`) at every re-linearization. Taken on the dense path
+    /// nonlinear `G` on a constant `Â` (the zone blocks `Y`, `E`, `F`, `F_E` of the module
+    /// doc): `z` solves (`2z` with `W_D`), once, instead of `m` (`2m`) at every
+    /// re-linearization. Taken on the dense path
     /// (also when [`DelassusKind::Auto`] had chosen the per-active-column path for a
     /// nonlinear `G`: its reason, `m` solves per re-linearization, is gone) when the
     /// zone's `n × z` blocks and the `m × m` operators fit the dense budget; returns
-    /// whether it was.
-    pub fn condense_zone(&mut self, zone: &[usize], stiffness: &SparseMatrix) -> bool {
+    /// whether it was. `fixed` flags the rows whose column never changes (a linear
+    /// contact block beside nonlinear ones): their entries are formed once.
+    pub fn condense_zone(
+        &mut self,
+        zone: &[usize],
+        fixed: Vec<bool>,
+        stiffness: &SparseMatrix,
+    ) -> bool {
         let (n, z, m) = (self.n, zone.len(), self.m);
         let per = if self.with_d && self.need_wd { 2 } else { 1 };
         let blocks = n
             .saturating_mul(z)
             .saturating_mul(8 * per)
             .saturating_add(m.saturating_mul(m).saturating_mul(8 * (per + 1)))
-            .saturating_add(z.saturating_mul(z).saturating_mul(8 * per));
+            .saturating_add(z.saturating_mul(z + m).saturating_mul(8 * per));
         if (!self.dense && !self.auto)
             || self.g_constant
             || z == 0
@@ -453,7 +506,10 @@ impl Delassus {
             f,
             fe,
             fb: vec![0.0; z * self.m],
+            feb: vec![0.0; if per == 2 { z * self.m } else { 0 }],
             r: vec![0.0; z],
+            fixed,
+            formed: [false; 2],
         });
         true
     }
@@ -523,41 +579,8 @@ impl Delassus {
         }
         let (n, m) = (self.n, self.m);
         if let Some(zone) = &mut self.zone {
-            // W = Bᵀ (F B)
-            let z = zone.dofs.len();
-            Zone::times_b(&self.jac, &zone.pos, z, &zone.f, &mut zone.fb);
-            for b in 0..m {
-                for a in 0..m {
-                    self.w[a + b * m] =
-                        Zone::dot(&self.jac, &zone.pos, a, &zone.fb[b * z..(b + 1) * z]);
-                }
-                self.slot[b] = b;
-                self.owner[b] = b;
-            }
-            self.used = m;
-            if !self.with_d {
-                return;
-            }
-            if self.need_wd {
-                Zone::times_b(&self.jac, &zone.pos, z, &zone.fe, &mut zone.fb);
-                for b in 0..m {
-                    for a in 0..m {
-                        self.wd[a + b * m] =
-                            Zone::dot(&self.jac, &zone.pos, a, &zone.fb[b * z..(b + 1) * z]);
-                    }
-                }
-            }
-            for b in 0..m {
-                for a in 0..m {
-                    self.wn[a + b * m] = match self.metric {
-                        Metric::Euclidean => self.jac.col_dot_col(a, b),
-                        Metric::Mass => self.w[a + b * m],
-                    };
-                }
-            }
-            return;
-        }
-        {
+            zone.condensed(&self.jac, false, &mut self.w);
+        } else {
             for a in 0..m {
                 let col = &mut self.cg[a * n..(a + 1) * n];
                 col.iter_mut().for_each(|x| *x = 0.0);
@@ -566,11 +589,13 @@ impl Delassus {
             let once = self.condensing_once();
             solve_columns(self.factor.as_mut(), &mut self.cg, m, once);
             self.column_solves += m;
+            for b in 0..m {
+                for a in 0..m {
+                    self.w[a + b * m] = self.jac.dot(a, &self.cg[b * n..(b + 1) * n]);
+                }
+            }
         }
         for b in 0..m {
-            for a in 0..m {
-                self.w[a + b * m] = self.jac.dot(a, &self.cg[b * n..(b + 1) * n]);
-            }
             self.slot[b] = b;
             self.owner[b] = b;
         }
@@ -579,7 +604,10 @@ impl Delassus {
             return;
         }
         if self.need_wd {
-            self.form_dense_wd(stiffness);
+            match &mut self.zone {
+                Some(zone) => zone.condensed(&self.jac, true, &mut self.wd),
+                None => self.form_dense_wd(stiffness),
+            }
         }
         for b in 0..m {
             for a in 0..m {

@@ -12,7 +12,7 @@
 
 mod common;
 
-use common::blocks::momentum_x;
+use common::blocks::{check_pushed, contact_sums, momentum_x};
 use signorini::contact::block::BlockCorners;
 use signorini::contact::plane::NodesOnPlane;
 use signorini::contact::{ContactSet, ContactStatus};
@@ -337,24 +337,6 @@ fn scene_integrator(name: &str, kind: SchemeKind) -> Box<dyn Integrator> {
     model.into_integrator(&scene.scheme, scene.time.dt).unwrap()
 }
 
-/// The summed normal impulse `ΣP_N` (N·s) and the magnitude of the summed tangential
-/// force `|ΣP_T| / h` (N, the tangential impulses summed as vectors of the tangent plane).
-fn contact_sums(s: &signorini::integrators::State, h: f64) -> (f64, f64) {
-    let (td, nc) = (s.tangent_dim, s.impulse.len());
-    let pn: f64 = s.impulse.iter().sum();
-    let ft = (0..td)
-        .map(|j| {
-            (0..nc)
-                .map(|c| s.tangent_impulse[c * td + j])
-                .sum::<f64>()
-                .powi(2)
-        })
-        .sum::<f64>()
-        .sqrt()
-        / h;
-    (pn, ft)
-}
-
 /// `meshes/pushed_block.toml`: the hex8 block at rest on the floor (μ = 0.3), its top
 /// face pushed along x by a force ramped from 0 (t = 0.1 s) to 3 N (t = 1.1 s). Closed
 /// form: friction balances the push while it is below μ m g = 1.4715 N (until
@@ -364,53 +346,9 @@ fn contact_sums(s: &signorini::integrators::State, h: f64) -> (f64, f64) {
 /// to 1e-3 from t = 0.1 s.
 #[test]
 fn pushed_hex8_block_sticks_until_the_push_reaches_mu_m_g_then_slides() {
-    let (mu, m) = (0.3, 0.5);
-    let t_star = 0.1 + mu * m * G / 3.0;
     for kind in SCHEMES {
         let mut integ = scene_integrator("pushed_block", kind);
-        let h = integ.dt();
-        let mut reached = None;
-        while integ.state().time < 1.0 - 1e-12 {
-            let st = integ.step().unwrap();
-            assert_eq!(st.caps_hit, 0, "{kind:?}");
-            let s = integ.state();
-            let t = s.time;
-            let (pn, ft) = contact_sums(s, h);
-            let push = 3.0 * (t - 0.1).clamp(0.0, 1.0);
-            // ΣN = m g once settled (Moreau–Jean's contacts activate over the first steps)
-            if t >= 0.1 {
-                assert!(
-                    (pn / h / (m * G) - 1.0).abs() < 1e-3,
-                    "{kind:?} t = {t}: ΣN/mg = {}",
-                    pn / h / (m * G)
-                );
-            }
-            if (0.15..=0.55).contains(&t) {
-                assert!(
-                    (ft / push - 1.0).abs() < 0.01,
-                    "{kind:?} t = {t}: friction {ft} N, push {push} N"
-                );
-                assert!(
-                    ft < mu * pn / h,
-                    "{kind:?} t = {t}: beyond the cone while sticking"
-                );
-            }
-            if t >= 0.62 {
-                assert!(
-                    (ft / (mu * pn / h) - 1.0).abs() < 0.01,
-                    "{kind:?} t = {t}: |ΣT|/μΣN = {}",
-                    ft / (mu * pn / h)
-                );
-            }
-            if reached.is_none() && ft >= 0.99 * mu * pn / h {
-                reached = Some(t);
-            }
-        }
-        let t = reached.expect("never slid");
-        assert!(
-            (t / t_star - 1.0).abs() < 0.01,
-            "{kind:?}: slides from {t} s, analytic {t_star} s"
-        );
+        check_pushed(integ.as_mut(), &format!("{kind:?}"), 1.0);
     }
 }
 

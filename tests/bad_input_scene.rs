@@ -755,6 +755,21 @@ target = { body = "b", surface = "z1" }
         want.extend_from_slice(needles);
         expect(class, cli(&dir, &["check", "scene.toml"], &[]), 2, &want);
     }
+    // a node that moves more than half the search distance in a step could cross a
+    // facet the lists missed: the run stops (exit 1) naming the parameter
+    let fast = TWO_BOXES
+        .replace("surface = \"z1\"", "surface = \"z1\", search = 1e-3")
+        .replace(
+            "origin = [0.0, 0.0, 0.1] }",
+            "origin = [0.0, 0.0, 0.1] }\nvelocity = [0.0, 0.0, -10.0]",
+        );
+    std::fs::write(dir.join("fast.toml"), &fast).unwrap();
+    expect(
+        "a step longer than the search",
+        cli(&dir, &["run", "fast.toml", "--quiet", "--out", "out"], &[]),
+        1,
+        &["target.search", "in one step", "smaller time step"],
+    );
     // the good scene passes, and `check` shows the interface and its search
     std::fs::write(dir.join("scene.toml"), TWO_BOXES).unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_signorini"))

@@ -60,10 +60,10 @@ use rstar::{AABB, RTree};
 use super::{ContactJacobian, ContactLaw, ContactSet, check_friction, check_restitution};
 use crate::error::{Error, require_positive};
 
-/// Candidate facets kept per slave node by default (the R*-tree query's results; a
-/// node at a vertex of a structured hex mesh's face sees 4 quads, of a tet mesh's face
-/// up to about 10 triangles).
-pub const DEFAULT_CAPACITY: usize = 32;
+/// Candidate facets kept per slave node by default (the R*-tree query's results within
+/// twice the search distance: 9 to 25 quads of a uniform face with the default search,
+/// about twice as many triangles; 64 leaves room for graded and distorted surfaces).
+pub const DEFAULT_CAPACITY: usize = 64;
 
 /// A slave paired with no facet.
 const NO_FACET: u32 = u32::MAX;
@@ -149,8 +149,10 @@ pub struct NodesOnSurface {
     /// Candidate facets of slave `s`: `cand[s * capacity..][..count[s]]`, by facet index.
     cand: Vec<u32>,
     count: Vec<u32>,
-    /// Displacements of the slave then the master nodes at the last build.
+    /// Displacements of the slave then the master nodes at the last build, and at the
+    /// last update (the motion of a step).
     built: Vec<[f64; 3]>,
+    last: Vec<[f64; 3]>,
     /// Whether the lists were ever built.
     ready: bool,
     /// The facet each slave is paired with for the step ([`NO_FACET`]: none within the
@@ -250,6 +252,7 @@ impl NodesOnSurface {
             cand: vec![0; m * cap],
             count: vec![0; m],
             built: vec![[0.0; 3]; nodes],
+            last: vec![[0.0; 3]; nodes],
             ready: false,
             pair: vec![0; m],
             rest_normal: vec![[0.0; 3]; m],
@@ -590,6 +593,17 @@ impl ContactSet for NodesOnSurface {
         z.dedup();
         z
     }
+    fn restart(&mut self, q: &[f64]) {
+        let m = self.slave.dofs.len();
+        for k in 0..m + self.master.dofs.len() {
+            self.last[k] = if k < m {
+                displacement(&self.slave, k, q, self.dim)
+            } else {
+                displacement(&self.master, k - m, q, self.dim)
+            };
+        }
+        self.ready = false;
+    }
     fn update(&mut self, q: &[f64]) -> Result<bool, Error> {
         if self.trivial() {
             return Ok(false);
@@ -597,14 +611,30 @@ impl ContactSet for NodesOnSurface {
         let dim = self.dim;
         let m = self.slave.dofs.len();
         let limit = 0.25 * self.search * self.search;
-        let moved = |k: usize, u: [f64; 3]| {
-            let d = sub(&u, &self.built[k]);
-            dot(&d, &d) > limit
-        };
-        let stale = !self.ready
-            || (0..m).any(|k| moved(k, displacement(&self.slave, k, q, dim)))
-            || (0..self.master.dofs.len())
-                .any(|k| moved(m + k, displacement(&self.master, k, q, dim)));
+        let (mut stale, mut step) = (!self.ready, 0.0_f64);
+        for k in 0..m + self.master.dofs.len() {
+            let u = if k < m {
+                displacement(&self.slave, k, q, dim)
+            } else {
+                displacement(&self.master, k - m, q, dim)
+            };
+            let (d, e) = (sub(&u, &self.built[k]), sub(&u, &self.last[k]));
+            stale |= dot(&d, &d) > limit;
+            step = step.max(dot(&e, &e));
+            self.last[k] = u;
+        }
+        // a node that moves more than s/2 in one step may cross a facet the lists missed
+        if step > limit {
+            return Err(Error::invalid(
+                "target.search",
+                crate::error::num(self.search),
+                &format!(
+                    "a node moved {:.3e} m in one step, more than half the search distance: \
+                     give a larger search distance or a smaller time step",
+                    step.sqrt()
+                ),
+            ));
+        }
         if stale {
             self.build(q, 2.0 * self.search)?;
         }
@@ -769,10 +799,10 @@ impl Interface<'_> {
         (nodes, facets)
     }
 
-    /// Mean edge length of the master facets (1-D: a tenth of the master rod's
-    /// half-length).
-    fn facet_size(&self) -> f64 {
-        let (mut sum, mut n) = (0.0, 0usize);
+    /// Smallest and mean edge length of the master facets (1-D: both a twentieth of
+    /// the master rod's length).
+    fn facet_sizes(&self) -> (f64, f64) {
+        let (mut small, mut sum, mut n) = (f64::INFINITY, 0.0, 0usize);
         for f in self.facets {
             if f.len() < 2 {
                 continue;
@@ -782,15 +812,17 @@ impl Interface<'_> {
                     self.master_points[f[k]],
                     self.master_points[f[(k + 1) % f.len()]],
                 );
-                sum += norm(&sub(&a, &b));
+                let l = norm(&sub(&a, &b));
+                small = small.min(l);
+                sum += l;
                 n += 1;
                 if f.len() == 2 {
                     break;
                 }
             }
         }
-        if n > 0 {
-            sum / n as f64
+        if n > 0 && small > 0.0 {
+            (small, sum / n as f64)
         } else {
             let (lo, hi) = self
                 .master_points
@@ -798,7 +830,8 @@ impl Interface<'_> {
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
                     (l.min(p[0]), h.max(p[0]))
                 });
-            0.05 * (hi - lo).max(f64::MIN_POSITIVE)
+            let l = 0.05 * (hi - lo).max(f64::MIN_POSITIVE);
+            (l, l)
         }
     }
 }
@@ -808,7 +841,8 @@ impl Interface<'_> {
 /// node with the nearest master surface node, along the surface's mean outward normal
 /// there, refused when the pair is apart tangentially by more than 1e-6 of the facet
 /// size (the meshes do not match) or normally by more than the search distance.
-/// `search` defaults to half the mean facet edge length. Returns the set and a line
+/// `search` defaults to half the smallest facet edge (a graded surface keeps few
+/// candidates per node where it is fine). Returns the set and a line
 /// that describes it (for `signorini check`).
 pub fn build(
     side: Interface<'_>,
@@ -818,8 +852,8 @@ pub fn build(
     capacity: usize,
 ) -> Result<(Box<dyn ContactSet>, String), Error> {
     let dim = side.dim;
-    let size = side.facet_size();
-    let search = search.unwrap_or(0.5 * size);
+    let (smallest, size) = side.facet_sizes();
+    let search = search.unwrap_or(0.5 * smallest);
     let (master_nodes, facets) = side.master();
     let slave = Side {
         dofs: side.slave.iter().map(|&v| (side.slave_dofs)(v)).collect(),

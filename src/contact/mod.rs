@@ -84,6 +84,12 @@ pub trait ContactSet: Send {
     }
     /// True when `g` is affine in `q` and the frames are fixed (then `G` is constant).
     fn is_linear(&self) -> bool;
+    /// True when contact `alpha`'s block of `G` is constant (by default, when the whole
+    /// set is linear): a plane contact beside contacts between bodies keeps its block
+    /// while theirs change.
+    fn block_is_linear(&self, _alpha: usize) -> bool {
+        self.is_linear()
+    }
     /// Rows of contact `alpha`'s block: 1 without friction, the space dimension with it.
     fn dim(&self, alpha: usize) -> usize;
     /// The dofs touched by each Jacobian column, row by row (normal first in each block).
@@ -111,6 +117,10 @@ pub trait ContactSet: Send {
         z.dedup();
         z
     }
+    /// Forgets the search history before a run resumes at `q` (a checkpoint): the next
+    /// [`ContactSet::update`] rebuilds from `q` and measures the next step's motion
+    /// from it.
+    fn restart(&mut self, _q: &[f64]) {}
     /// Whether the integrators should condense the step matrix onto [`ContactSet::zone`]
     /// once instead of solving for `Â⁻¹G` at every re-linearization of a nonlinear `G`.
     /// Contacts between bodies do; the rigid obstacles keep the per-linearization solves
@@ -360,11 +370,18 @@ impl ContactSet for Composite {
     fn condensed(&self) -> bool {
         self.sets.iter().any(|s| s.condensed())
     }
+    fn block_is_linear(&self, alpha: usize) -> bool {
+        let (i, a) = self.owner[alpha];
+        self.sets[i].block_is_linear(a)
+    }
     fn zone(&self) -> Vec<usize> {
         let mut z: Vec<usize> = self.sets.iter().flat_map(|s| s.zone()).collect();
         z.sort_unstable();
         z.dedup();
         z
+    }
+    fn restart(&mut self, q: &[f64]) {
+        self.sets.iter_mut().for_each(|s| s.restart(q));
     }
     fn update(&mut self, q: &[f64]) -> Result<bool, crate::error::Error> {
         let mut any = false;

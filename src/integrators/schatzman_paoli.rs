@@ -136,7 +136,8 @@ impl SchatzmanPaoli {
             .evaluate(&sp.state.q, &mut sp.state.gap, &mut sp.del.jac);
         if !sp.g_constant && sp.contacts.condensed() {
             let zone = sp.contacts.zone();
-            sp.del.condense_zone(&zone, &sp.sys.stiffness);
+            let fixed = super::core::fixed_rows(sp.contacts.as_ref());
+            sp.del.condense_zone(&zone, fixed, &sp.sys.stiffness);
         }
         sp.del.refresh(&sp.sys.stiffness);
         sp.del
@@ -288,6 +289,7 @@ impl Integrator for SchatzmanPaoli {
         self.q_prev.copy_from_slice(s.vector("q_prev", n)?);
         self.g_prev.copy_from_slice(s.vector("g_prev", m)?);
         self.q_lin.copy_from_slice(s.vector("q_lin", n)?);
+        self.contacts.restart(&self.state.q);
         self.contacts.update(&self.state.q)?;
         if !self.g_constant {
             self.contacts

@@ -216,39 +216,13 @@ impl Mesh {
     /// Nodes on the boundary: those of the faces (edges in 2-D) that belong to exactly
     /// one cell.
     pub fn boundary_nodes(&self) -> Vec<usize> {
-        let mut count: std::collections::HashMap<Vec<usize>, usize> = Default::default();
-        for (kind, c) in &self.cells {
-            let faces: &[&[usize]] = match kind {
-                CellKind::Tri3 => &[&[0, 1], &[1, 2], &[2, 0]],
-                CellKind::Quad4 => &[&[0, 1], &[1, 2], &[2, 3], &[3, 0]],
-                CellKind::Tet4 => &[&[0, 1, 2], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]],
-                CellKind::Hex8 => &[
-                    &[0, 1, 2, 3],
-                    &[4, 5, 6, 7],
-                    &[0, 1, 5, 4],
-                    &[1, 2, 6, 5],
-                    &[2, 3, 7, 6],
-                    &[3, 0, 4, 7],
-                ],
-            };
-            for f in faces {
-                let mut key: Vec<usize> = f.iter().map(|&a| c[a]).collect();
-                key.sort_unstable();
-                *count.entry(key).or_default() += 1;
-            }
-        }
-        let mut nodes: Vec<usize> = count
-            .into_iter()
-            .filter(|(_, n)| *n == 1)
-            .flat_map(|(f, _)| f)
-            .collect();
+        let all: Vec<usize> = (0..self.points.len()).collect();
+        let mut nodes: Vec<usize> = self.boundary_facets(&all).into_iter().flatten().collect();
         nodes.sort_unstable();
         nodes.dedup();
         nodes
     }
-}
 
-impl Mesh {
     /// The boundary facets (edges in 2-D, faces in 3-D: those of exactly one cell) whose
     /// nodes all lie in `set`, each ordered so that its normal points out of its cell:
     /// an edge `(a, b)` has the body on its left (outward normal `(b − a)` turned by

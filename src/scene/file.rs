@@ -362,7 +362,7 @@ pub struct TargetSpec {
     pub pairing: Pairing,
     /// Search distance (m): facets farther than this from a node are not looked at,
     /// and the candidate lists are rebuilt when a node has moved half of it (default:
-    /// half the mean edge length of the master facets; node-to-node: the largest
+    /// half the smallest edge of the master facets; node-to-node: the largest
     /// normal distance accepted between paired nodes).
     #[serde(default)]
     pub search: Option<f64>,

@@ -50,3 +50,78 @@ pub fn momentum_x(integ: &dyn Integrator) -> (f64, f64) {
     let m: f64 = mv.iter().zip(&ones).map(|(a, b)| a * b).sum();
     (p, m)
 }
+
+/// The summed normal impulse `ΣP_N` (N·s) and the magnitude of the summed tangential
+/// force `|ΣP_T| / h` (N, the tangential impulses summed as vectors of the tangent plane:
+/// the contacts share one frame, as on a plane or a flat interface between bodies).
+pub fn contact_sums(s: &signorini::integrators::State, h: f64) -> (f64, f64) {
+    let (td, nc) = (s.tangent_dim, s.impulse.len());
+    let pn: f64 = s.impulse.iter().sum();
+    let ft = (0..td)
+        .map(|j| {
+            (0..nc)
+                .map(|c| s.tangent_impulse[c * td + j])
+                .sum::<f64>()
+                .powi(2)
+        })
+        .sum::<f64>()
+        .sqrt()
+        / h;
+    (pn, ft)
+}
+
+/// The checks of `meshes/pushed_block.toml` (the 0.5 kg block, μ = 0.3, pushed along x
+/// by a force ramped from 0 at t = 0.1 s to 3 N at 1.1 s), run to `t_end` on whatever
+/// floor `integ` has: ΣN = m g to 1e-3 from t = 0.1 s; the friction equals the push
+/// within 1 % and stays inside the cone over [0.15, 0.55] s; |ΣT| = μ ΣN within 1 % from
+/// 0.62 s; and the slide starts (|ΣT| ≥ 0.99 μ ΣN) within 1 % of t* = 0.1 + μ m g / 3 N.
+pub fn check_pushed(integ: &mut dyn Integrator, label: &str, t_end: f64) {
+    const G: f64 = 9.81;
+    let (mu, m) = (0.3, 0.5);
+    let t_star = 0.1 + mu * m * G / 3.0;
+    let h = integ.dt();
+    let mut reached = None;
+    while integ.state().time < t_end - 1e-12 {
+        integ.prepare().unwrap();
+        let st = integ.step().unwrap();
+        assert_eq!(st.caps_hit, 0, "{label}");
+        let s = integ.state();
+        let t = s.time;
+        let (pn, ft) = contact_sums(s, h);
+        let push = 3.0 * (t - 0.1).clamp(0.0, 1.0);
+        // ΣN = m g once settled (Moreau–Jean's contacts activate over the first steps)
+        if t >= 0.1 {
+            assert!(
+                (pn / h / (m * G) - 1.0).abs() < 1e-3,
+                "{label} t = {t}: ΣN/mg = {}",
+                pn / h / (m * G)
+            );
+        }
+        if (0.15..=0.55).contains(&t) {
+            assert!(
+                (ft / push - 1.0).abs() < 0.01,
+                "{label} t = {t}: friction {ft} N, push {push} N"
+            );
+            assert!(
+                ft < mu * pn / h,
+                "{label} t = {t}: beyond the cone while sticking"
+            );
+        }
+        if t >= 0.62 {
+            assert!(
+                (ft / (mu * pn / h) - 1.0).abs() < 0.01,
+                "{label} t = {t}: |ΣT|/μΣN = {}",
+                ft / (mu * pn / h)
+            );
+        }
+        if reached.is_none() && ft >= 0.99 * mu * pn / h {
+            reached = Some(t);
+        }
+    }
+    let t = reached.expect("never slid");
+    eprintln!("{label}: slides from {t} s (analytic {t_star} s)");
+    assert!(
+        (t / t_star - 1.0).abs() < 0.01,
+        "{label}: slides from {t} s, analytic {t_star} s"
+    );
+}
