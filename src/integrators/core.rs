@@ -1757,7 +1757,7 @@ fn add_step_loads(
 
 /// A structural failure in the step after `state` (an inverted element, a singular
 /// iteration matrix) as the run's error, naming the step and the time it reached.
-fn step_error(state: &State, h: f64, e: Error) -> Error {
+pub(crate) fn step_error(state: &State, h: f64, e: Error) -> Error {
     Error::RunFailed {
         step: state.step + 1,
         time: state.time + h,

@@ -155,7 +155,9 @@ impl Integrator for SchatzmanPaoli {
 
     fn step(&mut self) -> Result<StepStats, Error> {
         let mut st = StepStats::default();
-        self.contacts.update(&self.state.q)?;
+        self.contacts
+            .update(&self.state.q)
+            .map_err(|e| super::core::step_error(&self.state, self.h, e))?;
         let (h, th, n, m) = (self.h, self.theta, self.n, self.m);
         // M_SP Δ = M(q_k − q_{k−1}) − h²K q_k + h² f − h²(1−θ) C v_k − (hθ/2) C (q_k − q_{k−1})
         for i in 0..n {
@@ -265,7 +267,10 @@ impl Integrator for SchatzmanPaoli {
         &self.state
     }
     fn prepare(&mut self) -> Result<(), Error> {
-        self.contacts.update(&self.state.q).map(|_| ())
+        self.contacts
+            .update(&self.state.q)
+            .map(|_| ())
+            .map_err(|e| super::core::step_error(&self.state, self.h, e))
     }
     fn save(&self) -> crate::integrators::saved::IntegratorState {
         let mut s = self.state.save(self.name());
