@@ -413,12 +413,39 @@ impl NodesOnSurface {
         let cap = self.capacity;
         let mut best: Option<(usize, Projection)> = None;
         for &f in &self.cand[s * cap..s * cap + self.count[s] as usize] {
-            let p = self.project(&self.facets[f as usize], x, q);
+            let facet = &self.facets[f as usize];
+            // the distance to the facet's box bounds the distance to the facet: a facet
+            // that cannot come strictly nearer is not projected (the choice, lowest index
+            // on a tie, is the same)
+            if let Some((_, b)) = best
+                && self.box_distance(facet, x, q) >= b.dist
+            {
+                continue;
+            }
+            let p = self.project(facet, x, q);
             if best.is_none_or(|(_, b)| p.dist < b.dist) {
                 best = Some((f as usize, p));
             }
         }
         best
+    }
+
+    /// The distance from `x` to facet `f`'s bounding box at `q`.
+    fn box_distance(&self, f: &Facet, x: &[f64; 3], q: &[f64]) -> f64 {
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for k in f.nodes() {
+            let y = self.master.position(k, q, self.dim);
+            for j in 0..3 {
+                lo[j] = lo[j].min(y[j]);
+                hi[j] = hi[j].max(y[j]);
+            }
+        }
+        let mut d2 = 0.0;
+        for j in 0..3 {
+            let e = (lo[j] - x[j]).max(x[j] - hi[j]).max(0.0);
+            d2 += e * e;
+        }
+        d2.sqrt()
     }
 
     /// The closest point of facet `f` to `x`.
@@ -637,6 +664,10 @@ impl ContactSet for NodesOnSurface {
         }
         if stale {
             self.build(q, 2.0 * self.search)?;
+        } else if step == 0.0 {
+            // nothing moved since the last pairing (the step's `prepare` ran): the same
+            // pairs
+            return Ok(false);
         }
         Ok(self.pair_at(q))
     }
