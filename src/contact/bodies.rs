@@ -43,7 +43,11 @@
 //! within the step (the rebuild rule guarantees that no facet is nearer than `s/2`).
 //! Each slave holds at most [`NodesOnSurface::capacity`] candidates; a build that
 //! finds more is an error naming `search` (a smaller search distance or a coarser
-//! master surface). Measured crates (research notes, 180 000 facets, 100 000 nodes):
+//! master surface). A node that moves more than `s/2` in one step could cross a facet
+//! its list missed: that is an error naming `search` too (a larger search distance or
+//! a smaller step). A resumed run restarts the search from the restored `q`
+//! ([`ContactSet::restart`]). `cargo bench --bench contact` times the rebuild, the
+//! pairing and the evaluation on flat faces of 10⁴ and 9·10⁴ quads. Measured crates (research notes, 180 000 facets, 100 000 nodes):
 //! `rstar` builds in 40 ms and answers the queries in 100–180 ms, `bvh` 75–99 and
 //! 130–160 ms, `parry3d-f64` 80–110 and 90–120 ms; a rebuild is a fresh bulk load, so
 //! `rstar`'s build time decides, and it brings no second linear-algebra crate.
@@ -89,14 +93,17 @@ impl Facet {
         }
         Facet {
             nodes: n,
-            len: nodes.len() as u8,
+            // more than 4 nodes is kept as a count that `NodesOnSurface::new` refuses
+            len: nodes.len().min(255) as u8,
             sign,
         }
     }
 
-    /// Its nodes.
+    /// Its nodes (the first four of a facet given more, which sets refuse).
     pub fn nodes(&self) -> impl Iterator<Item = usize> + '_ {
-        self.nodes[..self.len as usize].iter().map(|&a| a as usize)
+        self.nodes[..(self.len as usize).min(4)]
+            .iter()
+            .map(|&a| a as usize)
     }
 }
 
