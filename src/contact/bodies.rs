@@ -1065,3 +1065,133 @@ pub fn box_distances(
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::generate::box_mesh;
+    use crate::model::solid::CellKind;
+
+    /// One slave node over one warped quad (both free): the gap is the distance along
+    /// the normal and its Jacobian column is the central difference of the gap, to
+    /// 1e-7 (an interior closest point: the column is exact, the difference has error
+    /// O(ε²) with ε = 1e-6 m).
+    #[test]
+    fn gap_gradient_matches_central_differences_on_a_warped_quad() {
+        let master = Side {
+            dofs: (0..4)
+                .map(|k| [Some(3 + 3 * k), Some(4 + 3 * k), Some(5 + 3 * k)])
+                .collect(),
+            reference: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.1, 0.05],
+                [1.1, 1.0, -0.02],
+                [-0.1, 0.9, 0.08],
+            ],
+        };
+        let slave = Side {
+            dofs: vec![[Some(0), Some(1), Some(2)]],
+            reference: vec![[0.4, 0.55, 0.2]],
+        };
+        let set = NodesOnSurface::new(
+            3,
+            slave,
+            master,
+            vec![Facet::new(&[0, 1, 2, 3], 0.0)],
+            (0.0, 0.3),
+            1.0,
+            4,
+        )
+        .unwrap();
+        let q: Vec<f64> = (0..15).map(|i| 1e-3 * ((i * 7 % 5) as f64 - 2.0)).collect();
+        let mut jac = ContactJacobian::for_set(&set);
+        let mut gap = [0.0];
+        set.evaluate(&q, &mut gap, &mut jac);
+        assert!(gap[0] > 0.1 && gap[0] < 0.3, "{}", gap[0]);
+        let (dofs, vals) = jac.col(0);
+        let mut grad = [0.0; 15];
+        for (&d, &v) in dofs.iter().zip(vals) {
+            grad[d] += v;
+        }
+        let eps = 1e-6;
+        for (i, &gi) in grad.iter().enumerate() {
+            let (mut qp, mut qm) = (q.clone(), q.clone());
+            qp[i] += eps;
+            qm[i] -= eps;
+            let (mut gp, mut gm) = ([0.0], [0.0]);
+            let mut scratch = ContactJacobian::for_set(&set);
+            set.evaluate(&qp, &mut gp, &mut scratch);
+            set.evaluate(&qm, &mut gm, &mut scratch);
+            let fd = (gp[0] - gm[0]) / (2.0 * eps);
+            assert!((fd - gi).abs() < 1e-7, "dof {i}: {gi} against {fd}");
+        }
+        // the frame: unit normal first, orthonormal tangents
+        let col = |c: usize| {
+            let mut v = [0.0; 3];
+            let (d, x) = jac.col(c);
+            for (&d, &x) in d.iter().zip(x) {
+                if d < 3 {
+                    v[d] += x;
+                }
+            }
+            v
+        };
+        let (n, t1, t2) = (col(0), col(1), col(2));
+        for (a, b, want) in [
+            (n, n, 1.0),
+            (t1, t1, 1.0),
+            (t2, t2, 1.0),
+            (n, t1, 0.0),
+            (t1, t2, 0.0),
+        ] {
+            assert!((dot(&a, &b) - want).abs() < 1e-12);
+        }
+    }
+
+    /// The boundary facets of a box point out of it, and the closest points of nodes
+    /// beyond an edge clamp to it: a node outside the face's footprint still gets the
+    /// gap along the face's normal.
+    #[test]
+    fn box_faces_point_outward_and_clamp_at_their_edges() {
+        let mesh = box_mesh(CellKind::Hex8, [2, 2, 2], [1.0, 1.0, 1.0]);
+        let all: Vec<usize> = (0..mesh.points.len()).collect();
+        let facets = mesh.boundary_facets(&all);
+        assert_eq!(facets.len(), 24);
+        let centre = [0.5, 0.5, 0.5];
+        for f in &facets {
+            let p: Vec<[f64; 3]> = f.iter().map(|&v| mesh.points[v]).collect();
+            let n = cross(&sub(&p[2], &p[0]), &sub(&p[3], &p[1]));
+            let mid = [0, 1, 2].map(|j| p.iter().map(|x| x[j]).sum::<f64>() / 4.0);
+            assert!(dot(&n, &sub(&mid, &centre)) > 0.0, "{f:?} points inward");
+        }
+        // the top face against a node beyond its edge, 0.1 above
+        let top: Vec<usize> = (0..mesh.points.len())
+            .filter(|&v| mesh.points[v][2] == 1.0)
+            .collect();
+        let faces = mesh.boundary_facets(&top);
+        assert_eq!(faces.len(), 4);
+        let (set, _) = build(
+            Interface {
+                dim: 3,
+                slave: &[0],
+                slave_points: &[[1.2, 0.5, 1.1]],
+                slave_dofs: &|_| [Some(0), Some(1), Some(2)],
+                facets: &faces,
+                master_points: &mesh.points,
+                master_dofs: &|v| [Some(3 + 3 * v), Some(4 + 3 * v), Some(5 + 3 * v)],
+            },
+            false,
+            (0.0, 0.0),
+            Some(1.0),
+            DEFAULT_CAPACITY,
+        )
+        .unwrap();
+        let q = vec![0.0; 3 + 3 * mesh.points.len()];
+        let mut jac = ContactJacobian::for_set(set.as_ref());
+        let mut gap = [0.0];
+        set.evaluate(&q, &mut gap, &mut jac);
+        assert!((gap[0] - 0.1).abs() < 1e-15, "{}", gap[0]);
+        let (_, vals) = jac.col(0);
+        assert_eq!(&vals[..3], &[0.0, 0.0, 1.0]);
+    }
+}
