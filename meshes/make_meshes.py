@@ -28,6 +28,36 @@ import numpy as np
 
 
 
+def graded_quads(sizes, path):
+    """Meshes the current 2-D model with quad4 (recombined) graded from the origin:
+    `sizes` = (size at the origin, size far away, distance where the grading starts,
+    distance where it ends); writes Gmsh 4.1 ASCII to `path` and removes the model."""
+    origin = gmsh.model.occ.addPoint(0, 0, 0)
+    gmsh.model.occ.synchronize()
+    f = gmsh.model.mesh.field
+    f.add("Distance", 1)
+    f.setNumbers(1, "PointsList", [origin])
+    f.add("Threshold", 2)
+    f.setNumber(2, "InField", 1)
+    for k, v in zip(["SizeMin", "SizeMax", "DistMin", "DistMax"], sizes):
+        f.setNumber(2, k, v)
+    f.setAsBackgroundMesh(2)
+    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
+              "Mesh.MeshSizeFromCurvature"]:
+        gmsh.option.setNumber(k, 0)
+    gmsh.option.setNumber("Mesh.RecombineAll", 1)
+    gmsh.option.setNumber("Mesh.Algorithm", 8)
+    gmsh.model.mesh.generate(2)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.option.setNumber("Mesh.Binary", 0)
+    gmsh.write(path)
+    gmsh.model.remove()
+    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
+              "Mesh.MeshSizeFromCurvature"]:
+        gmsh.option.setNumber(k, 1)
+    gmsh.option.setNumber("Mesh.RecombineAll", 0)
+
+
 def hertz_ball(lower=False):
     r = 0.01
     gmsh.model.add("hertz")
@@ -46,30 +76,8 @@ def hertz_ball(lower=False):
     gmsh.model.addPhysicalGroup(2, [t for _, t in gmsh.model.getEntities(2)], name="ball")
     gmsh.model.addPhysicalGroup(1, axis, name="axis")
     gmsh.model.addPhysicalGroup(1, arc, name="surface")
-    pole = occ.addPoint(0, 0, 0)
-    occ.synchronize()
-    f = gmsh.model.mesh.field
-    f.add("Distance", 1)
-    f.setNumbers(1, "PointsList", [pole])
-    f.add("Threshold", 2)
-    f.setNumber(2, "InField", 1)
-    for k, v in [("SizeMin", 4e-5), ("SizeMax", 1e-3), ("DistMin", 1e-3), ("DistMax", 6e-3)]:
-        f.setNumber(2, k, v)
-    f.setAsBackgroundMesh(2)
-    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
-              "Mesh.MeshSizeFromCurvature"]:
-        gmsh.option.setNumber(k, 0)
-    gmsh.option.setNumber("Mesh.RecombineAll", 1)
-    gmsh.option.setNumber("Mesh.Algorithm", 8)
-    gmsh.model.mesh.generate(2)
-    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-    gmsh.option.setNumber("Mesh.Binary", 0)
-    gmsh.write("meshes/hertz_ball_lower.msh" if lower else "meshes/hertz_ball.msh")
-    gmsh.model.remove()
-    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
-              "Mesh.MeshSizeFromCurvature"]:
-        gmsh.option.setNumber(k, 1)
-    gmsh.option.setNumber("Mesh.RecombineAll", 0)
+    graded_quads((4e-5, 1e-3, 1e-3, 6e-3),
+                 "meshes/hertz_ball_lower.msh" if lower else "meshes/hertz_ball.msh")
 
 
 def hertz_plate():
@@ -90,30 +98,7 @@ def hertz_plate():
     gmsh.model.addPhysicalGroup(2, [t for _, t in gmsh.model.getEntities(2)], name="plate")
     gmsh.model.addPhysicalGroup(1, top, name="top")
     gmsh.model.addPhysicalGroup(1, bottom, name="bottom")
-    origin = occ.addPoint(0, 0, 0)
-    occ.synchronize()
-    f = gmsh.model.mesh.field
-    f.add("Distance", 1)
-    f.setNumbers(1, "PointsList", [origin])
-    f.add("Threshold", 2)
-    f.setNumber(2, "InField", 1)
-    for k, v in [("SizeMin", 4e-5), ("SizeMax", 2e-3), ("DistMin", 1e-3), ("DistMax", 1e-2)]:
-        f.setNumber(2, k, v)
-    f.setAsBackgroundMesh(2)
-    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
-              "Mesh.MeshSizeFromCurvature"]:
-        gmsh.option.setNumber(k, 0)
-    gmsh.option.setNumber("Mesh.RecombineAll", 1)
-    gmsh.option.setNumber("Mesh.Algorithm", 8)
-    gmsh.model.mesh.generate(2)
-    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-    gmsh.option.setNumber("Mesh.Binary", 0)
-    gmsh.write("meshes/hertz_plate.msh")
-    gmsh.model.remove()
-    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
-              "Mesh.MeshSizeFromCurvature"]:
-        gmsh.option.setNumber(k, 1)
-    gmsh.option.setNumber("Mesh.RecombineAll", 0)
+    graded_quads((4e-5, 2e-3, 1e-3, 1e-2), "meshes/hertz_plate.msh")
 
 
 gmsh.initialize()
