@@ -66,7 +66,10 @@
 //!   tolerance (16 × accuracy / |U|) and a dead band `2hθ·accuracy` for the rows resting at g ≈ 0, which
 //!   otherwise flip in and out of the position problem on the solver's last digits.
 //! - *Stagnation.* A loop that gains less than 10 % in 5 iterations ends; it converged
-//!   if it got within `√tol` (`StepStats::newton_stalls`), else it is a cap.
+//!   if it got within `√tol` (`StepStats::newton_stalls`), or, with a nonlinear `G`, if
+//!   its last iterate moved `q` by at most `tol·|q|∞` (a body at rest on other bodies
+//!   takes step increments at the solves' round-off, so the change relative to the
+//!   increment never falls), else it is a cap.
 //! - Rows that keep `g = 0` with `P = 0` and `τ < 0` because eq. 65 had no solution for
 //!   the index set are counted in `StepStats::held_rows` (position problem below).
 
