@@ -22,6 +22,13 @@ fn committed_scenes_build_with_the_expected_sizes() {
         ("bar.toml", 1001, 1, true),
         ("hex_bar.toml", 201 * 4 * 3, 4, true),
         ("block_on_cylinder.toml", 21 * 6 * 2, 21, false),
+        // contacts between bodies: a rod's end on a rod's end is linear, the rest not
+        ("two_bars.toml", 2 * 1001, 1, true),
+        ("hex_bars.toml", (201 * 9 + 151 * 16) * 3, 9, false),
+        ("hertz_spheres.toml", 3860, 42, false),
+        ("hertz_ball_on_plate.toml", 4326, 43, false),
+        ("sliding_block_on_slab.toml", 1143, 25, false),
+        ("block_stack.toml", 594, 66, false),
     ] {
         let (_, report) = load(file).build().unwrap();
         assert_eq!(report.dofs, dofs, "{file}");
