@@ -121,6 +121,17 @@ fn plateau(o: &Outcome) -> (f64, f64) {
     (mean, dur)
 }
 
+/// The largest difference between two force histories and the largest force of the
+/// first.
+fn largest_difference(a: &[f64], b: &[f64]) -> (f64, f64) {
+    let scale = a.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let diff = a
+        .iter()
+        .zip(b)
+        .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()));
+    (diff, scale)
+}
+
 #[test]
 fn equal_bars_exchange_their_velocities() {
     let f_ref = E * AREA * V0 / (2.0 * c0());
@@ -229,12 +240,7 @@ fn node_to_node_pairing_gives_the_node_to_surface_history() {
         "node-to-node",
         5e-4,
     ));
-    let scale = a.force.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-    let diff = a
-        .force
-        .iter()
-        .zip(&b.force)
-        .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()));
+    let (diff, scale) = largest_difference(&a.force, &b.force);
     // the same constraint written two ways (g = n·(x_s − x_m) against g₀ + n·(u_s − u_m)):
     // round-off apart
     assert!(diff <= 1e-9 * scale, "{diff} of {scale}");
@@ -347,11 +353,6 @@ fn condensed_zone_and_per_column_delassus_agree() {
         "{}",
         b.summary.path
     );
-    let scale = a.force.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-    let diff = a
-        .force
-        .iter()
-        .zip(&b.force)
-        .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()));
+    let (diff, scale) = largest_difference(&a.force, &b.force);
     assert!(diff <= 1e-9 * scale, "{diff} of {scale}");
 }

@@ -407,6 +407,23 @@ fn frames_show_the_prescribed_motion() {
 /// A scene with a large-deformation body names its cell tensors `green_lagrange_strain`
 /// and `cauchy_stress` (and no `strain`, `stress`): the neo-Hookean box in free flight
 /// writes them zero (a translation strains nothing), in every frame.
+/// Runs `scene` into `dir` with a frame at every step.
+fn run_every_step(scene: &Scene, dir: &std::path::Path) {
+    let options = OutputOptions {
+        stride: 1,
+        ..OutputOptions::default()
+    };
+    run_scene(
+        scene,
+        Some(Output {
+            dir,
+            options: &options,
+        }),
+        &mut Quiet,
+    )
+    .unwrap();
+}
+
 #[test]
 fn nonlinear_bodies_write_green_lagrange_strain_and_cauchy_stress() {
     let text = FREE_BOX.replace(
@@ -416,19 +433,7 @@ fn nonlinear_bodies_write_green_lagrange_strain_and_cauchy_stress() {
     let mut scene = Scene::from_toml(&text).unwrap();
     scene.base_dir = PathBuf::from(".");
     let dir = tmp("green-lagrange");
-    let options = OutputOptions {
-        stride: 1,
-        ..OutputOptions::default()
-    };
-    run_scene(
-        &scene,
-        Some(Output {
-            dir: &dir,
-            options: &options,
-        }),
-        &mut Quiet,
-    )
-    .unwrap();
+    run_every_step(&scene, &dir);
     let pvd = read_pvd(&dir.join("fields.pvd"));
     assert_eq!(pvd.len(), 6);
     for (_, file) in &pvd {
@@ -463,19 +468,7 @@ fn contacts_between_bodies_show_on_both_sides() {
     let mut scene = Scene::from_toml(&text).unwrap();
     scene.base_dir = PathBuf::from(".");
     let dir = tmp("bodies");
-    let options = OutputOptions {
-        stride: 1,
-        ..OutputOptions::default()
-    };
-    run_scene(
-        &scene,
-        Some(Output {
-            dir: &dir,
-            options: &options,
-        }),
-        &mut Quiet,
-    )
-    .unwrap();
+    run_every_step(&scene, &dir);
     let pvd = read_pvd(&dir.join("fields.pvd"));
     assert_eq!(pvd.len(), 21);
     let mut touched = false;
