@@ -544,13 +544,11 @@ impl Delassus {
         if let Some(z) = &self.zone {
             format!(
                 "Delassus dense on the contact zone: Â⁻¹S {}×{} condensed once ({} zone \
-                 dofs), Â⁻¹G = (Â⁻¹S)B {}×{} and W {}×{} re-formed per linearization \
-                 without a solve",
+                 dofs), W = BᵀFB {}×{} re-formed per linearization without a solve \
+                 (constant blocks once), corrections (Â⁻¹S)(Bx)",
                 self.n,
                 z.dofs.len(),
                 z.dofs.len(),
-                self.n,
-                self.m,
                 self.m,
                 self.m
             )

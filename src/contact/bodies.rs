@@ -117,14 +117,74 @@ pub struct Side {
 }
 
 impl Side {
-    fn position(&self, k: usize, q: &[f64], dim: usize) -> [f64; 3] {
-        let mut x = self.reference[k];
-        for (i, xi) in x.iter_mut().enumerate().take(dim) {
+    /// Displacement of node `k` at `q` (0 on fixed components).
+    fn displacement(&self, k: usize, q: &[f64], dim: usize) -> [f64; 3] {
+        let mut u = [0.0; 3];
+        for (i, ui) in u.iter_mut().enumerate().take(dim) {
             if let Some(d) = self.dofs[k][i] {
-                *xi += q[d];
+                *ui = q[d];
             }
         }
-        x
+        u
+    }
+
+    /// Position of node `k` at `q`.
+    fn position(&self, k: usize, q: &[f64], dim: usize) -> [f64; 3] {
+        let u = self.displacement(k, q, dim);
+        let x = self.reference[k];
+        [x[0] + u[0], x[1] + u[1], x[2] + u[2]]
+    }
+
+    /// The closest point to `x` of facet `f` over this side's nodes at `q`.
+    fn project(&self, dim: usize, f: &Facet, x: &[f64; 3], q: &[f64]) -> Projection {
+        let mut p = [[0.0; 3]; 4];
+        for (k, node) in f.nodes().enumerate() {
+            p[k] = self.position(node, q, dim);
+        }
+        let finish = |y: [f64; 3], normal: [f64; 3], weights: [f64; 4]| {
+            let d = sub(x, &y);
+            Projection {
+                dist: norm(&d),
+                gap: dot(&normal, &d),
+                normal,
+                weights,
+            }
+        };
+        match f.len {
+            1 => finish(p[0], [f.sign, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]),
+            2 => {
+                let t = sub(&p[1], &p[0]);
+                let l2 = dot(&t, &t);
+                let xi = (dot(&sub(x, &p[0]), &t) / l2).clamp(0.0, 1.0);
+                let y = axpy(&p[0], xi, &t);
+                let l = l2.sqrt();
+                // counter-clockwise boundary of the body: the outward normal is t turned
+                // by −90°
+                let n = [t[1] / l, -t[0] / l, 0.0];
+                finish(y, n, [1.0 - xi, xi, 0.0, 0.0])
+            }
+            3 => {
+                let (e1, e2) = (sub(&p[1], &p[0]), sub(&p[2], &p[0]));
+                let n = unit(&cross(&e1, &e2));
+                let (b1, b2) = closest_on_triangle(x, &p[0], &e1, &e2);
+                let y = axpy(&axpy(&p[0], b1, &e1), b2, &e2);
+                finish(y, n, [1.0 - b1 - b2, b1, b2, 0.0])
+            }
+            _ => {
+                let (xi, eta) = closest_on_quad(x, &p);
+                let (w, dxi, deta) = bilinear(xi, eta);
+                let mut y = [0.0; 3];
+                let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
+                for k in 0..4 {
+                    for j in 0..3 {
+                        y[j] += w[k] * p[k][j];
+                        a[j] += dxi[k] * p[k][j];
+                        b[j] += deta[k] * p[k][j];
+                    }
+                }
+                finish(y, unit(&cross(&a, &b)), w)
+            }
+        }
     }
 }
 
@@ -216,20 +276,7 @@ impl NodesOnSurface {
                 "slave nodes must be free (a fixed node cannot be a contact node)",
             ));
         }
-        let want = match dim {
-            1 => 1..=1,
-            2 => 2..=2,
-            _ => 3..=4,
-        };
-        for f in &facets {
-            if !want.contains(&(f.len as usize)) || f.nodes().any(|k| k >= master.dofs.len()) {
-                return Err(Error::invalid(
-                    "target.surface",
-                    format!("a facet of {} nodes", f.len),
-                    &format!("needs {want:?} nodes of the target body in {dim}-D"),
-                ));
-            }
-        }
+        check_facets(dim, &facets, master.dofs.len())?;
         let width = dim * (1 + facets.iter().map(|f| f.len as usize).max().unwrap_or(1));
         let m = slave.dofs.len();
         let block = if mu > 0.0 { dim } else { 1 };
@@ -275,7 +322,7 @@ impl NodesOnSurface {
         for s in 0..m {
             let x = set.slave.position(s, &q0, dim);
             let f = tree.nearest_neighbor(x).map_or(0, |h| h.data as usize);
-            let p = set.project(&set.facets[f], &x, &q0);
+            let p = set.master.project(dim, &set.facets[f], &x, &q0);
             set.rest_normal[s] = p.normal;
             set.t_ref[s] = super::frame::tangents(&p.normal)[0];
         }
@@ -292,6 +339,17 @@ impl NodesOnSurface {
             .flat_map(|d| d.iter().flatten().copied())
             .max()
             .unwrap_or(0)
+    }
+
+    /// Displacement of node `k` in the slave-then-master numbering of
+    /// [`NodesOnSurface::built`].
+    fn node_displacement(&self, k: usize, q: &[f64]) -> [f64; 3] {
+        let m = self.slave.dofs.len();
+        if k < m {
+            self.slave.displacement(k, q, self.dim)
+        } else {
+            self.master.displacement(k - m, q, self.dim)
+        }
     }
 
     /// Candidate facets kept per slave node.
@@ -324,11 +382,8 @@ impl NodesOnSurface {
         let dim = self.dim;
         let m = self.slave.dofs.len();
         self.builds += 1;
-        for k in 0..m {
-            self.built[k] = displacement(&self.slave, k, q, dim);
-        }
-        for k in 0..self.master.dofs.len() {
-            self.built[m + k] = displacement(&self.master, k, q, dim);
+        for k in 0..self.built.len() {
+            self.built[k] = self.node_displacement(k, q);
         }
         if self.trivial() {
             self.count.iter_mut().for_each(|c| *c = 1);
@@ -429,7 +484,7 @@ impl NodesOnSurface {
             {
                 continue;
             }
-            let p = self.project(facet, x, q);
+            let p = self.master.project(self.dim, facet, x, q);
             if best.is_none_or(|(_, b)| p.dist < b.dist) {
                 best = Some((f as usize, p));
             }
@@ -453,59 +508,6 @@ impl NodesOnSurface {
             d2 += e * e;
         }
         d2.sqrt()
-    }
-
-    /// The closest point of facet `f` to `x`.
-    fn project(&self, f: &Facet, x: &[f64; 3], q: &[f64]) -> Projection {
-        let dim = self.dim;
-        let mut p = [[0.0; 3]; 4];
-        for (k, node) in f.nodes().enumerate() {
-            p[k] = self.master.position(node, q, dim);
-        }
-        let finish = |y: [f64; 3], normal: [f64; 3], weights: [f64; 4]| {
-            let d = sub(x, &y);
-            Projection {
-                dist: norm(&d),
-                gap: dot(&normal, &d),
-                normal,
-                weights,
-            }
-        };
-        match f.len {
-            1 => finish(p[0], [f.sign, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]),
-            2 => {
-                let t = sub(&p[1], &p[0]);
-                let l2 = dot(&t, &t);
-                let xi = (dot(&sub(x, &p[0]), &t) / l2).clamp(0.0, 1.0);
-                let y = axpy(&p[0], xi, &t);
-                let l = l2.sqrt();
-                // counter-clockwise boundary of the body: the outward normal is t turned
-                // by −90°
-                let n = [t[1] / l, -t[0] / l, 0.0];
-                finish(y, n, [1.0 - xi, xi, 0.0, 0.0])
-            }
-            3 => {
-                let (e1, e2) = (sub(&p[1], &p[0]), sub(&p[2], &p[0]));
-                let n = unit(&cross(&e1, &e2));
-                let (b1, b2) = closest_on_triangle(x, &p[0], &e1, &e2);
-                let y = axpy(&axpy(&p[0], b1, &e1), b2, &e2);
-                finish(y, n, [1.0 - b1 - b2, b1, b2, 0.0])
-            }
-            _ => {
-                let (xi, eta) = closest_on_quad(x, &p);
-                let (w, dxi, deta) = bilinear(xi, eta);
-                let mut y = [0.0; 3];
-                let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
-                for k in 0..4 {
-                    for j in 0..3 {
-                        y[j] += w[k] * p[k][j];
-                        a[j] += dxi[k] * p[k][j];
-                        b[j] += deta[k] * p[k][j];
-                    }
-                }
-                finish(y, unit(&cross(&a, &b)), w)
-            }
-        }
     }
 
     /// The tangents of normal `n` for slave `s` (see the module doc).
@@ -573,16 +575,6 @@ impl NodesOnSurface {
     }
 }
 
-fn displacement(side: &Side, k: usize, q: &[f64], dim: usize) -> [f64; 3] {
-    let mut u = [0.0; 3];
-    for (i, ui) in u.iter_mut().enumerate().take(dim) {
-        if let Some(d) = side.dofs[k][i] {
-            *ui = q[d];
-        }
-    }
-    u
-}
-
 impl ContactSet for NodesOnSurface {
     fn len(&self) -> usize {
         self.slave.dofs.len()
@@ -607,7 +599,11 @@ impl ContactSet for NodesOnSurface {
             let f = self.pair[s];
             let hit = (f != NO_FACET).then(|| {
                 let x = self.slave.position(s, q, dim);
-                (f as usize, self.project(&self.facets[f as usize], &x, q))
+                (
+                    f as usize,
+                    self.master
+                        .project(self.dim, &self.facets[f as usize], &x, q),
+                )
             });
             self.write(s, s * self.block, hit, &mut gap[s], jac);
         }
@@ -628,13 +624,8 @@ impl ContactSet for NodesOnSurface {
         z
     }
     fn restart(&mut self, q: &[f64]) {
-        let m = self.slave.dofs.len();
-        for k in 0..m + self.master.dofs.len() {
-            self.last[k] = if k < m {
-                displacement(&self.slave, k, q, self.dim)
-            } else {
-                displacement(&self.master, k - m, q, self.dim)
-            };
+        for k in 0..self.last.len() {
+            self.last[k] = self.node_displacement(k, q);
         }
         self.ready = false;
     }
@@ -642,16 +633,10 @@ impl ContactSet for NodesOnSurface {
         if self.trivial() {
             return Ok(false);
         }
-        let dim = self.dim;
-        let m = self.slave.dofs.len();
         let limit = 0.25 * self.search * self.search;
         let (mut stale, mut step) = (!self.ready, 0.0_f64);
-        for k in 0..m + self.master.dofs.len() {
-            let u = if k < m {
-                displacement(&self.slave, k, q, dim)
-            } else {
-                displacement(&self.master, k - m, q, dim)
-            };
+        for k in 0..self.last.len() {
+            let u = self.node_displacement(k, q);
             let (d, e) = (sub(&u, &self.built[k]), sub(&u, &self.last[k]));
             stale |= dot(&d, &d) > limit;
             step = step.max(dot(&e, &e));
@@ -786,6 +771,26 @@ fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
 fn unit(a: &[f64; 3]) -> [f64; 3] {
     let l = norm(a);
     [a[0] / l, a[1] / l, a[2] / l]
+}
+
+/// Checks that every facet has the node count of its dimension (1 in 1-D, 2 in 2-D, 3
+/// or 4 in 3-D) over the `nodes` master nodes.
+fn check_facets(dim: usize, facets: &[Facet], nodes: usize) -> Result<(), Error> {
+    let want = match dim {
+        1 => 1..=1,
+        2 => 2..=2,
+        _ => 3..=4,
+    };
+    for f in facets {
+        if !want.contains(&(f.len as usize)) || f.nodes().any(|k| k >= nodes) {
+            return Err(Error::invalid(
+                "target.surface",
+                format!("a facet of {} nodes", f.len),
+                &format!("needs {want:?} nodes of the target body in {dim}-D"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The two sides of an interface as a scene gives them: the slave nodes and the master
@@ -941,31 +946,27 @@ pub fn build(
         );
         return Ok((Box::new(set), line));
     }
-    // node-to-node: the mean outward normal at each master node
-    let probe = NodesOnSurface::new(
-        dim,
-        Side::default(),
-        master.clone(),
-        facets,
-        (e, 0.0),
-        search,
-        1,
-    );
-    let probe = probe?;
-    let q0 = vec![0.0; probe.max_dof() + 1];
+    // node-to-node: the mean outward normal at each master node (the facets' normals at
+    // their centroids, in the reference configuration)
+    check_facets(dim, &facets, master.dofs.len())?;
+    let q0 = vec![
+        0.0;
+        master
+            .dofs
+            .iter()
+            .flat_map(|d| d.iter().flatten().copied())
+            .max()
+            .map_or(0, |d| d + 1)
+    ];
     let mut normal = vec![[0.0; 3]; master_nodes.len()];
-    for f in &probe.facets {
-        let mid = {
-            let mut c = [0.0; 3];
-            let k = f.len as f64;
-            for node in f.nodes() {
-                for j in 0..3 {
-                    c[j] += master.reference[node][j] / k;
-                }
+    for f in &facets {
+        let mut mid = [0.0; 3];
+        for node in f.nodes() {
+            for j in 0..3 {
+                mid[j] += master.reference[node][j] / f.len as f64;
             }
-            c
-        };
-        let n = probe.project(f, &mid, &q0).normal;
+        }
+        let n = master.project(dim, f, &mid, &q0).normal;
         for node in f.nodes() {
             for j in 0..3 {
                 normal[node][j] += n[j];

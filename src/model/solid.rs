@@ -262,17 +262,20 @@ impl Mesh {
                     e.1 += 1;
                     continue;
                 }
-                let x: Vec<[f64; 3]> = nodes.iter().map(|&v| self.points[v]).collect();
-                let out = sub3(mean(x.iter().copied()), centroid);
+                let x: Vec<Vector3<f64>> = nodes
+                    .iter()
+                    .map(|&v| Vector3::from(self.points[v]))
+                    .collect();
+                let out = mean(x.iter().map(|p| (*p).into())) - centroid;
                 let normal = match x.len() {
                     2 => {
-                        let t = sub3(x[1], x[0]);
-                        [t[1], -t[0], 0.0]
+                        let t = x[1] - x[0];
+                        Vector3::new(t[1], -t[0], 0.0)
                     }
-                    3 => cross3(sub3(x[1], x[0]), sub3(x[2], x[0])),
-                    _ => cross3(sub3(x[2], x[0]), sub3(x[3], x[1])),
+                    3 => (x[1] - x[0]).cross(&(x[2] - x[0])),
+                    _ => (x[2] - x[0]).cross(&(x[3] - x[1])),
                 };
-                if normal.iter().zip(&out).map(|(a, b)| a * b).sum::<f64>() < 0.0 {
+                if normal.dot(&out) < 0.0 {
                     nodes.reverse();
                     if nodes.len() == 4 {
                         // keep the first node first (a cyclic order either way)
@@ -289,25 +292,14 @@ impl Mesh {
     }
 }
 
-fn mean(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
-    let (mut s, mut n) = ([0.0; 3], 0.0);
+/// The centroid of `points`.
+fn mean(points: impl Iterator<Item = [f64; 3]>) -> Vector3<f64> {
+    let (mut s, mut n) = (Vector3::zeros(), 0.0);
     for p in points {
-        for i in 0..3 {
-            s[i] += p[i];
-        }
+        s += Vector3::from(p);
         n += 1.0;
     }
-    s.map(|x| x / n)
-}
-fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    s / n
 }
 
 /// Element matrices of one cell on fixed-size matrices, `ND = nodes·dim` square.
