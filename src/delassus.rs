@@ -181,6 +181,12 @@ pub struct Delassus {
     epoch: u64,
     /// Sparse solves spent on columns since construction (set-up included).
     pub column_solves: usize,
+    /// Products through the factor ([`Delassus::product`]) since construction.
+    pub products: usize,
+    /// Largest support whose columns are stored ([`Delassus::limit_columns`]).
+    limit: usize,
+    /// The pool was sized by the memory budget, not by the caller.
+    pool_auto: bool,
     t1: Vec<f64>,
     t2: Vec<f64>,
     // per-active-column path: contacts awaiting columns, and two n × SOLVE_BLOCK blocks
@@ -398,6 +404,9 @@ impl Delassus {
             cap,
             epoch: 1,
             column_solves: 0,
+            products: 0,
+            limit: usize::MAX,
+            pool_auto: pool == 0,
             t1: vec![0.0; n],
             t2: vec![0.0; n],
             pending: Vec::with_capacity(SOLVE_BLOCK),
@@ -512,6 +521,22 @@ impl Delassus {
             formed: [false; 2],
         });
         true
+    }
+
+    /// Stores no columns for a support of more than `rows` rows (the one-step
+    /// workspaces' cap): such problems are solved matrix-free, and their columns, computed
+    /// `rows` solves at a time, would cost more than the products they save.
+    pub fn limit_columns(&mut self, rows: usize) {
+        self.limit = rows;
+        if !self.dense && self.pool_auto && self.cap > rows.max(1) && self.used == 0 {
+            // the default pool need not outgrow the largest set stored at once
+            let (m, cap) = (self.m, rows.max(1));
+            self.cap = cap;
+            self.w = vec![0.0; m * cap];
+            self.wd = vec![0.0; if self.with_d { m * cap } else { 0 }];
+            self.owner = vec![NONE; cap];
+            self.stamp = vec![0; cap];
+        }
     }
 
     /// Number of contacts `m`.
@@ -671,12 +696,19 @@ impl Delassus {
     }
 
     /// Ensures the columns of every contact in `idx`, computing the missing ones
-    /// [`SOLVE_BLOCK`] at a time.
+    /// [`SOLVE_BLOCK`] at a time; none for more rows than [`Delassus::limit_columns`]
+    /// allows (their problem is solved matrix-free).
     pub fn ensure_all(
         &mut self,
         idx: &[usize],
         stiffness: &SparseMatrix,
     ) -> Result<(), SolveError> {
+        if !self.dense && idx.len() > self.limit {
+            // more than the one-step workspaces hold: the problem is solved matrix-free
+            // and its products go through the factor (past the pool but within the
+            // workspaces, the entries are needed: a pool error)
+            return Ok(());
+        }
         for &b in idx {
             self.request(b)?;
             if self.pending.len() == SOLVE_BLOCK {
@@ -764,12 +796,19 @@ impl Delassus {
         self.pending.clear();
     }
 
-    /// Ensures the columns of the support of `x` (its non-zero entries).
+    /// Ensures the columns of the support of `x` (its non-zero entries); none when the
+    /// support is larger than the pool or [`Delassus::limit_columns`] allows
+    /// ([`Delassus::mul_add`] then goes through the factor).
     pub fn ensure_support(
         &mut self,
         x: &[f64],
         stiffness: &SparseMatrix,
     ) -> Result<(), SolveError> {
+        if !self.dense && x.iter().filter(|&&v| v != 0.0).count() > self.cap.min(self.limit) {
+            // more than the pool or the one-step workspaces hold: the products go
+            // through the factor
+            return Ok(());
+        }
         for (b, &xb) in x.iter().enumerate() {
             if xb != 0.0 {
                 self.request(b)?;
@@ -797,8 +836,67 @@ impl Delassus {
         }
     }
 
-    /// `out += s · op · x`; the columns of the support of `x` must be available.
-    pub fn mul_add(&self, op: Op, s: f64, x: &[f64], out: &mut [f64]) {
+    /// Whether every column of the support of `x` is in store (always on the dense path).
+    pub fn has_support(&self, x: &[f64]) -> bool {
+        self.dense
+            || x.iter()
+                .zip(&self.slot)
+                .all(|(&xb, &s)| xb == 0.0 || s != NONE)
+    }
+
+    /// `out += s · op · x`: from the stored columns when the support of `x` is in store,
+    /// else through the factor ([`Delassus::product`]).
+    pub fn mul_add(
+        &mut self,
+        op: Op,
+        s: f64,
+        x: &[f64],
+        out: &mut [f64],
+        stiffness: &SparseMatrix,
+    ) {
+        if !self.has_support(x) {
+            self.product(op, s, x, out, stiffness);
+            return;
+        }
+        self.mul_add_stored(op, s, x, out);
+    }
+
+    /// `out += s · op · x` through the factor, with no stored column (the matrix-free
+    /// operator of the module doc): `Gᵀ Â⁻¹ (G x)` for `W` (one sparse solve),
+    /// `Gᵀ Â⁻¹ K N (G x)` for `W_D` (two with the `M̂⁻¹` metric, one with `I`),
+    /// `Gᵀ N (G x)` for `W_N`. Allocation-free.
+    pub fn product(
+        &mut self,
+        op: Op,
+        s: f64,
+        x: &[f64],
+        out: &mut [f64],
+        stiffness: &SparseMatrix,
+    ) {
+        if x.iter().all(|&v| v == 0.0) {
+            return;
+        }
+        self.products += 1;
+        self.gather_g(x);
+        match (op, self.metric) {
+            (Op::Wn, Metric::Euclidean) => {}
+            (Op::W, _) | (Op::Wn, Metric::Mass) => self.factor.solve_in_place(&mut self.t1),
+            (Op::Wd, metric) => {
+                if metric == Metric::Mass {
+                    self.factor.solve_in_place(&mut self.t1);
+                }
+                spmv(stiffness.as_ref(), &self.t1, &mut self.t2);
+                std::mem::swap(&mut self.t1, &mut self.t2);
+                self.factor.solve_in_place(&mut self.t1);
+            }
+        }
+        for (a, o) in out.iter_mut().enumerate() {
+            *o += s * self.jac.dot(a, &self.t1);
+        }
+    }
+
+    /// `out += s · op · x` from the stored columns, which must hold the support of `x`.
+    fn mul_add_stored(&self, op: Op, s: f64, x: &[f64], out: &mut [f64]) {
         let m = self.m;
         for (b, &xb) in x.iter().enumerate() {
             if xb == 0.0 {

@@ -774,6 +774,13 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
             f.caps_hit
         );
     }
+    if let Some(g) = &s.matrix_free {
+        out!(
+            "matrix-free         {} one-step problems past the dense workspaces, {:.1} products with W each",
+            g.solves,
+            g.products_per_solve
+        );
+    }
     if let Some(c) = &s.contact {
         let rel = |a: f64, b: f64| 100.0 * (a / b - 1.0);
         out!("                    measured        analytic        difference");

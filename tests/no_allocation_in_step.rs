@@ -198,6 +198,51 @@ fn coupled_position_solves_do_not_allocate() {
     }
 }
 
+/// The matrix-free path (`solvers::global`): the hex8 block pressed on the plane with
+/// its 25 contacts past a workspace cap of 16 rows, every scheme, frictionless (MPRGP)
+/// and with friction (the accelerated projected gradient; the schemes that have it),
+/// on both Delassus paths: the counted steps run matrix-free solves (asserted) without
+/// allocating.
+#[test]
+fn matrix_free_solves_do_not_allocate() {
+    use signorini::scene::file::Scene;
+    for mu in [0.0, 0.3] {
+        let text = common::blocks::undamped_block(1e-4, 0.3, "moreau-jean", 0.5, mu)
+            .replace("theta = 0.5", "theta = 0.5\nmax_active_rows = 16");
+        for kind in SchemeKind::ALL {
+            if mu > 0.0
+                && matches!(
+                    kind,
+                    SchemeKind::SchatzmanPaoli | SchemeKind::TrapezoidPosition
+                )
+            {
+                continue;
+            }
+            for delassus in [DelassusKind::Dense, DelassusKind::Columns] {
+                let mut scene = Scene::from_toml(&text).unwrap();
+                scene.scheme.kind = kind;
+                scene.scheme.delassus = delassus;
+                let (model, _) = scene.build().unwrap();
+                let mut integ = model.into_integrator(&scene.scheme, 1e-4).unwrap();
+                integ.step().unwrap();
+                let mut global = 0;
+                let before = ALLOCS.with(|c| c.get());
+                for _ in 0..50 {
+                    global += integ.step().unwrap().global_solves;
+                }
+                let n = ALLOCS.with(|c| c.get()) - before;
+                assert!(global > 0, "{} μ = {mu}: no matrix-free solve", kind.name());
+                assert_eq!(
+                    n,
+                    0,
+                    "{} {delassus:?} μ = {mu} allocated {n} times",
+                    kind.name()
+                );
+            }
+        }
+    }
+}
+
 /// `auto`'s Newton fallback in the step loop and Algorithm 2's complementarity rounds
 /// (issue 16 §2, large μ): the shipped sliding block launched at 1 m/s with μ = 1e6,
 /// where NSGS and PROX cycle on the first step and the dense Newton methods finish, and

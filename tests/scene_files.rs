@@ -29,6 +29,8 @@ fn committed_scenes_build_with_the_expected_sizes() {
         ("hertz_ball_on_plate.toml", 4326, 43, false),
         ("sliding_block_on_slab.toml", 1143, 25, false),
         ("block_stack.toml", 594, 66, false),
+        // past the dense workspaces: the matrix-free path (tests/analytic_flat_impact.rs)
+        ("wide_block.toml", 100 * 100 * 3 * 3, 100 * 100, true),
     ] {
         let (_, report) = load(file).build().unwrap();
         assert_eq!(report.dofs, dofs, "{file}");

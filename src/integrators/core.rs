@@ -85,9 +85,10 @@ use crate::model::system::Linearity;
 use crate::solvers::friction::{
     Block, FrictionParams, FrictionProblem, FrictionSolver, FrictionSolverKind,
 };
+use crate::solvers::global::GlobalSolver;
 use crate::solvers::lcp::LcpSolver;
 use crate::solvers::mlcp::Mlcp;
-use crate::solvers::operator::DenseOperator;
+use crate::solvers::operator::{DelassusOperator, DenseOperator};
 use crate::solvers::{SolveError, SolveInfo};
 
 /// What the position step enforces (eq. 58 for Algorithm 1, eq. 68 for Algorithm 2).
@@ -138,6 +139,66 @@ pub(crate) struct Workspace {
     /// Friction blocks of the gathered problem (offsets in the gathered rows).
     blocks: Vec<Block>,
     friction: FrictionSolver,
+    /// The gathered rows exceed `cap`: the problem is recorded (`gq`, `gz`, `geq`) and
+    /// solved matrix-free ([`crate::solvers::global`]) on products with `del`.
+    over: bool,
+    /// Operator and scale of the recorded problem.
+    gop: (Op, f64),
+    gq: Vec<f64>,
+    gz: Vec<f64>,
+    gw: Vec<f64>,
+    geq: Vec<bool>,
+    /// Full contact-space vectors for the restricted products.
+    gx: Vec<f64>,
+    gy: Vec<f64>,
+    global: GlobalSolver,
+    /// Tolerance and product cap of the matrix-free solves (the friction solver's).
+    gtol: f64,
+    gmax: usize,
+}
+
+/// The principal sub-block `scale · op[idx, idx]` of a Delassus operator, applied by
+/// products with the whole operator ([`Delassus::mul_add`]: stored columns, or through
+/// the factor): what the matrix-free solvers of [`crate::solvers::global`] see.
+struct Restricted<'a> {
+    del: std::cell::RefCell<&'a mut Delassus>,
+    stiffness: &'a SparseMatrix,
+    op: Op,
+    scale: f64,
+    idx: &'a [usize],
+    x: std::cell::RefCell<&'a mut [f64]>,
+    y: std::cell::RefCell<&'a mut [f64]>,
+}
+
+impl DelassusOperator for Restricted<'_> {
+    fn size(&self) -> usize {
+        self.idx.len()
+    }
+    /// One product per entry: for checks, never in the solvers' loops.
+    fn entry(&self, i: usize, j: usize) -> f64 {
+        let (mut xs, mut ys) = (self.x.borrow_mut(), self.y.borrow_mut());
+        xs.iter_mut().for_each(|v| *v = 0.0);
+        ys.iter_mut().for_each(|v| *v = 0.0);
+        xs[self.idx[j]] = 1.0;
+        self.del
+            .borrow_mut()
+            .mul_add(self.op, self.scale, &xs, &mut ys, self.stiffness);
+        ys[self.idx[i]]
+    }
+    fn mul_add(&self, s: f64, x: &[f64], out: &mut [f64]) {
+        let (mut xs, mut ys) = (self.x.borrow_mut(), self.y.borrow_mut());
+        xs.iter_mut().for_each(|v| *v = 0.0);
+        ys.iter_mut().for_each(|v| *v = 0.0);
+        for (&i, &v) in self.idx.iter().zip(x) {
+            xs[i] = v;
+        }
+        self.del
+            .borrow_mut()
+            .mul_add(self.op, s * self.scale, &xs, &mut ys, self.stiffness);
+        for (o, &i) in out.iter_mut().zip(self.idx) {
+            *o += ys[i];
+        }
+    }
 }
 
 impl Workspace {
@@ -159,31 +220,55 @@ impl Workspace {
             mlcp: Mlcp::with_capacity(cap),
             blocks: Vec::with_capacity(if friction { contacts } else { 0 }),
             friction: FrictionSolver::with_capacity(if friction { cap } else { 0 }),
+            over: false,
+            gop: (Op::W, 1.0),
+            gq: vec![0.0; if rows > cap { rows } else { 0 }],
+            gz: vec![0.0; if rows > cap { rows } else { 0 }],
+            gw: vec![0.0; if rows > cap { rows } else { 0 }],
+            geq: vec![false; if rows > cap { rows } else { 0 }],
+            gx: vec![0.0; if rows > cap { rows } else { 0 }],
+            gy: vec![0.0; if rows > cap { rows } else { 0 }],
+            global: GlobalSolver::with_capacity(if rows > cap { rows } else { 0 }),
+            gtol: params.friction.tol,
+            gmax: params.friction.max_iterations,
         }
     }
 
     /// Rows of the dense blocks: `rows`, capped by `params.max_active_rows`.
-    fn cap(rows: usize, params: &SchemeParams) -> usize {
+    pub(crate) fn cap(rows: usize, params: &SchemeParams) -> usize {
         match params.max_active_rows {
             0 => rows.min(DEFAULT_MAX_ACTIVE_ROWS),
             c => rows.min(c),
         }
     }
 
-    /// Fails when the gathered rows exceed the workspace.
-    fn check_cap(&self) -> Result<(), SolveError> {
-        if self.idx.len() > self.cap {
-            Err(SolveError::ActiveRows {
-                active: self.idx.len(),
-                cap: self.cap,
-            })
-        } else {
-            Ok(())
+    /// The matrix-free fallback, for the path line (empty when every row fits).
+    pub fn describe(&self) -> String {
+        if self.global.capacity() == 0 {
+            return String::new();
         }
+        format!(
+            "; one-step problems of more than {} active rows solved matrix-free on products \
+             W x = Gᵀ(M̂⁻¹(G x)) (MPRGP{})",
+            self.cap,
+            if self.friction.capacity() > 0 {
+                ", friction by accelerated projected gradient with the fixed point on ‖u_T‖"
+            } else {
+                ""
+            }
+        )
+    }
+
+    /// True when the rows of `idx` exceed the dense workspaces: the problem is then
+    /// solved matrix-free, and its Delassus columns need not be stored.
+    pub fn over_cap(&self) -> bool {
+        self.idx.len() > self.cap
     }
 
     /// Gathers `op[idx, idx]` (scaled by `scale`), `rhs[idx]`, the warm start and the
-    /// equality flags; the columns of `idx` must be available in `del`.
+    /// equality flags; the columns of `idx` must be available in `del`. Past the dense
+    /// workspaces only `rhs`, the warm start and the flags are gathered (the matrix-free
+    /// solve applies `op` by products).
     pub fn gather(
         &mut self,
         del: &Delassus,
@@ -193,8 +278,17 @@ impl Workspace {
         warm: &[f64],
         eq: impl Fn(usize) -> bool,
     ) -> Result<(), SolveError> {
-        self.check_cap()?;
         let k = self.idx.len();
+        self.over = self.over_cap();
+        if self.over {
+            self.gop = (op, scale);
+            for (b, &j) in self.idx.iter().enumerate() {
+                self.gq[b] = rhs[j];
+                self.gz[b] = warm[j];
+                self.geq[b] = eq(j);
+            }
+            return Ok(());
+        }
         for (b, &j) in self.idx.iter().enumerate() {
             for (a, &i) in self.idx.iter().enumerate() {
                 self.sub[a + b * k] = scale * del.entry(op, i, j);
@@ -206,9 +300,67 @@ impl Workspace {
         Ok(())
     }
 
-    /// Solves the gathered problem (an LCP when no row is an equality).
-    pub fn solve(&mut self) -> Result<SolveInfo, SolveError> {
+    /// The restricted operator of the recorded problem over `del`.
+    fn restricted<'a>(
+        del: &'a mut Delassus,
+        stiffness: &'a SparseMatrix,
+        (op, scale): (Op, f64),
+        idx: &'a [usize],
+        gx: &'a mut [f64],
+        gy: &'a mut [f64],
+    ) -> Restricted<'a> {
+        Restricted {
+            del: std::cell::RefCell::new(del),
+            stiffness,
+            op,
+            scale,
+            idx,
+            x: std::cell::RefCell::new(gx),
+            y: std::cell::RefCell::new(gy),
+        }
+    }
+
+    /// Solves the gathered problem (an LCP when no row is an equality); past the dense
+    /// workspaces by MPRGP on products with `del` (a cap or a residual above the
+    /// tolerance is an error).
+    pub fn solve(
+        &mut self,
+        del: &mut Delassus,
+        stiffness: &SparseMatrix,
+        stats: &mut StepStats,
+    ) -> Result<SolveInfo, SolveError> {
         let k = self.idx.len();
+        if self.over {
+            let a = Self::restricted(
+                del,
+                stiffness,
+                self.gop,
+                &self.idx,
+                &mut self.gx,
+                &mut self.gy,
+            );
+            let info = self.global.solve_box(
+                &a,
+                &self.gq[..k],
+                &self.geq[..k],
+                &mut self.gz[..k],
+                &mut self.gw[..k],
+                self.gtol,
+                self.gmax,
+            );
+            stats.global_solves += 1;
+            stats.global_products += info.products;
+            if !info.converged {
+                return Err(SolveError::Cap {
+                    cap: self.gmax,
+                    residual: info.residual,
+                });
+            }
+            return Ok(SolveInfo {
+                iterations: info.products,
+                residual: info.accuracy,
+            });
+        }
         if self.eq[..k].iter().any(|&e| e) {
             self.mlcp.solve(
                 &self.sub[..k * k],
@@ -235,8 +387,43 @@ impl Workspace {
     fn solve_friction(
         &mut self,
         params: &FrictionParams,
+        del: &mut Delassus,
+        stiffness: &SparseMatrix,
+        stats: &mut StepStats,
     ) -> Result<(crate::solvers::friction::FrictionInfo, f64), SolveError> {
         let k = self.idx.len();
+        if self.over {
+            let a = Self::restricted(
+                del,
+                stiffness,
+                self.gop,
+                &self.idx,
+                &mut self.gx,
+                &mut self.gy,
+            );
+            let info = self.global.solve_friction(
+                &a,
+                &self.gq[..k],
+                &self.blocks,
+                &mut self.gz[..k],
+                &mut self.gw[..k],
+                params.tol,
+                params.max_iterations,
+            );
+            stats.global_solves += 1;
+            stats.global_products += info.products;
+            let fi = crate::solvers::friction::FrictionInfo {
+                iterations: info.products,
+                residual: info.residual,
+                prox_iterations: info.outer,
+                converged: info.converged,
+                // not a fallback: counted in `StepStats::global_solves`
+                solver: FrictionSolverKind::Nsgs,
+                tolerance: params.tol,
+                ..Default::default()
+            };
+            return Ok((fi, info.accuracy));
+        }
         let op = DenseOperator::new(k, &self.sub[..k * k]);
         let prob = FrictionProblem {
             w: &op,
@@ -258,7 +445,7 @@ impl Workspace {
     #[allow(clippy::too_many_arguments)]
     fn add_violated(
         &mut self,
-        del: &Delassus,
+        (del, stiffness): (&mut Delassus, &SparseMatrix),
         (op, scale): (Op, f64),
         rhs: &[f64],
         z: &[f64],
@@ -271,7 +458,7 @@ impl Workspace {
             self.member[a] = true;
         }
         self.res.copy_from_slice(rhs);
-        del.mul_add(op, scale, z, &mut self.res);
+        del.mul_add(op, scale, z, &mut self.res, stiffness);
         let before = self.idx.len();
         for a in candidates {
             let r = self.res[a];
@@ -290,8 +477,9 @@ impl Workspace {
     /// `out[idx] = z`, zero elsewhere.
     pub fn scatter(&self, out: &mut [f64]) {
         out.iter_mut().for_each(|x| *x = 0.0);
+        let z = if self.over { &self.gz } else { &self.z };
         for (a, &i) in self.idx.iter().enumerate() {
-            out[i] = self.z[a];
+            out[i] = z[a];
         }
     }
 }
@@ -610,6 +798,8 @@ impl ThetaCore {
         // the coupled problem has at most the velocity rows plus one τ per contact,
         // capped like the dense workspaces (beyond, the decoupled loop runs alone)
         let ws_cap = Workspace::cap(rows, params);
+        let mut del = del?;
+        del.limit_columns(ws_cap);
         let coupled_cap =
             (with_projection && params.projection_feedback).then(|| (rows + m).min(ws_cap));
         {
@@ -617,6 +807,14 @@ impl ThetaCore {
             let mut mem = crate::limits::MemoryEstimate::default();
             mem.add("dense one-step workspaces (4 × rows²)", cap * cap, 32);
             mem.add("coupled position problem (unknowns²)", cc * cc, 8);
+            if rows > ws_cap {
+                // the matrix-free solves' vectors (`Workspace::gq`…, `GlobalSolver`)
+                mem.add(
+                    "matrix-free one-step vectors (15 × rows)",
+                    rows as u64,
+                    15 * 8,
+                );
+            }
             // `auto`'s dense Newton fallback: W and J (solvers::newton::NewtonWork)
             let fn_rows = if friction {
                 cap.min(crate::solvers::newton::STEP_NEWTON_ROWS as u64)
@@ -643,7 +841,7 @@ impl ThetaCore {
             friction,
             friction_params: params.friction,
             normal,
-            del: del?,
+            del,
             e,
             with_projection,
             feedback: params.projection_feedback,
@@ -770,7 +968,7 @@ impl ThetaCore {
             } else {
                 String::new()
             }
-        )
+        ) + &self.ws.describe()
     }
 
     /// Free velocity and the contact-space data at the start of a step (for a
@@ -1046,8 +1244,13 @@ impl ThetaCore {
                 self.del
                     .ensure_support(&self.tau_prev, &self.sys.stiffness)
                     .map_err(|e| fail(&self.state, "Delassus columns", e))?;
-                self.del
-                    .mul_add(Op::Wd, h * th, &self.tau_prev, &mut self.coupling);
+                self.del.mul_add(
+                    Op::Wd,
+                    h * th,
+                    &self.tau_prev,
+                    &mut self.coupling,
+                    &self.sys.stiffness,
+                );
             }
             for a in 0..rows {
                 self.a[a] = self.u_free[a] - self.coupling[a] + self.e[a] * self.u_k[a];
@@ -1084,9 +1287,11 @@ impl ThetaCore {
                         self.ws.idx.extend(o..o + d);
                     }
                     if !self.ws.idx.is_empty() {
-                        self.del
-                            .ensure_all(&self.ws.idx, &self.sys.stiffness)
-                            .map_err(|e| fail(&self.state, "Delassus columns", e))?;
+                        if !self.ws.over_cap() {
+                            self.del
+                                .ensure_all(&self.ws.idx, &self.sys.stiffness)
+                                .map_err(|e| fail(&self.state, "Delassus columns", e))?;
+                        }
                         // friction: warm start from the previous step's impulse
                         let warm = if frictional && it == 1 {
                             &self.state.impulse_rows
@@ -1099,7 +1304,12 @@ impl ThetaCore {
                         if frictional {
                             let (info, acc) = self
                                 .ws
-                                .solve_friction(&self.friction_params)
+                                .solve_friction(
+                                    &self.friction_params,
+                                    &mut self.del,
+                                    &self.sys.stiffness,
+                                    stats,
+                                )
                                 .map_err(|e| fail(&self.state, "friction problem", e))?;
                             self.velocity_accuracy = self.velocity_accuracy.max(acc);
                             stats.friction_solves += 1;
@@ -1114,7 +1324,7 @@ impl ThetaCore {
                         } else {
                             let info = self
                                 .ws
-                                .solve()
+                                .solve(&mut self.del, &self.sys.stiffness, stats)
                                 .map_err(|e| fail(&self.state, "velocity LCP", e))?;
                             stats.lcp_iterations += info.iterations;
                             stats.lcp_residual = stats.lcp_residual.max(info.residual);
@@ -1146,7 +1356,8 @@ impl ThetaCore {
                 }
             }
             self.wp.iter_mut().for_each(|x| *x = 0.0);
-            self.del.mul_add(Op::W, 1.0, &self.p, &mut self.wp);
+            self.del
+                .mul_add(Op::W, 1.0, &self.p, &mut self.wp, &self.sys.stiffness);
             for a in 0..rows {
                 self.u_new[a] = self.u_free[a] + self.wp[a] - self.coupling[a];
             }
@@ -1161,7 +1372,8 @@ impl ThetaCore {
             }
             self.wt.iter_mut().for_each(|x| *x = 0.0);
             if self.with_projection {
-                self.del.mul_add(Op::Wn, 1.0, &self.tau, &mut self.wt);
+                self.del
+                    .mul_add(Op::Wn, 1.0, &self.tau, &mut self.wt, &self.sys.stiffness);
             }
             for c in 0..m {
                 let a = self.off[c];
@@ -1454,8 +1666,10 @@ impl ThetaCore {
         }
         self.wp.iter_mut().for_each(|x| *x = 0.0);
         self.wt.iter_mut().for_each(|x| *x = 0.0);
-        self.del.mul_add(Op::Wd, 1.0, &self.dtau, &mut self.wp);
-        self.del.mul_add(Op::Wn, 1.0, &self.dtau, &mut self.wt);
+        self.del
+            .mul_add(Op::Wd, 1.0, &self.dtau, &mut self.wp, &self.sys.stiffness);
+        self.del
+            .mul_add(Op::Wn, 1.0, &self.dtau, &mut self.wt, &self.sys.stiffness);
         let mut dv: f64 = 0.0;
         let mut dg: f64 = 0.0;
         for a in 0..rows {
@@ -1551,15 +1765,17 @@ impl ThetaCore {
                 let mut rounds = 0;
                 while !self.ws.idx.is_empty() {
                     rounds += 1;
-                    self.del
-                        .ensure_all(&self.ws.idx, &self.sys.stiffness)
-                        .map_err(|e| fail(&self.state, "Delassus columns", e))?;
+                    if !self.ws.over_cap() {
+                        self.del
+                            .ensure_all(&self.ws.idx, &self.sys.stiffness)
+                            .map_err(|e| fail(&self.state, "Delassus columns", e))?;
+                    }
                     self.ws
                         .gather(&self.del, Op::Wn, 1.0, b, &self.tau_prev, eq)
                         .map_err(|e| fail(&self.state, "position MLCP", e))?;
                     let info = self
                         .ws
-                        .solve()
+                        .solve(&mut self.del, &self.sys.stiffness, stats)
                         .map_err(|e| fail(&self.state, "position MLCP", e))?;
                     stats.lcp_iterations += info.iterations;
                     stats.lcp_residual = stats.lcp_residual.max(info.residual);
@@ -1568,7 +1784,7 @@ impl ThetaCore {
                     let (off, pos) = (&self.off, &self.pos_mask);
                     let candidates = (0..m).filter(|&c| pos[c]).map(|c| off[c]);
                     let grew = self.ws.add_violated(
-                        &self.del,
+                        (&mut self.del, &self.sys.stiffness),
                         (Op::Wn, 1.0),
                         b,
                         &self.tau,
@@ -1847,14 +2063,24 @@ pub(crate) fn grow_solve(
     let mut rounds = 0;
     while !ws.idx.is_empty() {
         rounds += 1;
-        del.ensure_all(&ws.idx, stiffness)?;
+        if !ws.over_cap() {
+            del.ensure_all(&ws.idx, stiffness)?;
+        }
         ws.gather(del, op, scale, rhs, warm, |_| false)?;
-        let info = ws.solve()?;
+        let info = ws.solve(del, stiffness, stats)?;
         stats.lcp_iterations += info.iterations;
         stats.lcp_residual = stats.lcp_residual.max(info.residual);
         ws.scatter(out);
         let candidates = (0..m).filter(|&a| rows[a]);
-        if !ws.add_violated(del, (op, scale), rhs, out, tol, candidates, |_| false) {
+        if !ws.add_violated(
+            (del, stiffness),
+            (op, scale),
+            rhs,
+            out,
+            tol,
+            candidates,
+            |_| false,
+        ) {
             break;
         }
         if rounds > m {

@@ -161,6 +161,12 @@ pub struct StepStats {
     /// (`0 ≤ g ⊥ τ ≥ 0` on every active row) because the combined rule (eq. 67–70)
     /// hit the Newton cap or left held rows.
     pub complementarity_fallbacks: usize,
+    /// One-step problems solved matrix-free because their active rows exceeded the dense
+    /// workspaces (`max_active_rows`; [`crate::solvers::global`]).
+    pub global_solves: usize,
+    /// Products with the Delassus operator those solves took (each one sparse solve
+    /// through the factor when the columns are not stored).
+    pub global_products: usize,
 }
 
 /// A time integrator for a linear structure with contacts.
@@ -395,8 +401,11 @@ pub struct SchemeParams {
     pub delassus_pool: usize,
     /// Rows of the contact space the one-step solvers' dense workspaces hold (0,
     /// default: all rows up to 4096, i.e. 128 MiB per dense block). The workspaces grow
-    /// with the active contacts, never with the square of the candidates; more rows
-    /// active in one step than this is an error naming the parameter.
+    /// with the active contacts, never with the square of the candidates; a problem with
+    /// more active rows than this is solved matrix-free ([`crate::solvers::global`]: MPRGP,
+    /// or the accelerated projected gradient with friction, on products `W x` through
+    /// the factor), to the friction tolerance `friction.tol` within
+    /// `friction.max_iterations` products.
     pub max_active_rows: usize,
     /// Coulomb friction solver controls (used only when some contact has `μ > 0`).
     pub friction: crate::solvers::friction::FrictionParams,

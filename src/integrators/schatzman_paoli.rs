@@ -112,7 +112,11 @@ impl SchatzmanPaoli {
             theta,
             n,
             m,
-            del: del?,
+            del: {
+                let mut del = del?;
+                del.limit_columns(Workspace::cap(m, params));
+                del
+            },
             e,
             g_constant,
             newton: params.newton,
@@ -326,6 +330,6 @@ impl Integrator for SchatzmanPaoli {
                 "nonlinear gap: re-linearized every Newton iteration"
             },
             self.del.describe()
-        )
+        ) + &self.ws.describe()
     }
 }

@@ -87,6 +87,9 @@ pub struct RunState {
     /// Coupled position solves, stagnated Newton loops, steps with held rows,
     /// complementarity fallbacks of Algorithm 2.
     pub newton_loops: [usize; 4],
+    /// Matrix-free one-step solves and their products.
+    #[serde(default)]
+    pub global: [usize; 2],
     /// Nonlinear structures: factorizations of `M̂ⁿ` so far.
     #[serde(default)]
     pub factorizations: usize,

@@ -452,6 +452,11 @@ pub fn run_checkpointed(
             complementarity_fallbacks: acc.loops[3],
         },
         friction: acc.friction(s.tangent_dim > 0),
+        matrix_free: (acc.global[0] > 0).then(|| summary::MatrixFreeSummary {
+            solves: acc.global[0],
+            products: acc.global[1],
+            products_per_solve: acc.global[1] as f64 / acc.global[0] as f64,
+        }),
         nonlinear: (sys.linearity() != crate::model::system::Linearity::Linear).then(|| {
             summary::NonlinearSummary {
                 factorizations: acc.factorizations,

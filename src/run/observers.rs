@@ -30,6 +30,8 @@ pub(super) struct Acc {
     pub(super) fr_steps: usize,
     pub(super) fr_caps: usize,
     pub(super) fr_fallbacks: usize,
+    /// Matrix-free solves and their products.
+    pub(super) global: [usize; 2],
     /// Coupled position solves, stagnated Newton loops, steps with held rows.
     pub(super) loops: [usize; 4],
     /// Largest relative energy excess met ([`EnergyCheck`]).
@@ -58,6 +60,8 @@ impl Acc {
         self.loops[1] += s.newton_stalls;
         self.loops[2] += usize::from(s.held_rows > 0);
         self.loops[3] += s.complementarity_fallbacks;
+        self.global[0] += s.global_solves;
+        self.global[1] += s.global_products;
         if s.friction_solves > 0 {
             self.fr_solves += s.friction_solves;
             self.fr_sweeps += s.friction_iterations;
@@ -355,6 +359,7 @@ impl RunObserver {
             ],
             friction_residual: [Bits(a.fr_res_sum), Bits(a.fr_res_max)],
             newton_loops: a.loops,
+            global: a.global,
             factorizations: a.factorizations,
             energy_audit: self
                 .energy
@@ -405,6 +410,7 @@ impl RunObserver {
         ] = r.friction_counts;
         (a.fr_res_sum, a.fr_res_max) = (r.friction_residual[0].0, r.friction_residual[1].0);
         a.loops = r.newton_loops;
+        a.global = r.global;
         a.factorizations = r.factorizations;
         a.energy_excess = r.energy_excess.0;
         let t = &mut self.tracker;

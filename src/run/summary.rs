@@ -96,6 +96,17 @@ pub struct NewtonLoops {
     pub complementarity_fallbacks: usize,
 }
 
+/// The matrix-free one-step solves of a run ([`crate::solvers::global`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct MatrixFreeSummary {
+    /// Problems solved matrix-free (`StepStats::global_solves`).
+    pub solves: usize,
+    /// Products with the Delassus operator they took (`StepStats::global_products`).
+    pub products: usize,
+    /// Products per solve.
+    pub products_per_solve: f64,
+}
+
 /// The Newton loop of a nonlinear structure over a run ([`Summary::nonlinear`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct NonlinearSummary {
@@ -167,6 +178,10 @@ pub struct Summary {
     /// Friction solver statistics (absent in a frictionless scene).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<FrictionSummary>,
+    /// One-step problems solved matrix-free because their active rows exceeded the
+    /// dense workspaces (absent when none was).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub matrix_free: Option<MatrixFreeSummary>,
     /// The nonlinear structure's Newton loop (absent for a linear structure).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub nonlinear: Option<NonlinearSummary>,

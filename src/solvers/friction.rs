@@ -358,7 +358,7 @@ pub fn checked_residual(blocks: &[Block], q: &[f64], r: &[f64], u: &[f64], tol: 
 /// map of [`residual`] reads `‖u + μ‖u_T‖ e_N‖`, `μ` times the round-off of `u_T`
 /// (μ = 1e6: a floor near 1e-10 that no solver can pass), and a block taking off with
 /// `u_N < 0` reads `ρ|u_N|`, so no take-off check is needed.
-fn ac_map2(r: &[f64], u: &[f64], mu: f64, rho: f64) -> f64 {
+pub(super) fn ac_map2(r: &[f64], u: &[f64], mu: f64, rho: f64) -> f64 {
     let d = r.len();
     let xn = r[0] - rho * u[0];
     let pn = xn.max(0.0);

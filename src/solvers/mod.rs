@@ -6,6 +6,9 @@
 //! - [`lcp::Pgs`]: projected Gauss–Seidel with tolerance, iteration cap and warm start.
 //! - [`lcp::BlockPivoting`]: block principal pivoting for SPD matrices (one dense
 //!   Cholesky per guess of the active set, warm-started), falling back to Lemke.
+//! - [`global::GlobalSolver`]: matrix-free MPRGP (LCP, MLCP) and accelerated projected
+//!   gradient (Coulomb friction) on products `W x` only, for active sets past the dense
+//!   workspaces.
 //! - [`mlcp::Mlcp`]: the projection problem of Algorithm 2 (eq. 65, 68), with equality
 //!   rows (`g^α = 0`, free `τ^α`, for contacts with a positive impulse) and
 //!   complementarity rows (`0 ≤ g ⊥ τ ≥ 0`), reduced to an LCP by a Schur complement.
@@ -16,6 +19,7 @@
 //! `max_i |min(z_i, w_i)|` as data.
 
 pub mod friction;
+pub mod global;
 pub mod lcp;
 pub mod mlcp;
 pub mod newton;
