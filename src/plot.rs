@@ -192,7 +192,7 @@ pub fn plot_run(dir: &Path) -> Result<Vec<PathBuf>, Error> {
         need("max_violation")?,
     );
     let impulses: Vec<usize> = (0..header.len())
-        .filter(|&i| header[i].starts_with("impulse_"))
+        .filter(|&i| header[i].starts_with("impulse_") || header[i] == "total_impulse")
         .collect();
     let mut rows: Vec<Vec<f64>> = Vec::new();
     for (i, l) in lines.enumerate() {

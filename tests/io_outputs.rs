@@ -82,3 +82,109 @@ fn cli_run_writes_summary_and_history() {
     assert!(!dir.join("summary.json.part").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Many contacts (a 16 × 16-cell face: 289 frictional contacts, past `auto`'s 256): the
+/// CSV keeps the sums (`closed_contacts`, `total_impulse`, `min_gap`,
+/// `total_projection`, `total_tangent_impulse_{t}`, `sticking`, `slipping`) instead of
+/// 289 groups of columns, and they equal the sums of the per-contact columns that
+/// `contact_columns = "all"` writes for the same run (to 1e-12 relative: the same
+/// impulses summed in the same order; the counts exactly).
+#[test]
+fn many_contacts_keep_their_sums_in_the_csv() {
+    use signorini::io::{ContactColumns, OutputOptions};
+    use signorini::run::Output;
+    use signorini::run::{Quiet, run_scene};
+    use signorini::scene::file::Scene;
+    let scene = Scene::from_toml(
+        r#"
+[time]
+dt = 1e-4
+t_end = 2e-3
+[scheme]
+kind = "combined-projection"
+[[bodies]]
+name = "block"
+mesh = { generator = "box", cell = "hex8", cells = [16, 16, 1], size = [0.16, 0.16, 0.01] }
+material = { young = 1e7, poisson = 0.3, density = 1000.0 }
+velocity = [0.3, 0.0, -0.01]
+[loads]
+gravity = [0.0, 0.0, -9.81]
+[[obstacles]]
+name = "floor"
+type = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+[[contacts]]
+body = "block"
+nodes = "z0"
+obstacle = "floor"
+friction = 0.3
+"#,
+    )
+    .unwrap();
+    let read = |cols: ContactColumns| -> (Vec<String>, Vec<Vec<f64>>) {
+        let dir = std::env::temp_dir().join(format!(
+            "signorini-io-columns-{cols:?}-{}",
+            std::process::id()
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+        let options = OutputOptions {
+            fields: false,
+            plots: true,
+            hdf5: Some(false),
+            contact_columns: cols,
+            ..OutputOptions::default()
+        };
+        let out = Output {
+            dir: &dir,
+            options: &options,
+        };
+        run_scene(&scene, Some(out), &mut Quiet).unwrap();
+        let csv = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+        assert!(
+            dir.join("contact_force.png").exists(),
+            "the force plot reads the sums"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut lines = csv.lines();
+        let header = lines.next().unwrap().split(',').map(String::from).collect();
+        let rows = lines
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect();
+        (header, rows)
+    };
+    let (sh, sums) = read(ContactColumns::Auto);
+    assert_eq!(
+        sh[8..].join(","),
+        "closed_contacts,total_impulse,min_gap,total_projection,total_tangent_impulse_0,\
+         total_tangent_impulse_1,sticking,slipping,friction_iterations,friction_residual"
+    );
+    let (ah, all) = read(ContactColumns::All);
+    assert_eq!(ah.len(), 8 + 289 * 9 + 2);
+    let col = |name: &str| ah.iter().position(|h| h == name).unwrap();
+    let mut touched = 0;
+    for (s, a) in sums.iter().zip(&all) {
+        let p: Vec<f64> = (0..289).map(|c| a[col(&format!("impulse_{c}"))]).collect();
+        let closed = p.iter().filter(|&&x| x > 0.0).count() as f64;
+        let total: f64 = p.iter().sum();
+        let min_gap = (0..289)
+            .map(|c| a[col(&format!("gap_{c}"))])
+            .fold(f64::INFINITY, f64::min);
+        let tx: f64 = (0..289)
+            .map(|c| a[col(&format!("tangent_impulse_{c}_0"))])
+            .sum();
+        let status = |k: f64| {
+            (0..289)
+                .filter(|c| a[col(&format!("status_{c}"))] == k)
+                .count()
+        };
+        assert_eq!(s[8], closed);
+        assert!((s[9] - total).abs() <= 1e-12 * total.abs().max(1e-30));
+        assert_eq!(s[10], min_gap);
+        assert!((s[12] - tx).abs() <= 1e-12 * tx.abs().max(1e-30));
+        assert_eq!(s[14] as usize, status(1.0));
+        assert_eq!(s[15] as usize, status(2.0));
+        touched += usize::from(closed > 0.0);
+    }
+    assert!(touched > 5, "the block touched the floor in {touched} rows");
+}

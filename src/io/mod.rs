@@ -308,6 +308,36 @@ pub struct HistoryWriter {
     rows_since_flush: usize,
     /// Rows written so far.
     rows: u64,
+    /// One group of columns per contact; false: the sums ([`ContactColumns`]).
+    per_contact: bool,
+}
+
+/// Contacts up to which [`ContactColumns::Auto`] writes per-contact history columns.
+pub const CSV_CONTACTS_MAX: usize = 256;
+
+/// Which contact columns `history.csv` has (`output.contact_columns`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ContactColumns {
+    /// Per contact up to [`CSV_CONTACTS_MAX`] contacts, the sums above (default).
+    #[default]
+    Auto,
+    /// Per contact whatever their number (a row of 10⁴ frictional contacts is 0.8 MB).
+    All,
+    /// The sums only: closed contacts, `ΣP_N`, the smallest gap, `Στ` (with friction
+    /// `ΣP_T` per tangent and the sticking and slipping counts).
+    Sums,
+}
+
+impl ContactColumns {
+    /// Whether a run with `m` contacts writes per-contact columns.
+    pub fn per_contact(self, m: usize) -> bool {
+        match self {
+            ContactColumns::Auto => m <= CSV_CONTACTS_MAX,
+            ContactColumns::All => true,
+            ContactColumns::Sums => false,
+        }
+    }
 }
 
 /// A file that counts the bytes written to it (the history's checkpoint cursor).
@@ -335,8 +365,17 @@ impl HistoryWriter {
     /// tangents each (0 in a frictionless scene: the columns of before, unchanged).
     /// Frictional scenes add per contact `tangent_impulse_{c}_{t}` (N·s),
     /// `slip_velocity_{c}_{t}` (m/s) and `status_{c}` (0 open, 1 stick, 2 slip, 3 closed without friction), and per
-    /// row `friction_iterations`, `friction_residual`.
-    pub fn create(path: &Path, m: usize, tangent_dim: usize) -> Result<Self, Error> {
+    /// row `friction_iterations`, `friction_residual`. Without `per_contact` the contact
+    /// columns are the sums of [`ContactColumns::Sums`]: `closed_contacts`,
+    /// `total_impulse` (ΣP_N, N·s), `min_gap` (m), `total_projection` (Στ), with friction
+    /// `total_tangent_impulse_{t}` (the tangential impulses summed in their own frames:
+    /// a vector where the contacts share a frame, as on a plane), `sticking`, `slipping`.
+    pub fn create(
+        path: &Path,
+        m: usize,
+        tangent_dim: usize,
+        per_contact: bool,
+    ) -> Result<Self, Error> {
         let tmp = part_path(path);
         let f = File::create(&tmp).map_err(|e| Error::write(&tmp, e))?;
         let mut out = BufWriter::with_capacity(1 << 16, Counting { f, n: 0 });
@@ -344,7 +383,16 @@ impl HistoryWriter {
             "step,time,kinetic_energy,potential_energy,max_violation,newton_iterations,\
              projection_iterations,index_set_iterations",
         );
-        for c in 0..m {
+        if !per_contact {
+            header.push_str(",closed_contacts,total_impulse,min_gap,total_projection");
+            for t in 0..tangent_dim {
+                header.push_str(&format!(",total_tangent_impulse_{t}"));
+            }
+            if tangent_dim > 0 {
+                header.push_str(",sticking,slipping");
+            }
+        }
+        for c in (0..m).filter(|_| per_contact) {
             header.push_str(&format!(",gap_{c},velocity_{c},impulse_{c},projection_{c}"));
             for t in 0..tangent_dim {
                 header.push_str(&format!(",tangent_impulse_{c}_{t},slip_velocity_{c}_{t}"));
@@ -365,13 +413,15 @@ impl HistoryWriter {
             path: path.to_path_buf(),
             rows_since_flush: 0,
             rows: 0,
+            per_contact,
         })
     }
 
     /// Reopens the `.part` of a checkpointed run, cut to the `bytes` that belong to the
     /// checkpointed steps (rows a killed run wrote after its checkpoint, and a row the
-    /// kill cut, are dropped: the resumed run writes them again).
-    pub fn resume(path: &Path, bytes: u64, rows: u64) -> Result<Self, Error> {
+    /// kill cut, are dropped: the resumed run writes them again). `per_contact` as the
+    /// run was created with.
+    pub fn resume(path: &Path, bytes: u64, rows: u64, per_contact: bool) -> Result<Self, Error> {
         let tmp = part_path(path);
         let mut f = std::fs::OpenOptions::new()
             .write(true)
@@ -433,6 +483,7 @@ impl HistoryWriter {
             path: path.to_path_buf(),
             rows_since_flush: 0,
             rows,
+            per_contact,
         })
     }
 
@@ -474,7 +525,33 @@ impl HistoryWriter {
                 ",{},{},{}",
                 stats.newton_iterations, stats.projection_iterations, stats.index_set_iterations
             )?;
-            for c in 0..state.gap.len() {
+            if !self.per_contact {
+                let td = state.tangent_dim;
+                let closed = state.impulse.iter().filter(|&&p| p > 0.0).count();
+                let total: f64 = state.impulse.iter().sum();
+                let min_gap = state.gap.iter().copied().fold(f64::INFINITY, f64::min);
+                let tau: f64 = state.projection.iter().sum();
+                write!(o, ",{closed}")?;
+                for x in [total, if state.gap.is_empty() { 0.0 } else { min_gap }, tau] {
+                    o.write_all(b",")?;
+                    o.write_all(fmt_f64(&mut buf, x))?;
+                }
+                for t in 0..td {
+                    let s: f64 = state.tangent_impulse.iter().skip(t).step_by(td).sum();
+                    o.write_all(b",")?;
+                    o.write_all(fmt_f64(&mut buf, s))?;
+                }
+                if td > 0 {
+                    let count = |k| state.status.iter().filter(|s| **s == k).count();
+                    write!(
+                        o,
+                        ",{},{}",
+                        count(crate::contact::ContactStatus::Stick),
+                        count(crate::contact::ContactStatus::Slip)
+                    )?;
+                }
+            }
+            for c in (0..state.gap.len()).filter(|_| self.per_contact) {
                 for x in [
                     state.gap[c],
                     state.local_velocity[c],
@@ -578,6 +655,11 @@ pub struct OutputOptions {
     /// steps (default 0: none); `signorini resume DIR` finishes a killed run from it.
     #[serde(default)]
     pub checkpoint_every: usize,
+    /// Contact columns of `history.csv` (default `auto`: one group per contact up to
+    /// [`CSV_CONTACTS_MAX`] contacts, their sums beyond; the HDF5 `/history` always
+    /// keeps every contact).
+    #[serde(default)]
+    pub contact_columns: ContactColumns,
 }
 
 fn one() -> usize {
@@ -598,6 +680,7 @@ impl Default for OutputOptions {
             plots: true,
             hdf5: None,
             checkpoint_every: 0,
+            contact_columns: ContactColumns::Auto,
         }
     }
 }

@@ -286,10 +286,20 @@ pub fn run_checkpointed(
         let geom_outlines = geom.outlines.clone();
         let hist_path = o.dir.join("history.csv");
         let hist = match resume {
-            Some(c) => HistoryWriter::resume(&hist_path, c.run.history_bytes, c.run.history_rows)?,
+            Some(c) => HistoryWriter::resume(
+                &hist_path,
+                c.run.history_bytes,
+                c.run.history_rows,
+                o.options.contact_columns.per_contact(m),
+            )?,
             None => {
                 crate::io::prepare_run_dir(o.dir)?;
-                HistoryWriter::create(&hist_path, m, integ.state().tangent_dim)?
+                HistoryWriter::create(
+                    &hist_path,
+                    m,
+                    integ.state().tangent_dim,
+                    o.options.contact_columns.per_contact(m),
+                )?
             }
         };
         let h5 = crate::io::Hdf5Output::open(o.dir, o.options, resume.is_some())?;
