@@ -38,6 +38,12 @@
 //!   then `W = BᵀFB`, `W_D = BᵀF_E B` without a solve, and a correction `Â⁻¹G x` is
 //!   `Y (B x)` over the zone columns under the rows that carry an impulse.
 //!
+//! * **matrix-free** (any path, [`Delassus::product`]): `W x = Gᵀ Â⁻¹ (G x)` through the
+//!   factor, one sparse solve per product, no column stored. [`Delassus::mul_add`] falls
+//!   back on it when a column of the support is not in store; the one-step problems
+//!   past the dense workspaces (`max_active_rows`, [`Delassus::limit_columns`]) use it
+//!   alone ([`crate::solvers::global`]).
+//!
 //! The `Auto` choice takes the dense path while the dense blocks stay under 2 GiB and
 //! either `G` is constant (the blocks are formed once, by blocked solves) or there are
 //! at most [`AUTO_DENSE_MAX_CONTACTS`] contacts (a nonlinear `G` re-forms every block at
@@ -345,21 +351,8 @@ impl Delassus {
     ) -> Result<Self, Error> {
         let m = jac.ncols();
         let per = if with_d { 2 } else { 1 };
-        let dense = match kind {
-            DelassusKind::Dense => true,
-            DelassusKind::Columns => false,
-            DelassusKind::Auto => {
-                (g_constant || m <= AUTO_DENSE_MAX_CONTACTS)
-                    && n.saturating_mul(m).saturating_mul(8 * per) <= AUTO_DENSE_MAX_BYTES
-            }
-        };
-        let cap = if dense {
-            m
-        } else if pool > 0 {
-            m.min(pool)
-        } else {
-            m.min((COLUMN_POOL_BYTES / (8 * per * m.max(1))).max(1))
-        };
+        let dense = choose_dense(kind, n, m, per, g_constant);
+        let cap = pool_cap(dense, pool, m, per);
         let nm = if dense {
             let nm = n.saturating_mul(m);
             let mut mem = crate::limits::MemoryEstimate::default();
@@ -435,11 +428,7 @@ impl Delassus {
     ) -> bool {
         let (n, z, m) = (self.n, zone.len(), self.m);
         let per = if self.with_d && self.need_wd { 2 } else { 1 };
-        let blocks = n
-            .saturating_mul(z)
-            .saturating_mul(8 * per)
-            .saturating_add(m.saturating_mul(m).saturating_mul(8 * (per + 1)))
-            .saturating_add(z.saturating_mul(z + m).saturating_mul(8 * per));
+        let blocks = zone_bytes(n, z, m, per);
         if (!self.dense && !self.auto)
             || self.g_constant
             || z == 0
@@ -566,28 +555,57 @@ impl Delassus {
 
     /// One phrase for summaries: which path runs.
     pub fn describe(&self) -> String {
-        if let Some(z) = &self.zone {
-            format!(
-                "Delassus dense on the contact zone: Â⁻¹S {}×{} condensed once ({} zone \
-                 dofs), W = BᵀFB {}×{} re-formed per linearization without a solve \
-                 (constant blocks once), corrections (Â⁻¹S)(Bx)",
-                self.n,
-                z.dofs.len(),
-                z.dofs.len(),
-                self.m,
-                self.m
-            )
-        } else if self.dense {
-            format!(
-                "Delassus dense: Â⁻¹G {}×{} and W {}×{} condensed per linearization",
-                self.n, self.m, self.m, self.m
-            )
-        } else {
-            format!(
-                "Delassus per-active-column: W columns computed when a contact first \
-                 activates (pool of {} columns of {}), corrections by one sparse solve",
-                self.cap, self.m
-            )
+        describe_path(
+            self.zone.as_ref().map(|z| z.dofs.len()),
+            self.dense,
+            self.n,
+            self.m,
+            self.cap,
+        )
+    }
+
+    /// Where [`Delassus::new`], [`Delassus::limit_columns`] and
+    /// [`Delassus::condense_zone`] put the Delassus data of `m` contact rows on `n` dofs,
+    /// and its bytes: the same decisions, with nothing formed (`zone`: the contact zone's
+    /// dofs when the set asks to be condensed, [`crate::contact::ContactSet::condensed`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn plan(
+        n: usize,
+        m: usize,
+        (kind, pool): (DelassusKind, usize),
+        with_d: bool,
+        g_constant: bool,
+        zone: Option<usize>,
+        limit: usize,
+    ) -> DelassusPlan {
+        let per = if with_d { 2 } else { 1 };
+        let dense = choose_dense(kind, n, m, per, g_constant);
+        let mut cap = pool_cap(dense, pool, m, per);
+        if !dense && pool == 0 && cap > limit.max(1) {
+            cap = limit.max(1);
+        }
+        let z = zone.filter(|&z| {
+            (dense || kind == DelassusKind::Auto)
+                && !g_constant
+                && z > 0
+                && zone_bytes(n, z, m, per) <= AUTO_DENSE_MAX_BYTES
+        });
+        let (n8, m8) = (n as u64 * 8, m as u64 * 8);
+        let per = per as u64;
+        let bytes = match z {
+            Some(z) => zone_bytes(n, z, m, per as usize) as u64,
+            None if dense => n8 * m as u64 * per + m8 * m as u64 * (1 + 2 * u64::from(with_d)),
+            None => m8 * cap as u64 * per + n8 * SOLVE_BLOCK.min(m).max(2) as u64 * per + 2 * n8,
+        };
+        DelassusPlan {
+            describe: describe_path(
+                z,
+                dense || z.is_some(),
+                n,
+                m,
+                if z.is_some() { m } else { cap },
+            ),
+            bytes,
         }
     }
 
@@ -1051,6 +1069,66 @@ impl Delassus {
                 self.jac.axpy(a, xa, &mut self.t1);
             }
         }
+    }
+}
+
+/// The planned Delassus data ([`Delassus::plan`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DelassusPlan {
+    /// The phrase [`Delassus::describe`] will give.
+    pub describe: String,
+    /// Bytes of the blocks, columns and scratch.
+    pub bytes: u64,
+}
+
+/// [`DelassusKind::Auto`]'s and the user's choice of the dense path.
+fn choose_dense(kind: DelassusKind, n: usize, m: usize, per: usize, g_constant: bool) -> bool {
+    match kind {
+        DelassusKind::Dense => true,
+        DelassusKind::Columns => false,
+        DelassusKind::Auto => {
+            (g_constant || m <= AUTO_DENSE_MAX_CONTACTS)
+                && n.saturating_mul(m).saturating_mul(8 * per) <= AUTO_DENSE_MAX_BYTES
+        }
+    }
+}
+
+/// Columns the store holds: all on the dense path, else the caller's pool or as many
+/// as fit in the pool budget.
+fn pool_cap(dense: bool, pool: usize, m: usize, per: usize) -> usize {
+    if dense {
+        m
+    } else if pool > 0 {
+        m.min(pool)
+    } else {
+        m.min((COLUMN_POOL_BYTES / (8 * per * m.max(1))).max(1))
+    }
+}
+
+/// Bytes of the contact zone's blocks (`Y`, `E`: `n × z`; `F`, `F_E`: `z × z`; `F B`,
+/// `F_E B`: `z × m`) and of the `m × m` operators.
+fn zone_bytes(n: usize, z: usize, m: usize, per: usize) -> usize {
+    n.saturating_mul(z)
+        .saturating_mul(8 * per)
+        .saturating_add(m.saturating_mul(m).saturating_mul(8 * (per + 1)))
+        .saturating_add(z.saturating_mul(z + m).saturating_mul(8 * per))
+}
+
+/// The phrase of a path: the zone's dofs, dense, or the per-active-column pool.
+fn describe_path(zone: Option<usize>, dense: bool, n: usize, m: usize, cap: usize) -> String {
+    if let Some(z) = zone {
+        format!(
+            "Delassus dense on the contact zone: Â⁻¹S {n}×{z} condensed once ({z} zone \
+             dofs), W = BᵀFB {m}×{m} re-formed per linearization without a solve \
+             (constant blocks once), corrections (Â⁻¹S)(Bx)"
+        )
+    } else if dense {
+        format!("Delassus dense: Â⁻¹G {n}×{m} and W {m}×{m} condensed per linearization")
+    } else {
+        format!(
+            "Delassus per-active-column: W columns computed when a contact first \
+             activates (pool of {cap} columns of {m}), corrections by one sparse solve"
+        )
     }
 }
 

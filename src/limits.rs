@@ -157,6 +157,11 @@ impl MemoryEstimate {
         self
     }
 
+    /// The parts: what, bytes.
+    pub fn parts(&self) -> &[(String, u64)] {
+        &self.parts
+    }
+
     /// The total (bytes, saturating).
     pub fn total(&self) -> u64 {
         self.parts
@@ -190,6 +195,15 @@ impl MemoryEstimate {
             ),
         ))
     }
+}
+
+/// Peak resident memory of this process (bytes): `VmHWM` of `/proc/self/status`
+/// (Linux); `None` where it cannot be read.
+pub fn peak_memory() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// A byte count as `12.3 GiB`.

@@ -649,9 +649,9 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     let scene = Scene::from_file_with(&args.scene, &args.set)?;
     let in_file = |e: signorini::Error| e.in_file(&args.scene);
     let (model, report) = scene.build().map_err(in_file)?;
-    let integ = model
-        .into_integrator(&scene.scheme, scene.time.dt)
-        .map_err(in_file)?;
+    let mut plan = model.plan(&scene.scheme, scene.time.dt).map_err(in_file)?;
+    let (m, rows) = (model.contacts.len(), model.contacts.rows());
+    plan.add_history(m, (rows - m) / m.max(1), scene.output.hdf5());
     out!("scene               {} (valid)", args.scene.display());
     out!(
         "model               {} bodies, {} cells, {} dofs ({} fixed dofs removed), {} candidate contacts",
@@ -706,7 +706,26 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
             (false, _) => "nonlinear structure: full Newton (M̂ⁿ refactored at every iterate)",
         }
     );
-    out!("path                {}", integ.path());
+    out!("path                {}", plan.describe());
+    let limit = signorini::limits::memory_limit();
+    out!(
+        "memory              {} planned (limit {}): {}",
+        signorini::limits::bytes(plan.ledger.total()),
+        signorini::limits::bytes(limit),
+        plan.ledger
+            .parts()
+            .iter()
+            .filter(|(_, b)| *b > 0)
+            .map(|(w, b)| format!("{w} {}", signorini::limits::bytes(*b)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    plan.ledger
+        .check(
+            "scene",
+            format!("{} dofs, {} contacts", report.dofs, report.contacts),
+        )
+        .map_err(in_file)?;
     Ok(())
 }
 
@@ -772,6 +791,13 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
             f.residual_mean,
             f.residual_max,
             f.caps_hit
+        );
+    }
+    if let Some(peak) = s.peak_memory_bytes {
+        out!(
+            "memory              {} peak resident, {} planned",
+            signorini::limits::bytes(peak),
+            signorini::limits::bytes(s.memory_planned_bytes)
         );
     }
     if let Some(g) = &s.matrix_free {

@@ -83,6 +83,8 @@ fn assert_same_run(a: &Path, b: &Path) {
             "frame_wait_seconds",
             "model_seconds",
             "integrator_seconds",
+            // a measurement of the process, like the times
+            "peak_memory_bytes",
         ] {
             o.remove(k);
         }

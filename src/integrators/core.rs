@@ -36,7 +36,10 @@
 //! The operators live in [`Delassus`]: dense `n × m` blocks for the tens of contacts of
 //! the bar and the academic examples, per-active-column storage (columns computed when
 //! a contact first activates, corrections by one sparse solve) for thousands of
-//! candidates (DESIGN.md §4).
+//! candidates (DESIGN.md §4). A one-step problem with more active rows than the dense
+//! workspaces hold (`max_active_rows`) is solved matrix-free on products through the
+//! factor ([`crate::solvers::global`]: MPRGP, or the accelerated projected gradient with
+//! friction), the same laws to the friction tolerance.
 //!
 //! Contact space is the rows of the contact blocks ([`crate::contact`]): every
 //! contact-space vector here (`U`, `P`, `τ`, the right-hand sides) has one entry per
@@ -802,32 +805,9 @@ impl ThetaCore {
         del.limit_columns(ws_cap);
         let coupled_cap =
             (with_projection && params.projection_feedback).then(|| (rows + m).min(ws_cap));
-        {
-            let (cap, cc) = (ws_cap as u64, coupled_cap.unwrap_or(0) as u64);
-            let mut mem = crate::limits::MemoryEstimate::default();
-            mem.add("dense one-step workspaces (4 × rows²)", cap * cap, 32);
-            mem.add("coupled position problem (unknowns²)", cc * cc, 8);
-            if rows > ws_cap {
-                // the matrix-free solves' vectors (`Workspace::gq`…, `GlobalSolver`)
-                mem.add(
-                    "matrix-free one-step vectors (15 × rows)",
-                    rows as u64,
-                    15 * 8,
-                );
-            }
-            // `auto`'s dense Newton fallback: W and J (solvers::newton::NewtonWork)
-            let fn_rows = if friction {
-                cap.min(crate::solvers::newton::STEP_NEWTON_ROWS as u64)
-            } else {
-                0
-            };
-            mem.add(
-                "friction Newton workspace (2 × rows²)",
-                fn_rows * fn_rows,
-                16,
-            );
-            mem.check("scheme.max_active_rows", format!("{cap} rows"))?;
-        }
+        let mut mem = crate::limits::MemoryEstimate::default();
+        workspace_ledger(rows, m, params, (friction, with_projection), &mut mem);
+        mem.check("scheme.max_active_rows", format!("{ws_cap} rows"))?;
         let mut core = ThetaCore {
             sys,
             contacts,
@@ -2089,6 +2069,48 @@ pub(crate) fn grow_solve(
         }
     }
     Ok(())
+}
+
+/// The one-step workspaces of the θ-method core in a memory ledger: the dense blocks
+/// (the gathered block and the MLCP's three, `scheme.max_active_rows` rows at most), the
+/// coupled position problem (the velocity rows plus one τ per contact, capped alike),
+/// the matrix-free vectors past the cap, and `auto`'s dense friction Newton fallback.
+/// Shared by [`ThetaCore::new`] and the plan of `signorini check`.
+pub(crate) fn workspace_ledger(
+    rows: usize,
+    m: usize,
+    params: &SchemeParams,
+    (friction, with_projection): (bool, bool),
+    mem: &mut crate::limits::MemoryEstimate,
+) {
+    let ws_cap = Workspace::cap(rows, params);
+    let cap = ws_cap as u64;
+    let cc = if with_projection && params.projection_feedback {
+        (rows + m).min(ws_cap) as u64
+    } else {
+        0
+    };
+    mem.add("dense one-step workspaces (4 × rows²)", cap * cap, 32);
+    mem.add("coupled position problem (unknowns²)", cc * cc, 8);
+    if rows > ws_cap {
+        // the matrix-free solves' vectors (`Workspace::gq`…, `GlobalSolver`)
+        mem.add(
+            "matrix-free one-step vectors (15 × rows)",
+            rows as u64,
+            15 * 8,
+        );
+    }
+    // `auto`'s dense Newton fallback: W and J (solvers::newton::NewtonWork)
+    let fn_rows = if friction {
+        cap.min(crate::solvers::newton::STEP_NEWTON_ROWS as u64)
+    } else {
+        0
+    };
+    mem.add(
+        "friction Newton workspace (2 × rows²)",
+        fn_rows * fn_rows,
+        16,
+    );
 }
 
 /// Checks a user-given vector: length and finiteness.

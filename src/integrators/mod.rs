@@ -27,6 +27,7 @@ pub mod combined_projection;
 pub mod core;
 pub mod direct_projection;
 pub mod moreau_jean;
+pub mod plan;
 pub mod saved;
 pub mod schatzman_paoli;
 pub mod structure;
@@ -502,16 +503,18 @@ impl SchemeParams {
     }
 }
 
-/// Builds the integrator chosen by `params` for `system` with `contacts`, initial
-/// state `(q0, v0)` at `t = 0` and step `h`.
-pub fn build(
+/// Everything [`build`] checks before it factors anything: the parameters, the step,
+/// the free dofs, the scheme against the structure, prescribed motion and friction, and
+/// the initial state's length and finiteness. `signorini check` runs it with the plan
+/// ([`plan::plan`]) instead of building.
+pub fn validate(
     params: &SchemeParams,
-    system: LinearSystem,
-    contacts: Box<dyn ContactSet>,
+    system: &LinearSystem,
+    contacts: &dyn ContactSet,
     q0: &[f64],
     v0: &[f64],
     h: f64,
-) -> Result<Box<dyn Integrator>, Error> {
+) -> Result<(), Error> {
     params.validate()?;
     crate::error::require_positive("dt", h)?;
     if system.ndof() == 0 {
@@ -555,6 +558,21 @@ pub fn build(
              moreau-jean, direct-projection or combined-projection",
         ));
     }
+    core::check_vector("initial displacement", q0, system.ndof())?;
+    core::check_vector("initial velocity", v0, system.ndof())
+}
+
+/// Builds the integrator chosen by `params` for `system` with `contacts`, initial
+/// state `(q0, v0)` at `t = 0` and step `h`.
+pub fn build(
+    params: &SchemeParams,
+    system: LinearSystem,
+    contacts: Box<dyn ContactSet>,
+    q0: &[f64],
+    v0: &[f64],
+    h: f64,
+) -> Result<Box<dyn Integrator>, Error> {
+    validate(params, &system, contacts.as_ref(), q0, v0, h)?;
     Ok(match params.kind {
         SchemeKind::MoreauJean => Box::new(moreau_jean::MoreauJean::new(
             params, system, contacts, q0, v0, h,

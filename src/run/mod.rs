@@ -102,7 +102,7 @@ fn run_bar_from(
         progress,
         ckpt,
     )
-    .and_then(|r| finish(r, setup, out))
+    .and_then(|r| finish(r, setup, scene.memory().total(), out))
 }
 
 /// Runs a scene file; writes into `out.dir` if given. Errors raised while building name
@@ -126,6 +126,16 @@ fn run_scene_from(
     progress.phase("building the model (mesh, assembly, contacts)");
     let (mut model, report) = scene.build()?;
     let geometry = std::mem::take(&mut model.geometry);
+    // the run's memory ledger, checked before anything is factored
+    let mut plan = model.plan(&scene.scheme, scene.time.dt)?;
+    let (m, rows) = (model.contacts.len(), model.contacts.rows());
+    if let Some(o) = out {
+        plan.add_history(m, (rows - m) / m.max(1), o.options.hdf5());
+    }
+    plan.ledger.check(
+        "scene",
+        format!("{} dofs, {m} contacts ({rows} rows)", report.dofs),
+    )?;
     announce_integrator(&model, progress);
     let t1 = Instant::now();
     let mut integ = model.into_integrator(&scene.scheme, scene.time.dt)?;
@@ -164,7 +174,7 @@ fn run_scene_from(
         progress,
         ckpt,
     )
-    .and_then(|r| finish(r, setup, out))
+    .and_then(|r| finish(r, setup, plan.ledger.total(), out))
 }
 
 /// Finishes the killed run in `dir` from its `checkpoint.json` (see
@@ -462,6 +472,9 @@ pub fn run_checkpointed(
             complementarity_fallbacks: acc.loops[3],
         },
         friction: acc.friction(s.tangent_dim > 0),
+        // set by `finish`
+        memory_planned_bytes: 0,
+        peak_memory_bytes: None,
         matrix_free: (acc.global[0] > 0).then(|| summary::MatrixFreeSummary {
             solves: acc.global[0],
             products: acc.global[1],
@@ -490,8 +503,15 @@ pub fn run_checkpointed(
 }
 
 /// Completes a run: records the set-up times, writes `summary.json` and the plots.
-fn finish(mut r: RunResult, setup: [f64; 2], out: Option<Output>) -> Result<RunResult, Error> {
+fn finish(
+    mut r: RunResult,
+    setup: [f64; 2],
+    planned: u64,
+    out: Option<Output>,
+) -> Result<RunResult, Error> {
     [r.summary.model_seconds, r.summary.integrator_seconds] = setup;
+    r.summary.memory_planned_bytes = planned;
+    r.summary.peak_memory_bytes = crate::limits::peak_memory();
     if let Some(o) = out {
         write_summary(&r.summary, o.dir)?;
         if o.options.plots {

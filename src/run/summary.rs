@@ -178,6 +178,12 @@ pub struct Summary {
     /// Friction solver statistics (absent in a frictionless scene).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<FrictionSummary>,
+    /// The memory ledger's total, checked before the run (bytes; an upper bound: it
+    /// counts zeroed buffers the run may never touch).
+    pub memory_planned_bytes: u64,
+    /// Peak resident memory of the process (bytes; Linux `VmHWM`, absent elsewhere).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_memory_bytes: Option<u64>,
     /// One-step problems solved matrix-free because their active rows exceeded the
     /// dense workspaces (absent when none was).
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -37,6 +37,21 @@ impl Model {
     ) -> Result<Box<dyn Integrator>, Error> {
         integrators::build(params, self.system, self.contacts, &self.q0, &self.v0, dt)
     }
+
+    /// Validates the run of `params` at step `dt` as [`Model::into_integrator`] would and
+    /// plans it ([`integrators::plan::plan`]: paths and memory ledger) without building
+    /// it: what `signorini check` costs.
+    pub fn plan(&self, params: &SchemeParams, dt: f64) -> Result<integrators::plan::Plan, Error> {
+        integrators::validate(
+            params,
+            &self.system,
+            self.contacts.as_ref(),
+            &self.q0,
+            &self.v0,
+            dt,
+        )?;
+        integrators::plan::plan(params, &self.system, self.contacts.as_ref(), dt)
+    }
 }
 
 /// The built-in example scene `name` (`bouncing-ball`, `oscillator`, `rocking-block`,

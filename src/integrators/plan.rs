@@ -1,0 +1,164 @@
+//! The plan of a run, before anything is factored or condensed: which paths the
+//! integrator will take (factor backend and fill, Delassus storage, one-step workspaces,
+//! matrix-free past them) and one memory ledger for all of it (matrices, factor and its
+//! scratch, Delassus data, workspaces, state and contact-space vectors, the history's
+//! buffers). `signorini check` prints it at the cost of the validation and a symbolic
+//! analysis of the step matrix (no numeric factorization, no Delassus column), and a
+//! run checks its total against the memory limit before building the integrator.
+//!
+//! The decisions are the integrator's own functions ([`Delassus::plan`] shares
+//! [`Delassus::new`]'s choice, [`crate::linalg::analyse_spd`] the factor's symbolic
+//! analysis and ordering, [`super::core`]'s workspace ledger the workspaces'), so the plan and
+//! the run cannot disagree on a path; the vectors are counted from the integrators'
+//! fields, rounded up.
+
+use super::structure::DENSE_MAX;
+use super::{SchemeKind, SchemeParams};
+use crate::assembly::linear_combination;
+use crate::contact::ContactSet;
+use crate::delassus::{Delassus, DelassusPlan};
+use crate::error::Error;
+use crate::limits::MemoryEstimate;
+use crate::linalg::FactorPlan;
+use crate::model::LinearSystem;
+use crate::model::system::Linearity;
+
+/// `n`-vectors the integrators hold (state, free and new velocities, linearization
+/// points, loads, scratch of the solves and of the Delassus corrections), rounded up.
+const STATE_VECTORS: u64 = 24;
+/// Contact-space vectors (per row: gaps, velocities, impulses, projections, right-hand
+/// sides, masks, warm starts), rounded up.
+const CONTACT_VECTORS: u64 = 32;
+
+/// What a run will hold and which paths it will take ([`plan`]).
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// The factor of the step matrix.
+    pub factor: FactorPlan,
+    /// Where the Delassus data go.
+    pub delassus: DelassusPlan,
+    /// One phrase for the one-step problems (dense workspaces, matrix-free past them).
+    pub workspaces: String,
+    /// Every part, in bytes.
+    pub ledger: MemoryEstimate,
+}
+
+impl Plan {
+    /// The planned path, in the words of [`super::Integrator::path`].
+    pub fn describe(&self) -> String {
+        format!(
+            "factor {}; {}; {}",
+            self.factor.backend, self.delassus.describe, self.workspaces
+        )
+    }
+
+    /// Adds the history's buffers: the CSV's 64 KiB, and with HDF5 4096 rows of every
+    /// column (`m` contacts with `tangent_dim` tangents).
+    pub fn add_history(&mut self, m: usize, tangent_dim: usize, hdf5: bool) {
+        self.ledger.add("history buffers (CSV)", 1, 1 << 16);
+        if hdf5 {
+            let cols = 12 + m as u64 * (4 + 2 * tangent_dim as u64 + 1);
+            self.ledger
+                .add("history buffers (HDF5, 4096 rows)", 4096 * cols, 8);
+        }
+    }
+}
+
+/// Plans the run of `params` on `system` with `contacts` at step `h` (module doc).
+pub fn plan(
+    params: &SchemeParams,
+    system: &LinearSystem,
+    contacts: &dyn ContactSet,
+    h: f64,
+) -> Result<Plan, Error> {
+    let n = system.ndof();
+    let m = contacts.len();
+    let rows = contacts.rows();
+    let friction = rows > m;
+    let th = params.theta;
+    let sp = params.kind == SchemeKind::SchatzmanPaoli;
+    let with_projection = matches!(
+        params.kind,
+        SchemeKind::DirectProjection | SchemeKind::CombinedProjection
+    );
+    let (a, b) = if sp {
+        (h * h * th, h * th / 2.0)
+    } else {
+        (h * h * th * th, h * th)
+    };
+    let mut terms = vec![(1.0, &system.mass), (a, &system.stiffness)];
+    if let Some(c) = &system.damping {
+        terms.push((b, c));
+    }
+    let step = linear_combination(&terms);
+    let linear = system.linearity() == Linearity::Linear;
+    let factor = if !linear && n <= DENSE_MAX {
+        FactorPlan {
+            backend: "dense LU".to_string(),
+            entries: (n * n) as u64,
+            scratch_bytes: 0,
+        }
+    } else {
+        crate::linalg::analyse_spd(
+            step.as_ref(),
+            "iteration matrix M + hθC + h²θ²K",
+            system.ordering.as_deref(),
+        )?
+    };
+    let g_constant = contacts.is_linear();
+    let zone = (linear && !g_constant && contacts.condensed()).then(|| contacts.zone().len());
+    let ws_cap = super::core::Workspace::cap(rows, params);
+    let delassus = Delassus::plan(
+        n,
+        rows,
+        (params.delassus, params.delassus_pool),
+        with_projection && linear,
+        g_constant && linear,
+        zone,
+        ws_cap,
+    );
+    let mut ledger = MemoryEstimate::default();
+    // measured: the built-in bar's whole process peaks at 7.5 MiB, its ledger 0.5 MiB
+    ledger.add("the process (binary, libraries, threads)", 1, 8 << 20);
+    let nnz = |s: &crate::linalg::SparseMatrix| s.val().len() as u64;
+    let model = nnz(&system.mass) + nnz(&system.stiffness) + system.damping.as_ref().map_or(0, nnz);
+    ledger.add("mass, stiffness and damping matrices", model, 16);
+    ledger.add("step matrix M̂ (for its factorization)", nnz(&step), 16);
+    ledger.add("factor of M̂", factor.entries, 8);
+    ledger.add("factorization scratch", factor.scratch_bytes, 1);
+    ledger.add("Delassus data", delassus.bytes, 1);
+    if sp {
+        super::core::workspace_ledger(m, m, params, (false, false), &mut ledger);
+    } else {
+        super::core::workspace_ledger(rows, m, params, (friction, with_projection), &mut ledger);
+    }
+    ledger.add(
+        format!("state and step vectors ({STATE_VECTORS} × n)"),
+        n as u64,
+        STATE_VECTORS * 8,
+    );
+    ledger.add(
+        format!("contact-space vectors ({CONTACT_VECTORS} × rows)"),
+        rows as u64,
+        CONTACT_VECTORS * 8,
+    );
+    let workspaces = if rows > ws_cap {
+        format!(
+            "one-step problems up to {ws_cap} active rows in dense workspaces, matrix-free \
+             past them (MPRGP{})",
+            if friction {
+                ", friction by accelerated projected gradient"
+            } else {
+                ""
+            }
+        )
+    } else {
+        format!("one-step problems in dense workspaces of {ws_cap} rows")
+    };
+    Ok(Plan {
+        factor,
+        delassus,
+        workspaces,
+        ledger,
+    })
+}
