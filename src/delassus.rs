@@ -598,6 +598,7 @@ impl Delassus {
             None => m8 * cap as u64 * per + n8 * SOLVE_BLOCK.min(m).max(2) as u64 * per + 2 * n8,
         };
         DelassusPlan {
+            dense: dense || z.is_some(),
             describe: describe_path(
                 z,
                 dense || z.is_some(),
@@ -1077,6 +1078,8 @@ impl Delassus {
 pub struct DelassusPlan {
     /// The phrase [`Delassus::describe`] will give.
     pub describe: String,
+    /// Every column formed per linearization (dense, or dense on the contact zone).
+    pub dense: bool,
     /// Bytes of the blocks, columns and scratch.
     pub bytes: u64,
 }

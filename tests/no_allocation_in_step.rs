@@ -243,6 +243,49 @@ fn matrix_free_solves_do_not_allocate() {
     }
 }
 
+/// The matrix-free path for a nonlinear `G` (contacts between bodies on the
+/// per-active-column path past 64 active rows): two 8³-cell cubes meeting over a face of
+/// 81 contacts; the counted steps run matrix-free solves (asserted) without allocating.
+#[test]
+fn matrix_free_solves_between_bodies_do_not_allocate() {
+    use signorini::scene::file::Scene;
+    let text = r#"
+[time]
+dt = 1e-5
+t_end = 1e-4
+[scheme]
+kind = "combined-projection"
+delassus = "columns"
+[[bodies]]
+name = "lower"
+mesh = { generator = "box", cell = "hex8", cells = [8, 8, 8], size = [0.1, 0.1, 0.1] }
+material = { young = 1e7, poisson = 0.3, density = 1000.0 }
+fixed = ["z0"]
+[[bodies]]
+name = "upper"
+mesh = { generator = "box", cell = "hex8", cells = [8, 8, 8], size = [0.1, 0.1, 0.1], origin = [0.0, 0.0, 0.1] }
+material = { young = 1e7, poisson = 0.3, density = 1000.0 }
+velocity = [0.0, 0.0, -1.0]
+[[contacts]]
+body = "upper"
+nodes = "z0"
+target = { body = "lower", surface = "z1" }
+"#;
+    let scene = Scene::from_toml(text).unwrap();
+    let (model, _) = scene.build().unwrap();
+    let mut integ = model.into_integrator(&scene.scheme, 1e-5).unwrap();
+    integ.prepare().unwrap();
+    integ.step().unwrap();
+    let mut global = 0;
+    let before = ALLOCS.with(|c| c.get());
+    for _ in 0..8 {
+        global += integ.step().unwrap().global_solves;
+    }
+    let n = ALLOCS.with(|c| c.get()) - before;
+    assert!(global > 0, "no matrix-free solve");
+    assert_eq!(n, 0, "allocated {n} times");
+}
+
 /// `auto`'s Newton fallback in the step loop and Algorithm 2's complementarity rounds
 /// (issue 16 §2, large μ): the shipped sliding block launched at 1 m/s with μ = 1e6,
 /// where NSGS and PROX cycle on the first step and the dense Newton methods finish, and

@@ -124,6 +124,14 @@ pub enum VelocityLaw {
 /// Default cap on the rows of the dense one-step workspaces (4096² values = 128 MiB).
 pub const DEFAULT_MAX_ACTIVE_ROWS: usize = 4096;
 
+/// Active rows past which a one-step problem with a nonlinear `G` on the
+/// per-active-column Delassus path is solved matrix-free: its columns would be re-solved
+/// (two solves per row with the projection) at every linearization, where a matrix-free
+/// solve takes a few tens of products (measured 21–25 per solve on the flat impact of
+/// `tests/analytic_flat_impact.rs`); the same threshold as the dense re-forming of
+/// [`crate::delassus::AUTO_DENSE_MAX_CONTACTS`].
+pub const NONLINEAR_COLUMNS_MAX: usize = 64;
+
 /// Dense sub-problem workspace: gathers a principal sub-block, solves, scatters. Sized
 /// for `cap` rows (the active rows of a step), not for the candidates.
 #[derive(Debug)]
@@ -145,6 +153,9 @@ pub(crate) struct Workspace {
     /// The gathered rows exceed `cap`: the problem is recorded (`gq`, `gz`, `geq`) and
     /// solved matrix-free ([`crate::solvers::global`]) on products with `del`.
     over: bool,
+    /// Rows past which a problem is solved matrix-free (`cap`, or fewer:
+    /// [`Workspace::matrix_free_from`]).
+    mf_from: usize,
     /// Operator and scale of the recorded problem.
     gop: (Op, f64),
     gq: Vec<f64>,
@@ -224,6 +235,7 @@ impl Workspace {
             blocks: Vec::with_capacity(if friction { contacts } else { 0 }),
             friction: FrictionSolver::with_capacity(if friction { cap } else { 0 }),
             over: false,
+            mf_from: cap,
             gop: (Op::W, 1.0),
             gq: vec![0.0; if rows > cap { rows } else { 0 }],
             gz: vec![0.0; if rows > cap { rows } else { 0 }],
@@ -253,7 +265,7 @@ impl Workspace {
         format!(
             "; one-step problems of more than {} active rows solved matrix-free on products \
              W x = Gᵀ(M̂⁻¹(G x)) (MPRGP{})",
-            self.cap,
+            self.mf_from,
             if self.friction.capacity() > 0 {
                 ", friction by accelerated projected gradient with the fixed point on ‖u_T‖"
             } else {
@@ -262,10 +274,32 @@ impl Workspace {
         )
     }
 
-    /// True when the rows of `idx` exceed the dense workspaces: the problem is then
-    /// solved matrix-free, and its Delassus columns need not be stored.
+    /// True when the rows of `idx` exceed the dense workspaces (or the threshold of
+    /// [`Workspace::matrix_free_from`]): the problem is then solved matrix-free, and its
+    /// Delassus columns need not be stored.
     pub fn over_cap(&self) -> bool {
-        self.idx.len() > self.cap
+        self.idx.len() > self.mf_from
+    }
+
+    /// Solves the problems of more than `rows` active rows matrix-free (at set-up:
+    /// sizes the matrix-free buffers for every row).
+    fn matrix_free_from(&mut self, rows: usize, params: &SchemeParams) {
+        let all = self.member.len();
+        if rows >= self.mf_from || all <= rows {
+            return;
+        }
+        self.mf_from = rows;
+        if self.global.capacity() < all {
+            self.gq = vec![0.0; all];
+            self.gz = vec![0.0; all];
+            self.gw = vec![0.0; all];
+            self.geq = vec![false; all];
+            self.gx = vec![0.0; all];
+            self.gy = vec![0.0; all];
+            self.global = GlobalSolver::with_capacity(all);
+            self.gtol = params.friction.tol;
+            self.gmax = params.friction.max_iterations;
+        }
     }
 
     /// Gathers `op[idx, idx]` (scaled by `scale`), `rhs[idx]`, the warm start and the
@@ -874,6 +908,17 @@ impl ThetaCore {
                 core.del.condense_zone(&zone, fixed, &core.sys.stiffness);
             }
             core.del.refresh(&core.sys.stiffness);
+            if !g_constant && !core.del.is_dense() {
+                // a nonlinear G on the per-active-column path re-solves every stored
+                // column at each linearization: past NONLINEAR_COLUMNS_MAX rows the
+                // products of a matrix-free solve cost less than the columns
+                let rows_mf = NONLINEAR_COLUMNS_MAX.min(core.ws.cap);
+                core.ws.matrix_free_from(rows_mf, params);
+                core.del.limit_columns(rows_mf);
+                if let Some(cp) = core.coupled.as_mut() {
+                    cp.cap = cp.cap.min(rows_mf);
+                }
+            }
         } else {
             // a nonlinear structure condenses with each step's first iteration matrix,
             // and carries the projection's feedback in F: W_D is never read

@@ -108,7 +108,7 @@ pub fn plan(
     let g_constant = contacts.is_linear();
     let zone = (linear && !g_constant && contacts.condensed()).then(|| contacts.zone().len());
     let ws_cap = super::core::Workspace::cap(rows, params);
-    let delassus = Delassus::plan(
+    let mut delassus = Delassus::plan(
         n,
         rows,
         (params.delassus, params.delassus_pool),
@@ -117,6 +117,22 @@ pub fn plan(
         zone,
         ws_cap,
     );
+    // a nonlinear G on the per-active-column path: matrix-free past a few rows
+    // (`core::NONLINEAR_COLUMNS_MAX`), its columns stored up to them
+    let mf_from = if linear && !g_constant && !delassus.dense && !sp {
+        delassus = Delassus::plan(
+            n,
+            rows,
+            (params.delassus, params.delassus_pool),
+            with_projection,
+            false,
+            zone,
+            super::core::NONLINEAR_COLUMNS_MAX.min(ws_cap),
+        );
+        super::core::NONLINEAR_COLUMNS_MAX.min(ws_cap)
+    } else {
+        ws_cap
+    };
     let mut ledger = MemoryEstimate::default();
     // measured: the built-in bar's whole process peaks at 7.5 MiB, its ledger 0.5 MiB
     ledger.add("the process (binary, libraries, threads)", 1, 8 << 20);
@@ -132,6 +148,13 @@ pub fn plan(
     } else {
         super::core::workspace_ledger(rows, m, params, (friction, with_projection), &mut ledger);
     }
+    if rows > mf_from && rows <= ws_cap {
+        ledger.add(
+            "matrix-free one-step vectors (15 × rows)",
+            rows as u64,
+            15 * 8,
+        );
+    }
     ledger.add(
         format!("state and step vectors ({STATE_VECTORS} × n)"),
         n as u64,
@@ -142,9 +165,9 @@ pub fn plan(
         rows as u64,
         CONTACT_VECTORS * 8,
     );
-    let workspaces = if rows > ws_cap {
+    let workspaces = if rows > mf_from {
         format!(
-            "one-step problems up to {ws_cap} active rows in dense workspaces, matrix-free \
+            "one-step problems up to {mf_from} active rows in dense workspaces, matrix-free \
              past them (MPRGP{})",
             if friction {
                 ", friction by accelerated projected gradient"

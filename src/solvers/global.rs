@@ -555,6 +555,28 @@ mod tests {
         a
     }
 
+    /// `z` within `tol` of `exact` (relative to its largest entry), and the returned `w`
+    /// equal to `A z + q` to round-off.
+    fn assert_solution(a: &[f64], q: &[f64], (z, w): (&[f64], &[f64]), exact: &[f64], tol: f64) {
+        let k = q.len();
+        let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for i in 0..k {
+            assert!(
+                (z[i] - exact[i]).abs() <= tol * scale,
+                "k = {k}, row {i}: {} vs {}",
+                z[i],
+                exact[i]
+            );
+        }
+        let mut w2 = vec![0.0; k];
+        affine(a, k, z, q, &mut w2);
+        assert!(
+            w.iter()
+                .zip(&w2)
+                .all(|(x, y)| (x - y).abs() <= 1e-12 * (1.0 + y.abs()))
+        );
+    }
+
     fn rhs(k: usize, seed: u64) -> Vec<f64> {
         (0..k)
             .map(|i| ((i as u64 * 7919 + seed * 104_729) % 1000) as f64 / 500.0 - 1.2)
@@ -589,23 +611,7 @@ mod tests {
                 10_000,
             );
             assert!(info.converged, "k = {k}: {info:?}");
-            let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            for i in 0..k {
-                assert!(
-                    (z[i] - exact[i]).abs() <= 1e-9 * scale,
-                    "k = {k}, row {i}: {} vs {}",
-                    z[i],
-                    exact[i]
-                );
-            }
-            // w is A z + q
-            let mut w2 = vec![0.0; k];
-            affine(&a, k, &z, &q, &mut w2);
-            assert!(
-                w.iter()
-                    .zip(&w2)
-                    .all(|(x, y)| (x - y).abs() <= 1e-12 * (1.0 + y.abs()))
-            );
+            assert_solution(&a, &q, (&z, &w), &exact, 1e-9);
         }
     }
 
@@ -637,17 +643,9 @@ mod tests {
             10_000,
         );
         assert!(info.converged, "{info:?}");
-        let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for i in 0..k {
-            assert!(
-                (z[i] - exact[i]).abs() <= 1e-9 * scale,
-                "row {i}: {} vs {}",
-                z[i],
-                exact[i]
-            );
-            if eq[i] {
-                assert!(w[i].abs() <= 1e-10, "equality row {i}: w = {:e}", w[i]);
-            }
+        assert_solution(&a, &q, (&z, &w), &exact, 1e-9);
+        for i in (0..k).filter(|&i| eq[i]) {
+            assert!(w[i].abs() <= 1e-10, "equality row {i}: w = {:e}", w[i]);
         }
     }
 
@@ -711,21 +709,6 @@ mod tests {
         let info = GlobalSolver::with_capacity(k)
             .solve_friction(&op, &q, &blocks, &mut r, &mut u, 1e-10, 100_000);
         assert!(info.converged, "{info:?}");
-        let scale = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for i in 0..k {
-            assert!(
-                (r[i] - exact[i]).abs() <= 1e-6 * scale,
-                "row {i}: {} vs {}",
-                r[i],
-                exact[i]
-            );
-        }
-        let mut u2 = vec![0.0; k];
-        affine(&a, k, &r, &q, &mut u2);
-        assert!(
-            u.iter()
-                .zip(&u2)
-                .all(|(x, y)| (x - y).abs() <= 1e-12 * (1.0 + y.abs()))
-        );
+        assert_solution(&a, &q, (&r, &u), &exact, 1e-6);
     }
 }
