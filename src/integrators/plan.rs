@@ -134,8 +134,11 @@ pub fn plan(
         ws_cap
     };
     let mut ledger = MemoryEstimate::default();
-    // measured: the built-in bar's whole process peaks at 7.5 MiB, its ledger 0.5 MiB
-    ledger.add("the process (binary, libraries, threads)", 1, 8 << 20);
+    ledger.add(
+        "the process (binary, libraries, threads)",
+        1,
+        crate::limits::PROCESS_BYTES,
+    );
     let nnz = |s: &crate::linalg::SparseMatrix| s.val().len() as u64;
     let model = nnz(&system.mass) + nnz(&system.stiffness) + system.damping.as_ref().map_or(0, nnz);
     ledger.add("mass, stiffness and damping matrices", model, 16);

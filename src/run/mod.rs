@@ -102,7 +102,10 @@ fn run_bar_from(
         progress,
         ckpt,
     )
-    .and_then(|r| finish(r, setup, scene.memory().total(), out))
+    .and_then(|r| {
+        let planned = scene.memory().total() + crate::limits::PROCESS_BYTES;
+        finish(r, setup, planned, out)
+    })
 }
 
 /// Runs a scene file; writes into `out.dir` if given. Errors raised while building name
