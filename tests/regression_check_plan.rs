@@ -23,7 +23,8 @@ fn scene(name: &str) -> Scene {
 /// The plan's factor backend (with its fill) and Delassus path appear word for word in
 /// the built integrator's path, for every kind of decision the shipped scenes take:
 /// tridiagonal and supernodal factors, AMD and nested dissection, dense Delassus blocks,
-/// the contact zone, per-active-column (hex8 on a curved obstacle), Schatzman–Paoli.
+/// the contact zone, per-active-column (hex8 on a curved obstacle), Schatzman–Paoli, a
+/// nonlinear structure's LDLᵀ and a rigid mechanism's dense LU.
 #[test]
 fn planned_paths_are_the_built_ones() {
     for (file, kind) in [
@@ -35,6 +36,10 @@ fn planned_paths_are_the_built_ones() {
         ("sliding_block_on_slab.toml", None),
         ("block_stack.toml", None),
         ("hertz_ball.toml", None),
+        // a nonlinear structure: LDLᵀ of M̂ⁿ, refactored in the step
+        ("ball_crush.toml", None),
+        // a rigid mechanism (nonsymmetric M̂ⁿ of a few dofs): dense LU
+        ("slider_crank.toml", None),
     ] {
         let mut s = scene(file);
         if let Some(k) = kind {

@@ -6,11 +6,14 @@
 //! analysis of the step matrix (no numeric factorization, no Delassus column), and a
 //! run checks its total against the memory limit before building the integrator.
 //!
-//! The decisions are the integrator's own functions ([`Delassus::plan`] shares
-//! [`Delassus::new`]'s choice, [`crate::linalg::analyse_spd`] the factor's symbolic
-//! analysis and ordering, [`super::core`]'s workspace ledger the workspaces'), so the plan and
-//! the run cannot disagree on a path; the vectors are counted from the integrators'
-//! fields, rounded up.
+//! The decisions come from the integrator's own functions ([`Delassus::plan`] shares
+//! [`Delassus::new`]'s choice, [`crate::linalg::analyse_spd`] and
+//! [`crate::linalg::analyse_ldlt`] the factors' symbolic analyses and orderings,
+//! [`super::core`]'s workspace ledger the workspaces'); `tests/regression_check_plan.rs`
+//! checks scene by scene that the planned factor and Delassus path are the built ones.
+//! The vectors are counted from the integrators' fields, rounded up; a nonlinear
+//! structure's step matrix is planned on the pattern of `M`, `K` and `C` (its tangents
+//! share it for the shipped bodies).
 
 use super::structure::DENSE_MAX;
 use super::{SchemeKind, SchemeParams};
@@ -92,18 +95,25 @@ pub fn plan(
     }
     let step = linear_combination(&terms);
     let linear = system.linearity() == Linearity::Linear;
-    let factor = if !linear && n <= DENSE_MAX {
+    let what = "iteration matrix M + hθC + h²θ²K";
+    // the backends of `core::factor_step_matrix` and `structure::Structure::factor`
+    let factor = if linear {
+        crate::linalg::analyse_spd(step.as_ref(), what, system.ordering.as_deref())?
+    } else if system.symmetric() {
+        crate::linalg::analyse_ldlt(step.as_ref(), what)?
+    } else if n <= DENSE_MAX {
         FactorPlan {
             backend: "dense LU".to_string(),
             entries: (n * n) as u64,
             scratch_bytes: 0,
         }
     } else {
-        crate::linalg::analyse_spd(
-            step.as_ref(),
-            "iteration matrix M + hθC + h²θ²K",
-            system.ordering.as_deref(),
-        )?
+        // the LU's fill follows its pivots: the symmetric pattern's as an estimate
+        let f = crate::linalg::analyse_ldlt(step.as_ref(), what)?;
+        FactorPlan {
+            backend: format!("faer LU (fill after pivoting; about {} entries)", f.entries),
+            ..f
+        }
     };
     let g_constant = contacts.is_linear();
     let zone = (linear && !g_constant && contacts.condensed()).then(|| contacts.zone().len());

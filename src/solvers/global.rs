@@ -249,10 +249,14 @@ impl GlobalSolver {
                     }
                 }
                 if acg <= af {
-                    // conjugate gradient step
+                    // conjugate gradient step (a row the step brings to its bound to
+                    // the last digit is held there: no impulse of −1e-20)
                     for i in 0..k {
                         z[i] -= acg * p[i];
                         g[i] -= acg * ap[i];
+                        if !eq[i] && z[i] < 0.0 {
+                            z[i] = 0.0;
+                        }
                     }
                     let mut phi_ap = 0.0;
                     for i in 0..k {
