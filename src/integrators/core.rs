@@ -132,6 +132,19 @@ pub const DEFAULT_MAX_ACTIVE_ROWS: usize = 4096;
 /// [`crate::delassus::AUTO_DENSE_MAX_CONTACTS`].
 pub const NONLINEAR_COLUMNS_MAX: usize = 64;
 
+/// Active rows past which the θ-method core solves a one-step problem matrix-free: the
+/// workspace rows `ws_cap`, or [`NONLINEAR_COLUMNS_MAX`] for a nonlinear `G` on the
+/// per-active-column path (which would re-solve every stored column at each
+/// linearization, where a matrix-free solve costs a few tens of products). Shared by
+/// [`ThetaCore::new`] and the plan of `signorini check`.
+pub(crate) fn matrix_free_rows(ws_cap: usize, g_constant: bool, dense: bool) -> usize {
+    if !g_constant && !dense {
+        NONLINEAR_COLUMNS_MAX.min(ws_cap)
+    } else {
+        ws_cap
+    }
+}
+
 /// Dense sub-problem workspace: gathers a principal sub-block, solves, scatters. Sized
 /// for `cap` rows (the active rows of a step), not for the candidates.
 #[derive(Debug)]
@@ -908,11 +921,8 @@ impl ThetaCore {
                 core.del.condense_zone(&zone, fixed, &core.sys.stiffness);
             }
             core.del.refresh(&core.sys.stiffness);
-            if !g_constant && !core.del.is_dense() {
-                // a nonlinear G on the per-active-column path re-solves every stored
-                // column at each linearization: past NONLINEAR_COLUMNS_MAX rows the
-                // products of a matrix-free solve cost less than the columns
-                let rows_mf = NONLINEAR_COLUMNS_MAX.min(core.ws.cap);
+            let rows_mf = matrix_free_rows(core.ws.cap, g_constant, core.del.is_dense());
+            if rows_mf < core.ws.cap {
                 core.ws.matrix_free_from(rows_mf, params);
                 core.del.limit_columns(rows_mf);
                 if let Some(cp) = core.coupled.as_mut() {

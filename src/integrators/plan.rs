@@ -127,9 +127,14 @@ pub fn plan(
         zone,
         ws_cap,
     );
-    // a nonlinear G on the per-active-column path: matrix-free past a few rows
-    // (`core::NONLINEAR_COLUMNS_MAX`), its columns stored up to them
-    let mf_from = if linear && !g_constant && !delassus.dense && !sp {
+    // the core's threshold (Schatzman–Paoli and nonlinear structures keep the cap); its
+    // columns are stored up to it
+    let mf_from = if linear && !sp {
+        super::core::matrix_free_rows(ws_cap, g_constant, delassus.dense)
+    } else {
+        ws_cap
+    };
+    if mf_from < ws_cap {
         delassus = Delassus::plan(
             n,
             rows,
@@ -137,12 +142,9 @@ pub fn plan(
             with_projection,
             false,
             zone,
-            super::core::NONLINEAR_COLUMNS_MAX.min(ws_cap),
+            mf_from,
         );
-        super::core::NONLINEAR_COLUMNS_MAX.min(ws_cap)
-    } else {
-        ws_cap
-    };
+    }
     let mut ledger = MemoryEstimate::default();
     ledger.add(
         "the process (binary, libraries, threads)",

@@ -790,17 +790,7 @@ pub fn analyse_spd(
 /// What [`solver::SparseLdlt::new`] would build for `a` (AMD, no pivoting), from the
 /// symbolic analysis alone: the factor of a nonlinear structure's symmetric `M̂ⁿ`.
 pub fn analyse_ldlt(a: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<FactorPlan, Error> {
-    let symbolic = factorize_symbolic_cholesky(
-        a.symbolic(),
-        Side::Lower,
-        SymmetricOrdering::Amd,
-        CholeskySymbolicParams::default(),
-    )
-    .map_err(|e| Error::Numerical(format!("{what}: symbolic LDLᵀ failed: {e:?}")))?;
-    let req = StackReq::any_of(&[
-        symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-        symbolic.solve_in_place_scratch::<f64>(SOLVE_CHUNK, Par::Seq),
-    ]);
+    let (symbolic, req) = solver::symbolic_ldlt(a, what)?;
     Ok(FactorPlan {
         backend: format!("faer LDLᵀ, AMD, nnz(L) = {}", symbolic.len_val()),
         entries: symbolic.len_val() as u64,

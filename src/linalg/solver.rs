@@ -154,21 +154,31 @@ pub struct SparseLdlt {
     mem: MemBuffer,
 }
 
+/// The symbolic analysis [`SparseLdlt::new`] factors on (AMD), with the scratch of its
+/// numeric factorization and solves; [`super::analyse_ldlt`] plans from it.
+pub(crate) fn symbolic_ldlt(
+    a: SparseColMatRef<'_, usize, f64>,
+    what: &str,
+) -> Result<(SymbolicCholesky<usize>, StackReq), Error> {
+    let symbolic = factorize_symbolic_cholesky(
+        a.symbolic(),
+        Side::Lower,
+        SymmetricOrdering::Amd,
+        CholeskySymbolicParams::default(),
+    )
+    .map_err(|e| Error::Numerical(format!("{what}: symbolic LDLᵀ failed: {e:?}")))?;
+    let req = StackReq::any_of(&[
+        symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+        symbolic.solve_in_place_scratch::<f64>(SOLVE_CHUNK, Par::Seq),
+    ]);
+    Ok((symbolic, req))
+}
+
 impl SparseLdlt {
     /// Analyses and factors `a`.
     pub fn new(a: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<Self, Error> {
         let n = square(a, what)?;
-        let symbolic = factorize_symbolic_cholesky(
-            a.symbolic(),
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| Error::Numerical(format!("{what}: symbolic LDLᵀ failed: {e:?}")))?;
-        let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(SOLVE_CHUNK, Par::Seq),
-        ]);
+        let (symbolic, req) = symbolic_ldlt(a, what)?;
         let mut mem = crate::limits::MemoryEstimate::default();
         mem.add("LDLᵀ factor", symbolic.len_val() as u64, 8);
         mem.add(
