@@ -36,7 +36,12 @@
 //!   column. `Y = Â⁻¹S`, `E = Â⁻¹K N S` (`n × z`) and the zone flexibilities `F = SᵀY`,
 //!   `F_E = SᵀE` (`z × z`) are formed once (`z` or `2z` solves); a re-linearization is
 //!   then `W = BᵀFB`, `W_D = BᵀF_E B` without a solve, and a correction `Â⁻¹G x` is
-//!   `Y (B x)` over the zone columns under the rows that carry an impulse.
+//!   `Y (B x)` over the zone columns under the rows that carry an impulse. When the
+//!   `n × z` blocks do not fit the dense budget but `F`, `F_E` and the `m × m` operators
+//!   do (two 20³ hex8 cubes: `Y`, `E` would take 2.3 GB, `F`, `F_E` take 112 MB), only
+//!   the flexibilities are kept ([`ZoneStorage::Flexibility`]): they are formed
+//!   [`ZONE_CHUNK`] columns at a time (`n × ZONE_CHUNK` scratch, threaded solves), and a
+//!   correction is one sparse solve of `G x`, as on the per-active-column path.
 //!
 //! * **matrix-free** (any path, [`Delassus::product`]): `W x = Gᵀ Â⁻¹ (G x)` through the
 //!   factor, one sparse solve per product, no column stored. [`Delassus::mul_add`] falls
@@ -106,6 +111,11 @@ pub enum DelassusKind {
     Dense,
     /// Columns of the active contacts only, computed when first needed.
     Columns,
+    /// For a nonlinear contact set condensed onto its contact zone: keep the zone's
+    /// flexibilities `F = SᵀÂ⁻¹S` only ([`ZoneStorage::Flexibility`]: less memory,
+    /// corrections by sparse solves) even where the `n × z` blocks would fit; otherwise
+    /// as `auto`.
+    Flexibility,
 }
 
 impl DelassusKind {
@@ -115,6 +125,7 @@ impl DelassusKind {
             DelassusKind::Auto => "auto",
             DelassusKind::Dense => "dense",
             DelassusKind::Columns => "columns",
+            DelassusKind::Flexibility => "flexibility",
         }
     }
 }
@@ -203,10 +214,29 @@ pub struct Delassus {
     ng_ready: bool,
     /// The contact zone's condensed data ([`Delassus::condense_zone`]).
     zone: Option<Zone>,
-    /// The path was chosen by [`DelassusKind::Auto`] (the zone may then switch a
-    /// per-active-column choice to the dense one).
+    /// The path was chosen by [`DelassusKind::Auto`] or [`DelassusKind::Flexibility`]
+    /// (the zone may then switch a per-active-column choice to the dense one).
     auto: bool,
+    /// [`DelassusKind::Flexibility`]: a condensed zone keeps `F`, `F_E` only.
+    flexibility_only: bool,
 }
+
+/// What the contact zone keeps ([`Delassus::condense_zone`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ZoneStorage {
+    /// `Y = Â⁻¹S`, `E = Â⁻¹K N S` (`n × z`) and `F`, `F_E` (`z × z`): corrections are
+    /// combinations of the columns of `Y` and `E`.
+    Full,
+    /// `F`, `F_E` only: corrections by one sparse solve of `G x` (blocks `n × z` past the
+    /// dense budget).
+    Flexibility,
+}
+
+/// Columns of the zone formed per pass by [`ZoneStorage::Flexibility`]'s set-up: a
+/// multiple of [`crate::linalg::SOLVE_CHUNK`], so that the factor's block solves see the
+/// same chunks as [`ZoneStorage::Full`]'s and give `F`, `F_E` bit for bit, and two
+/// chunks so that both threads solve at once.
+pub const ZONE_CHUNK: usize = 2 * crate::linalg::SOLVE_CHUNK;
 
 /// The step matrix condensed once onto the contact-zone dofs `S` (every dof a Jacobian
 /// column can touch): `Y = Â⁻¹S` and `E = Â⁻¹K N S` (`n × z` each) and the zone's
@@ -220,6 +250,8 @@ struct Zone {
     pos: Vec<usize>,
     /// The zone's dofs.
     dofs: Vec<usize>,
+    /// Whether `y`, `e` are held (else empty).
+    storage: ZoneStorage,
     y: Vec<f64>,
     e: Vec<f64>,
     f: Vec<f64>,
@@ -407,7 +439,8 @@ impl Delassus {
             blk2: vec![0.0; if with_d { nb } else { 0 }],
             ng_ready: false,
             zone: None,
-            auto: kind == DelassusKind::Auto,
+            auto: matches!(kind, DelassusKind::Auto | DelassusKind::Flexibility),
+            flexibility_only: kind == DelassusKind::Flexibility,
         })
     }
 
@@ -417,26 +450,24 @@ impl Delassus {
     /// re-linearization. Taken on the dense path
     /// (also when [`DelassusKind::Auto`] had chosen the per-active-column path for a
     /// nonlinear `G`: its reason, `m` solves per re-linearization, is gone) when the
-    /// zone's `n × z` blocks and the `m × m` operators fit the dense budget; returns
-    /// whether it was. `fixed` flags the rows whose column never changes (a linear
-    /// contact block beside nonlinear ones): their entries are formed once.
+    /// `m × m` operators and the zone's blocks fit the dense budget: `Y`, `E` and `F`,
+    /// `F_E` ([`ZoneStorage::Full`]), or `F`, `F_E` alone ([`ZoneStorage::Flexibility`]);
+    /// returns the storage taken, `None` when the zone was not condensed. `fixed` flags the
+    /// rows whose column never changes (a linear contact block beside nonlinear ones):
+    /// their entries are formed once.
     pub fn condense_zone(
         &mut self,
         zone: &[usize],
         fixed: Vec<bool>,
         stiffness: &SparseMatrix,
-    ) -> bool {
+    ) -> Option<ZoneStorage> {
         let (n, z, m) = (self.n, zone.len(), self.m);
         let per = if self.with_d && self.need_wd { 2 } else { 1 };
-        let blocks = zone_bytes(n, z, m, per);
-        if (!self.dense && !self.auto)
-            || self.g_constant
-            || z == 0
-            || blocks > AUTO_DENSE_MAX_BYTES
-            || zone.iter().any(|&d| d >= n)
+        if (!self.dense && !self.auto) || self.g_constant || z == 0 || zone.iter().any(|&d| d >= n)
         {
-            return false;
+            return None;
         }
+        let storage = zone_storage(n, z, m, per, self.flexibility_only)?;
         if !self.dense {
             // the per-active-column choice becomes the dense one: m × m operators
             self.dense = true;
@@ -446,59 +477,72 @@ impl Delassus {
             self.wn = vec![0.0; if self.with_d { m * m } else { 0 }];
             self.owner = vec![NONE; m];
             self.stamp = vec![0; m];
-            self.blk = Vec::new();
-            self.blk2 = Vec::new();
         }
+        // the flexibility zone corrects by solves of [G τ_used, G τ] (`blk`, 2 n)
+        let nb = match storage {
+            ZoneStorage::Full => 0,
+            ZoneStorage::Flexibility => 2 * n,
+        };
+        self.blk = vec![0.0; nb];
+        self.blk2 = Vec::new();
         let mut pos = vec![NONE; n];
         for (k, &d) in zone.iter().enumerate() {
             pos[d] = k;
         }
-        let mut y = vec![0.0; n * z];
-        for (k, &d) in zone.iter().enumerate() {
-            y[k * n + d] = 1.0;
-        }
-        // at set-up: the threaded blocked solves
-        solve_columns(self.factor.as_mut(), &mut y, z, true);
-        self.column_solves += z;
-        let mut e = Vec::new();
-        if per == 2 {
-            e = vec![0.0; n * z];
-            let k = stiffness.as_ref();
-            match self.metric {
-                Metric::Mass => k_times_columns(k, &y, &mut e, n),
-                Metric::Euclidean => {
-                    for (c, &d) in zone.iter().enumerate() {
-                        let col = &mut e[c * n..(c + 1) * n];
-                        for p in k.col_ptr()[d]..k.col_ptr()[d + 1] {
-                            col[k.row_idx()[p]] += k.val()[p];
+        let mut f = vec![0.0; z * z];
+        let mut fe = vec![0.0; if per == 2 { z * z } else { 0 }];
+        let (mut y, mut e) = (Vec::new(), Vec::new());
+        // the columns of the zone, a chunk of `cols` at a time (all at once when the
+        // n × z blocks are kept): Y = Â⁻¹S, E = Â⁻¹K N S, and their zone rows
+        let cols = match storage {
+            ZoneStorage::Full => z,
+            ZoneStorage::Flexibility => ZONE_CHUNK.min(z),
+        };
+        let mut yc = vec![0.0; n * cols];
+        let mut ec = vec![0.0; if per == 2 { n * cols } else { 0 }];
+        for start in (0..z).step_by(cols) {
+            let w = cols.min(z - start);
+            let (yb, eb) = (
+                &mut yc[..n * w],
+                &mut ec[..if per == 2 { n * w } else { 0 }],
+            );
+            yb.iter_mut().for_each(|v| *v = 0.0);
+            for (k, &d) in zone[start..start + w].iter().enumerate() {
+                yb[k * n + d] = 1.0;
+            }
+            // at set-up: the threaded blocked solves
+            solve_columns(self.factor.as_mut(), yb, w, true);
+            self.column_solves += w;
+            restrict(zone, yb, n, &mut f[start * z..(start + w) * z]);
+            if per == 2 {
+                let k = stiffness.as_ref();
+                match self.metric {
+                    Metric::Mass => k_times_columns(k, yb, eb, n),
+                    Metric::Euclidean => {
+                        eb.iter_mut().for_each(|v| *v = 0.0);
+                        for (c, &d) in zone[start..start + w].iter().enumerate() {
+                            let col = &mut eb[c * n..(c + 1) * n];
+                            for p in k.col_ptr()[d]..k.col_ptr()[d + 1] {
+                                col[k.row_idx()[p]] += k.val()[p];
+                            }
                         }
                     }
                 }
+                solve_columns(self.factor.as_mut(), eb, w, true);
+                self.column_solves += w;
+                restrict(zone, eb, n, &mut fe[start * z..(start + w) * z]);
             }
-            solve_columns(self.factor.as_mut(), &mut e, z, true);
-            self.column_solves += z;
         }
-        let restrict = |x: &[f64]| -> Vec<f64> {
-            let mut f = vec![0.0; z * z];
-            for j in 0..z {
-                for (i, &d) in zone.iter().enumerate() {
-                    f[i + j * z] = x[j * n + d];
-                }
-            }
-            f
-        };
-        let f = restrict(&y);
-        let fe = if e.is_empty() {
-            Vec::new()
-        } else {
-            restrict(&e)
-        };
+        if storage == ZoneStorage::Full {
+            (y, e) = (yc, ec);
+        }
         // the n × m blocks are never formed on this path
         self.cg = Vec::new();
         self.d = Vec::new();
         self.zone = Some(Zone {
             pos,
             dofs: zone.to_vec(),
+            storage,
             y,
             e,
             f,
@@ -509,7 +553,17 @@ impl Delassus {
             fixed,
             formed: [false; 2],
         });
-        true
+        Some(storage)
+    }
+
+    /// Whether the `n`-space corrections are sparse solves (the per-active-column path
+    /// and [`ZoneStorage::Flexibility`]) rather than combinations of stored columns.
+    fn corrects_by_solves(&self) -> bool {
+        !self.dense
+            || self
+                .zone
+                .as_ref()
+                .is_some_and(|z| z.storage == ZoneStorage::Flexibility)
     }
 
     /// Stores no columns for a support of more than `rows` rows (the one-step
@@ -556,7 +610,7 @@ impl Delassus {
     /// One phrase for summaries: which path runs.
     pub fn describe(&self) -> String {
         describe_path(
-            self.zone.as_ref().map(|z| z.dofs.len()),
+            self.zone.as_ref().map(|z| (z.dofs.len(), z.storage)),
             self.dense,
             self.n,
             self.m,
@@ -584,16 +638,20 @@ impl Delassus {
         if !dense && pool == 0 && cap > limit.max(1) {
             cap = limit.max(1);
         }
-        let z = zone.filter(|&z| {
-            (dense || kind == DelassusKind::Auto)
-                && !g_constant
-                && z > 0
-                && zone_bytes(n, z, m, per) <= AUTO_DENSE_MAX_BYTES
-        });
+        let z = zone
+            .filter(|&z| {
+                (dense || matches!(kind, DelassusKind::Auto | DelassusKind::Flexibility))
+                    && !g_constant
+                    && z > 0
+            })
+            .and_then(|z| {
+                zone_storage(n, z, m, per, kind == DelassusKind::Flexibility).map(|s| (z, s))
+            });
         let (n8, m8) = (n as u64 * 8, m as u64 * 8);
         let per = per as u64;
         let bytes = match z {
-            Some(z) => zone_bytes(n, z, m, per as usize) as u64,
+            Some((z, ZoneStorage::Full)) => zone_bytes(n, z, m, per as usize) as u64,
+            Some((z, ZoneStorage::Flexibility)) => flexibility_bytes(n, z, m, per as usize) as u64,
             None if dense => n8 * m as u64 * per + m8 * m as u64 * (1 + 2 * u64::from(with_d)),
             None => m8 * cap as u64 * per + n8 * SOLVE_BLOCK.min(m).max(2) as u64 * per + 2 * n8,
         };
@@ -948,11 +1006,13 @@ impl Delassus {
         if x.iter().all(|&v| v == 0.0) {
             return;
         }
-        if let Some(zone) = &mut self.zone {
+        if let Some(zone) = &mut self.zone
+            && zone.storage == ZoneStorage::Full
+        {
             zone.apply(&self.jac, false, s, x, y);
             return;
         }
-        if self.dense {
+        if self.dense && self.zone.is_none() {
             let n = self.n;
             for (a, &xa) in x.iter().enumerate() {
                 if xa != 0.0 {
@@ -983,7 +1043,7 @@ impl Delassus {
         let n = self.n;
         let feedback = kfac != 0.0 && tau_used.iter().any(|&t| t != 0.0);
         let any_tau = tau.iter().any(|&t| t != 0.0);
-        if self.dense {
+        if !self.corrects_by_solves() {
             self.add_inverse_g(1.0, p, v);
             if feedback && let Some(zone) = &mut self.zone {
                 zone.apply(&self.jac, true, kfac, tau_used, v);
@@ -1038,7 +1098,7 @@ impl Delassus {
 
     /// `q += N G τ` with the `τ` given to the last [`Delassus::add_velocity_correction`].
     pub fn add_position_correction(&mut self, tau: &[f64], q: &mut [f64]) {
-        if self.metric == Metric::Mass && !self.dense {
+        if self.metric == Metric::Mass && self.corrects_by_solves() {
             if self.ng_ready {
                 let n = self.n;
                 axpy(1.0, &self.blk[n..2 * n], q);
@@ -1089,7 +1149,7 @@ fn choose_dense(kind: DelassusKind, n: usize, m: usize, per: usize, g_constant: 
     match kind {
         DelassusKind::Dense => true,
         DelassusKind::Columns => false,
-        DelassusKind::Auto => {
+        DelassusKind::Auto | DelassusKind::Flexibility => {
             (g_constant || m <= AUTO_DENSE_MAX_CONTACTS)
                 && n.saturating_mul(m).saturating_mul(8 * per) <= AUTO_DENSE_MAX_BYTES
         }
@@ -1117,13 +1177,67 @@ fn zone_bytes(n: usize, z: usize, m: usize, per: usize) -> usize {
         .saturating_add(z.saturating_mul(z + m).saturating_mul(8 * per))
 }
 
+/// Bytes of [`ZoneStorage::Flexibility`]'s data: `F`, `F_E`, `F B`, `F_E B`, the `m × m`
+/// operators, the two `n`-vectors of its correction solves and the set-up's
+/// `n ×` [`ZONE_CHUNK`] scratch (freed after the set-up; counted as it sets the peak).
+fn flexibility_bytes(n: usize, z: usize, m: usize, per: usize) -> usize {
+    m.saturating_mul(m)
+        .saturating_mul(8 * (per + 1))
+        .saturating_add(z.saturating_mul(z + m).saturating_mul(8 * per))
+        .saturating_add(n.saturating_mul(16))
+        .saturating_add(n.saturating_mul(ZONE_CHUNK.min(z)).saturating_mul(8 * per))
+}
+
+/// What [`Delassus::condense_zone`] keeps of a zone of `z` dofs: the `n × z` blocks while
+/// they fit the dense budget (and the user did not ask for the flexibilities alone), the
+/// flexibilities alone while those do, else nothing.
+fn zone_storage(
+    n: usize,
+    z: usize,
+    m: usize,
+    per: usize,
+    flexibility_only: bool,
+) -> Option<ZoneStorage> {
+    if !flexibility_only && zone_bytes(n, z, m, per) <= AUTO_DENSE_MAX_BYTES {
+        Some(ZoneStorage::Full)
+    } else if flexibility_bytes(n, z, m, per) <= AUTO_DENSE_MAX_BYTES {
+        Some(ZoneStorage::Flexibility)
+    } else {
+        None
+    }
+}
+
+/// `f[i + j z] = x[j n + zone[i]]`: the zone rows of the `n`-columns of `x` (as many as
+/// `f` has `z`-columns).
+fn restrict(zone: &[usize], x: &[f64], n: usize, f: &mut [f64]) {
+    let z = zone.len();
+    for (fc, xc) in f.chunks_mut(z).zip(x.chunks(n)) {
+        for (o, &d) in fc.iter_mut().zip(zone) {
+            *o = xc[d];
+        }
+    }
+}
+
 /// The phrase of a path: the zone's dofs, dense, or the per-active-column pool.
-fn describe_path(zone: Option<usize>, dense: bool, n: usize, m: usize, cap: usize) -> String {
-    if let Some(z) = zone {
+fn describe_path(
+    zone: Option<(usize, ZoneStorage)>,
+    dense: bool,
+    n: usize,
+    m: usize,
+    cap: usize,
+) -> String {
+    if let Some((z, storage)) = zone {
+        let (kept, corrections) = match storage {
+            ZoneStorage::Full => (format!("Â⁻¹S {n}×{z}"), "(Â⁻¹S)(Bx)"),
+            ZoneStorage::Flexibility => (
+                format!("F = SᵀÂ⁻¹S {z}×{z} (Â⁻¹S {n}×{z} not kept)"),
+                "by one sparse solve",
+            ),
+        };
         format!(
-            "Delassus dense on the contact zone: Â⁻¹S {n}×{z} condensed once ({z} zone \
+            "Delassus dense on the contact zone: {kept} condensed once ({z} zone \
              dofs), W = BᵀFB {m}×{m} re-formed per linearization without a solve \
-             (constant blocks once), corrections (Â⁻¹S)(Bx)"
+             (constant blocks once), corrections {corrections}"
         )
     } else if dense {
         format!("Delassus dense: Â⁻¹G {n}×{m} and W {m}×{m} condensed per linearization")
