@@ -19,6 +19,12 @@ GetFEM model, its fastest path for this problem as the peer scripts in
   * one md.solve() (GetFEM's Newton) per step, max_res 1e-8, max_iter 10.
 Set-up (meshes, fems, model, bricks) and the stepping loop are timed separately
 (time.perf_counter); peak memory is the process's ru_maxrss. Prints one JSON line.
+
+`--pairs K --signorini BIN` runs the comparison itself: K pairs, each GetFEM (this
+script in a child process) then signorini (`BIN run` on the same scene, its set-up being
+`model_seconds + integrator_seconds` and its step `seconds_per_step` of summary.json,
+its peak the summary's VmHWM), and prints the medians and the per-step ratio, one JSON
+line per run and a table at the end. Run it on a quiet machine.
 """
 import argparse
 import json
@@ -64,10 +70,15 @@ def main():
     ap.add_argument('--steps', type=int, default=50)
     ap.add_argument('--lsolver', default='mumps')
     ap.add_argument('--signorini-scene', action='store_true', help='print the signorini scene and exit')
+    ap.add_argument('--pairs', type=int, default=0, help='run K GetFEM/signorini pairs in turn and print medians')
+    ap.add_argument('--signorini', default='target/release/signorini', help='the signorini binary (with --pairs)')
     args = ap.parse_args()
     n = args.cells
     if args.signorini_scene:
         sys.stdout.write(scene(n, args.steps))
+        return
+    if args.pairs > 0:
+        compare(args)
         return
     import numpy as np
     import getfem as gf
@@ -140,6 +151,54 @@ def main():
         'peak_rss_mib': resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
         'force_last': force[-1],
     }), flush=True)
+
+
+def compare(args):
+    """K pairs in turn (GetFEM, then signorini), medians and the per-step ratio."""
+    import os
+    import statistics
+    import subprocess
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, 'two_blocks.toml')
+        with open(path, 'w') as f:
+            f.write(scene(args.cells, args.steps))
+        rows = {'getfem': [], 'signorini': []}
+        for k in range(args.pairs):
+            out = subprocess.run(
+                [sys.executable, os.path.abspath(__file__), '--cells', str(args.cells),
+                 '--steps', str(args.steps), '--lsolver', args.lsolver],
+                check=True, capture_output=True, text=True).stdout
+            g = json.loads([line for line in out.splitlines() if line.startswith('{')][-1])
+            rows['getfem'].append(g)
+            print(json.dumps(g), flush=True)
+            res = os.path.join(tmp, f'out{k}')
+            subprocess.run([args.signorini, 'run', path, '--no-fields', '--no-plots', '--out', res],
+                           check=True, capture_output=True)
+            with open(os.path.join(res, 'summary.json')) as f:
+                s = json.load(f)
+            r = {'code': 'signorini', 'cells_per_block': args.cells, 'dofs': s['dofs'],
+                 'steps': s['steps'], 'setup_seconds': s['model_seconds'] + s['integrator_seconds'],
+                 'seconds_per_step': s['seconds_per_step'],
+                 'newton_iterations_mean': s['iterations']['newton']['mean'],
+                 'peak_rss_mib': s['peak_memory_bytes'] / 2**20, 'max_violation': s['max_violation']}
+            rows['signorini'].append(r)
+            print(json.dumps(r), flush=True)
+    med = {c: {key: statistics.median(x[key] for x in rs)
+               for key in ['setup_seconds', 'seconds_per_step', 'peak_rss_mib']}
+           for c, rs in rows.items()}
+    gm = statistics.median(x['median_step_seconds'] for x in rows['getfem'])
+    ratios = [g['seconds_per_step'] / s['seconds_per_step'] for g, s in zip(rows['getfem'], rows['signorini'])]
+    ratios_med = [g['median_step_seconds'] / s['seconds_per_step'] for g, s in zip(rows['getfem'], rows['signorini'])]
+    print(f"| {args.cells}^3 + {args.cells}^3 hex8, {args.steps} steps, {args.pairs} pairs (medians) | GetFEM | signorini |")
+    print("|---|---|---|")
+    print(f"| set-up | {med['getfem']['setup_seconds']:.2f} s | {med['signorini']['setup_seconds']:.2f} s |")
+    print(f"| time per step (mean over the run) | {med['getfem']['seconds_per_step']:.3f} s (median step {gm:.3f} s) "
+          f"| {med['signorini']['seconds_per_step']:.3f} s |")
+    print(f"| peak memory | {med['getfem']['peak_rss_mib']:.0f} MiB | {med['signorini']['peak_rss_mib']:.0f} MiB |")
+    print(f"GetFEM / signorini per step: median {statistics.median(ratios):.1f} "
+          f"(range {min(ratios):.1f}-{max(ratios):.1f}); against GetFEM's median step "
+          f"{statistics.median(ratios_med):.1f} (range {min(ratios_med):.1f}-{max(ratios_med):.1f})")
 
 
 if __name__ == '__main__':

@@ -115,6 +115,14 @@ pub enum DelassusKind {
     /// flexibilities `F = SᵀÂ⁻¹S` only ([`ZoneStorage::Flexibility`]: less memory,
     /// corrections by sparse solves) even where the `n × z` blocks would fit; otherwise
     /// as `auto`.
+    #[cfg_attr(
+        feature = "cli",
+        value(
+            help = "For contacts between bodies condensed on their contact zone: keep only \
+                    the zone's flexibilities F (less memory, corrections by sparse solves); \
+                    otherwise as auto"
+        )
+    )]
     Flexibility,
 }
 
@@ -326,9 +334,8 @@ impl Zone {
             .sum()
     }
 
-    /// `y += s X (B x)` for the zone's `X` (`Y` or `E`, `n × z`).
-    fn apply(&mut self, jac: &ContactJacobian, use_e: bool, s: f64, x: &[f64], y: &mut [f64]) {
-        let n = y.len();
+    /// `r = B x` (zone coordinates).
+    fn gather_b(&mut self, jac: &ContactJacobian, x: &[f64]) {
         self.r.iter_mut().for_each(|v| *v = 0.0);
         for (a, &xa) in x.iter().enumerate() {
             if xa != 0.0 {
@@ -340,6 +347,23 @@ impl Zone {
                 }
             }
         }
+    }
+
+    /// `y += s X r` for a zone matrix `X` (`F` or `F_E`, `z × z`, column-major), over the
+    /// non-zero entries of `r`.
+    fn zone_times(x: &[f64], r: &[f64], s: f64, y: &mut [f64]) {
+        let z = r.len();
+        for (k, &rk) in r.iter().enumerate() {
+            if rk != 0.0 {
+                axpy(s * rk, &x[k * z..(k + 1) * z], y);
+            }
+        }
+    }
+
+    /// `y += s X (B x)` for the zone's `X` (`Y` or `E`, `n × z`).
+    fn apply(&mut self, jac: &ContactJacobian, use_e: bool, s: f64, x: &[f64], y: &mut [f64]) {
+        let n = y.len();
+        self.gather_b(jac, x);
         let cols = if use_e { &self.e } else { &self.y };
         for (k, &rk) in self.r.iter().enumerate() {
             if rk != 0.0 {
@@ -556,6 +580,52 @@ impl Delassus {
         Some(storage)
     }
 
+    /// The contact zone's dofs when it keeps its flexibilities only
+    /// ([`ZoneStorage::Flexibility`]): the integrator can then iterate on the zone alone
+    /// ([`Delassus::zone_corrections`]) and correct the whole state once per step.
+    pub fn flexibility_zone(&self) -> Option<&[usize]> {
+        self.zone
+            .as_ref()
+            .filter(|z| z.storage == ZoneStorage::Flexibility)
+            .map(|z| z.dofs.as_slice())
+    }
+
+    /// The zone rows of the corrections of [`Delassus::add_velocity_correction`] and
+    /// [`Delassus::add_position_correction`], without a solve: `v = F (B p) + kfac ·
+    /// F_E (B τ_used)` and `q = N G τ` on the zone (`F (B τ)` for the `M̂⁻¹` metric, `B τ`
+    /// for `I`), both overwritten (zone order, [`Delassus::flexibility_zone`]). `F_E`
+    /// exists where `W_D` is formed. Allocation-free; `O(z · nnz(B x))`.
+    pub fn zone_corrections(
+        &mut self,
+        p: &[f64],
+        kfac: f64,
+        tau_used: &[f64],
+        tau: &[f64],
+        v: &mut [f64],
+        q: &mut [f64],
+    ) {
+        let metric = self.metric;
+        let zone = self
+            .zone
+            .as_mut()
+            .expect("zone_corrections needs a condensed contact zone");
+        v.iter_mut().for_each(|x| *x = 0.0);
+        q.iter_mut().for_each(|x| *x = 0.0);
+        zone.gather_b(&self.jac, p);
+        Zone::zone_times(&zone.f, &zone.r, 1.0, v);
+        if kfac != 0.0 && !zone.fe.is_empty() && tau_used.iter().any(|&t| t != 0.0) {
+            zone.gather_b(&self.jac, tau_used);
+            Zone::zone_times(&zone.fe, &zone.r, kfac, v);
+        }
+        if tau.iter().any(|&t| t != 0.0) {
+            zone.gather_b(&self.jac, tau);
+            match metric {
+                Metric::Mass => Zone::zone_times(&zone.f, &zone.r, 1.0, q),
+                Metric::Euclidean => q.copy_from_slice(&zone.r),
+            }
+        }
+    }
+
     /// Whether the `n`-space corrections are sparse solves (the per-active-column path
     /// and [`ZoneStorage::Flexibility`]) rather than combinations of stored columns.
     fn corrects_by_solves(&self) -> bool {
@@ -651,7 +721,10 @@ impl Delassus {
         let per = per as u64;
         let bytes = match z {
             Some((z, ZoneStorage::Full)) => zone_bytes(n, z, m, per as usize) as u64,
-            Some((z, ZoneStorage::Flexibility)) => flexibility_bytes(n, z, m, per as usize) as u64,
+            Some((z, ZoneStorage::Flexibility)) => {
+                (flexibility_bytes(n, z, m, per as usize)
+                    + flexibility_scratch_bytes(n, z, per as usize)) as u64
+            }
             None if dense => n8 * m as u64 * per + m8 * m as u64 * (1 + 2 * u64::from(with_d)),
             None => m8 * cap as u64 * per + n8 * SOLVE_BLOCK.min(m).max(2) as u64 * per + 2 * n8,
         };
@@ -1178,14 +1251,20 @@ fn zone_bytes(n: usize, z: usize, m: usize, per: usize) -> usize {
 }
 
 /// Bytes of [`ZoneStorage::Flexibility`]'s data: `F`, `F_E`, `F B`, `F_E B`, the `m × m`
-/// operators, the two `n`-vectors of its correction solves and the set-up's
-/// `n ×` [`ZONE_CHUNK`] scratch (freed after the set-up; counted as it sets the peak).
+/// operators and the two `n`-vectors of its correction solves. The dense budget bounds
+/// these; the set-up's scratch ([`flexibility_scratch_bytes`]) is freed after it.
 fn flexibility_bytes(n: usize, z: usize, m: usize, per: usize) -> usize {
     m.saturating_mul(m)
         .saturating_mul(8 * (per + 1))
         .saturating_add(z.saturating_mul(z + m).saturating_mul(8 * per))
         .saturating_add(n.saturating_mul(16))
-        .saturating_add(n.saturating_mul(ZONE_CHUNK.min(z)).saturating_mul(8 * per))
+}
+
+/// The `n ×` [`ZONE_CHUNK`] blocks (`Y` and, with `W_D`, `E`) of
+/// [`ZoneStorage::Flexibility`]'s set-up: freed once the flexibilities are formed, but
+/// part of the run's peak, so the ledger counts them.
+fn flexibility_scratch_bytes(n: usize, z: usize, per: usize) -> usize {
+    n.saturating_mul(ZONE_CHUNK.min(z)).saturating_mul(8 * per)
 }
 
 /// What [`Delassus::condense_zone`] keeps of a zone of `z` dofs: the `n × z` blocks while
@@ -1267,14 +1346,16 @@ const PRODUCT_TILE: usize = 32;
 /// columns per pass over `K`: each tile is transposed to row-major so that every entry
 /// of `K` updates a contiguous row of the tile. One pass per column streams all of `K`
 /// each time; on the 98 304-dof cube the 1024 products took 5.4 s one column at a time
-/// (bound by memory bandwidth), and the whole set-up 19.1 s against 16.2 s tiled. Allocates its two
-/// tiles (`2 n ×` [`PRODUCT_TILE`] values): called once per integrator, at construction.
+/// (bound by memory bandwidth), and the whole set-up 19.1 s against 16.2 s tiled. The
+/// tiles are spread over rayon's threads (each thread its two tiles, `2 n ×`
+/// [`PRODUCT_TILE`] values, allocated here: called at set-up only); a tile's columns do
+/// not depend on the thread. On the two 20³ cubes' zone (2 646 columns) the products
+/// took 4.0 s on one thread.
 fn k_times_columns(k: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64], n: usize) {
+    use rayon::prelude::*;
     const T: usize = PRODUCT_TILE;
-    let mut xt = vec![0.0; n * T];
-    let mut yt = vec![0.0; n * T];
     let (cp, ri, val) = (k.col_ptr(), k.row_idx(), k.val());
-    for (xs, ys) in x.chunks(n * T).zip(y.chunks_mut(n * T)) {
+    let tile = |(xt, yt): &mut (Vec<f64>, Vec<f64>), (xs, ys): (&[f64], &mut [f64])| {
         let cols = xs.len() / n;
         for c in 0..cols {
             for (j, &v) in xs[c * n..(c + 1) * n].iter().enumerate() {
@@ -1297,7 +1378,10 @@ fn k_times_columns(k: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64],
                 *v = yt[i * T + c];
             }
         }
-    }
+    };
+    x.par_chunks(n * T)
+        .zip(y.par_chunks_mut(n * T))
+        .for_each_init(|| (vec![0.0; n * T], vec![0.0; n * T]), tile);
 }
 
 fn axpy(s: f64, x: &[f64], y: &mut [f64]) {

@@ -19,7 +19,15 @@
 //! `U + eU_k = W_AA P_A + (U_free − hθ W_D τⁿ + e U_k)_A`, the linearized gaps
 //! (eq. 51) are `g = g(qⁿ) + Gᵀ(q_k + h(1−θ)v_k − qⁿ) + hθ U + W_N τ`, and `v, q` are
 //! formed once per step. For nonlinear contacts `G(qⁿ)` and the operators are
-//! recomputed every Newton iteration (`m` extra solves).
+//! recomputed every Newton iteration (`m` extra solves, or none on the condensed contact
+//! zone, where `W = BᵀFB`). Contacts being nodal, `G` and `g` depend on the zone's dofs
+//! alone, and on a linear structure the zone rows of the iterate are
+//! `v_z = v_free,z + F B Pⁿ⁺¹ − hθ F_E B τⁿ`, `q_z = … + (N G τⁿ⁺¹)_z`: when the zone keeps
+//! only its flexibilities ([`crate::delassus::ZoneStorage::Flexibility`], where each
+//! `n`-space correction is a sparse solve) the loop iterates on these `z` values alone,
+//! converges on their change, and [`ThetaCore::commit`] forms `v`, `q` once. A round in
+//! which no row is in any problem (Algorithm 2's first, free round) re-evaluates `g`
+//! and `G` for the activation test without forming the operators, which it never reads.
 //!
 //! A nonlinear structure ([`crate::model::system::Linearity::ConstantMass`]: bodies with
 //! a large-deformation law; [`crate::model::system::Linearity::Nonlinear`]: a mass
@@ -701,6 +709,9 @@ pub struct ThetaCore {
     /// from its velocity ([`ThetaCore::restart_iterate`]).
     last_converged: bool,
     jac_at_qk: bool,
+    /// The Delassus data were formed at `q_k` (the step's start) and not since: a round
+    /// that re-evaluates `G` at `q_k` need not form them again.
+    w_at_qk: bool,
     pub(crate) newton: NewtonParams,
     pub(crate) projection_tolerance: f64,
     pub(crate) state: State,
@@ -750,6 +761,17 @@ pub struct ThetaCore {
     /// from it do not move between iterations); 0 without friction, where the LCP
     /// solves are exact to rounding.
     velocity_accuracy: f64,
+    /// The contact zone's dofs when the Newton loop iterates on the zone alone
+    /// ([`ThetaCore::form_zone`]: a linear structure, a nonlinear `G`, the zone keeping its
+    /// flexibilities only, [`Delassus::flexibility_zone`]); empty otherwise.
+    zone: Vec<usize>,
+    /// Zone scratch (zone order): the velocity and position corrections, and `q` at the
+    /// iterate, at the last iterate and at the step's start.
+    zv: Vec<f64>,
+    zq: Vec<f64>,
+    zq_new: Vec<f64>,
+    zq_lin: Vec<f64>,
+    zq_k: Vec<f64>,
 }
 
 impl ThetaCore {
@@ -878,6 +900,7 @@ impl ThetaCore {
             at_first_iterate: false,
             last_converged: false,
             jac_at_qk: true,
+            w_at_qk: false,
             newton: params.newton,
             projection_tolerance: params.projection_tolerance,
             state,
@@ -911,6 +934,12 @@ impl ThetaCore {
             ws: Workspace::new(rows, m, params, friction),
             coupled: coupled_cap.map(|c| Coupled::new(c, m)),
             velocity_accuracy: 0.0,
+            zone: Vec::new(),
+            zv: Vec::new(),
+            zq: Vec::new(),
+            zq_new: Vec::new(),
+            zq_lin: Vec::new(),
+            zq_k: Vec::new(),
         };
         core.contacts
             .evaluate(&core.state.q, &mut core.state.gap, &mut core.del.jac);
@@ -919,8 +948,22 @@ impl ThetaCore {
                 let zone = core.contacts.zone();
                 let fixed = fixed_rows(core.contacts.as_ref());
                 core.del.condense_zone(&zone, fixed, &core.sys.stiffness);
+                if let Some(dofs) = core.del.flexibility_zone() {
+                    let z = dofs.len();
+                    core.zone = dofs.to_vec();
+                    for buf in [
+                        &mut core.zv,
+                        &mut core.zq,
+                        &mut core.zq_new,
+                        &mut core.zq_lin,
+                        &mut core.zq_k,
+                    ] {
+                        *buf = vec![0.0; z];
+                    }
+                }
             }
             core.del.refresh(&core.sys.stiffness);
+            core.w_at_qk = true;
             let rows_mf = matrix_free_rows(core.ws.cap, g_constant, core.del.is_dense());
             if rows_mf < core.ws.cap {
                 core.ws.matrix_free_from(rows_mf, params);
@@ -994,6 +1037,9 @@ impl ThetaCore {
                  Newton iterations only re-solve the contact-space problem (eq. 56a)"
             } else if self.g_constant {
                 "linear gap: G constant, W condensed again with each new M̂ⁿ"
+            } else if !self.zone.is_empty() {
+                "nonlinear gap: G(q) re-linearized every Newton iteration, which iterates on \
+                 the contact zone's dofs (F B P, no sparse solve) and forms the state once"
             } else {
                 "nonlinear gap: G(q) re-linearized every Newton iteration"
             },
@@ -1086,6 +1132,7 @@ impl ThetaCore {
         self.linearize_structure(true, stats)?;
         let st = self.structure.as_ref().expect("a nonlinear structure");
         self.del.refresh(&st.tangent);
+        self.w_at_qk = false;
         self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
         self.at_first_iterate = true;
         Ok(())
@@ -1108,6 +1155,7 @@ impl ThetaCore {
             // G was evaluated again at q_k for this loop
             let st = self.structure.as_ref().expect("a nonlinear structure");
             self.del.refresh(&st.tangent);
+            self.w_at_qk = false;
         }
         self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
         Ok(())
@@ -1214,11 +1262,25 @@ impl ThetaCore {
             self.contacts
                 .evaluate(&self.state.q, &mut self.g_at_lin, &mut self.del.jac);
             if self.structure.is_none() {
-                self.del.refresh(&self.sys.stiffness);
+                if !self.w_at_qk {
+                    self.del.refresh(&self.sys.stiffness);
+                    self.w_at_qk = true;
+                }
                 self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
             }
             self.jac_at_qk = true;
         }
+        // a round with no row in any problem reads no Delassus entry: its
+        // re-linearizations evaluate the gaps and G (for the activation test) and leave
+        // the operators as they are (formed at q_k, or re-formed by the next round)
+        let empty_round = law == VelocityLaw::Impact
+            && self.structure.is_none()
+            && !self.vel_mask.iter().any(|&x| x)
+            && match rule {
+                PositionRule::None => true,
+                PositionRule::Combined { .. } => !self.pos_mask.iter().any(|&x| x),
+                PositionRule::AllComplementarity => false,
+            };
         if self.structure.is_some() && !self.at_first_iterate {
             // a later round of Algorithm 2 (or its complementarity redo)
             if self.last_converged {
@@ -1235,6 +1297,10 @@ impl ThetaCore {
         self.velocity_accuracy = 0.0;
         self.q_lin.copy_from_slice(&self.state.q);
         self.g_at_lin.copy_from_slice(&self.state.gap);
+        for (k, &d) in self.zone.iter().enumerate() {
+            self.zq_k[k] = self.state.q[d];
+            self.zq_lin[k] = self.state.q[d];
+        }
         let mut relinearized = false;
         let mut converged = false;
         let (mut best, mut best_it) = (f64::INFINITY, 0);
@@ -1263,12 +1329,13 @@ impl ThetaCore {
                         tangent
                     }
                 };
-                if !self.g_constant || refactored {
+                if (!self.g_constant || refactored) && !empty_round {
                     let k = match &self.structure {
                         Some(st) => &st.tangent,
                         None => &self.sys.stiffness,
                     };
                     self.del.refresh(k);
+                    self.w_at_qk = false;
                 }
                 self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
             }
@@ -1422,6 +1489,17 @@ impl ThetaCore {
             // convergence
             let r = if self.operators_constant {
                 self.linear_residual()?
+            } else if !self.zone.is_empty() {
+                // the iterate on the contact zone alone: the rest of the state follows
+                // the zone's impulses linearly and is formed once, at commit
+                self.form_zone();
+                let r = newton_change(&self.zq_new, &self.zq_lin, &self.zq_k);
+                configuration_change = relative_change(&self.zq_new, &self.zq_lin);
+                self.zq_lin.copy_from_slice(&self.zq_new);
+                for (&d, &x) in self.zone.iter().zip(&self.zq_new) {
+                    self.q_lin[d] = x;
+                }
+                r
             } else {
                 self.form();
                 let r = newton_change(&self.q_new, &self.q_lin, &self.state.q);
@@ -1872,6 +1950,29 @@ impl ThetaCore {
         self.del.add_position_correction(&self.tau, &mut self.q_new);
     }
 
+    /// [`ThetaCore::form`] on the contact zone only (`zq_new`): with `G = S B` the gaps and
+    /// `G` depend on the zone's dofs alone, and on a linear structure the zone rows of the
+    /// corrections are `F (B p) − hθ F_E (B τ_used)` and `(N G τ)_zone`
+    /// ([`Delassus::zone_corrections`]), so a Newton iteration needs no sparse solve;
+    /// [`ThetaCore::commit`] forms the whole state once with the converged impulses.
+    fn form_zone(&mut self) {
+        let (h, th) = (self.h, self.theta);
+        let kfac = if self.feedback { -h * th } else { 0.0 };
+        self.del.zone_corrections(
+            &self.p,
+            kfac,
+            &self.tau_used,
+            &self.tau,
+            &mut self.zv,
+            &mut self.zq,
+        );
+        let s = &self.state;
+        for (k, &d) in self.zone.iter().enumerate() {
+            let vn = self.v_free[d] + self.zv[k];
+            self.zq_new[k] = s.q[d] + h * ((1.0 - th) * s.v[d] + th * vn) + self.zq[k];
+        }
+    }
+
     /// Accepts `v_new`, `q_new`, `P`, `τ` as the state at `t_{k+1}` and evaluates the
     /// contacts there (re-condensing for nonlinear contacts).
     /// Restores a checkpointed state and evaluates again what [`ThetaCore::commit`]
@@ -1913,6 +2014,7 @@ impl ThetaCore {
             if self.structure.is_none() {
                 // (a nonlinear structure condenses at the next step's first iterate)
                 self.del.refresh(&self.sys.stiffness);
+                self.w_at_qk = true;
             }
             self.jac_at_qk = true;
         }
@@ -1920,7 +2022,7 @@ impl ThetaCore {
     }
 
     pub fn commit(&mut self, stats: &mut StepStats) {
-        if self.operators_constant {
+        if self.operators_constant || !self.zone.is_empty() {
             self.form();
         }
         self.at_first_iterate = false;
