@@ -20,6 +20,13 @@ GetFEM model, its fastest path for this problem as the peer scripts in
 Set-up (meshes, fems, model, bricks) and the stepping loop are timed separately
 (time.perf_counter); peak memory is the process's ru_maxrss. Prints one JSON line.
 
+`--scaling --signorini BIN` runs signorini alone on two families of blocks, cubes of
+N³ cells (N = 6 … 20: dofs ∝ N³, contacts ∝ N²) and blocks of a 12 × 12-cell face
+N cells thick (N = 6 … 48: contacts fixed), and fits log y = a + b log(dofs) +
+c log(contacts) by least squares for the set-up, the time per step and the peak memory;
+`--delassus flexibility` keeps every run on one Delassus path (`auto` switches from the
+full contact zone to its flexibilities where the `n × z` blocks pass 2 GiB).
+
 `--pairs K --signorini BIN` runs the comparison itself: K pairs, each GetFEM (this
 script in a child process) then signorini (`BIN run` on the same scene, its set-up being
 `model_seconds + integrator_seconds` and its step `seconds_per_step` of summary.json,
@@ -35,9 +42,13 @@ import time
 E, NU, RHO, V0, SIDE, H = 1e7, 0.3, 1000.0, 1.0, 0.1, 1e-5
 
 
-def scene(n, steps):
-    """The signorini scene of the same problem (node-to-surface, both bodies deformable)."""
-    return f"""# Two {n}^3-cell hex8 cubes in contact over a full face (benches/getfem_two_blocks.py)
+def scene(n, steps, depth=None):
+    """The signorini scene of the same problem (node-to-surface, both bodies deformable);
+    `depth` cells across the thickness of each block (default n: cubes), the block then
+    SIDE * depth / n thick."""
+    d = n if depth is None else depth
+    t = SIDE * d / n
+    return f"""# Two {n}x{n}x{d}-cell hex8 blocks in contact over a full face (benches/getfem_two_blocks.py)
 [time]
 dt = {H:e}
 t_end = {steps * H:e}
@@ -47,13 +58,13 @@ kind = "combined-projection"
 
 [[bodies]]
 name = "lower"
-mesh = {{ generator = "box", cell = "hex8", cells = [{n}, {n}, {n}], size = [{SIDE}, {SIDE}, {SIDE}] }}
+mesh = {{ generator = "box", cell = "hex8", cells = [{n}, {n}, {d}], size = [{SIDE}, {SIDE}, {t}] }}
 material = {{ young = {E:e}, poisson = {NU}, density = {RHO} }}
 fixed = ["z0"]
 
 [[bodies]]
 name = "upper"
-mesh = {{ generator = "box", cell = "hex8", cells = [{n}, {n}, {n}], size = [{SIDE}, {SIDE}, {SIDE}], origin = [0.0, 0.0, {SIDE}] }}
+mesh = {{ generator = "box", cell = "hex8", cells = [{n}, {n}, {d}], size = [{SIDE}, {SIDE}, {t}], origin = [0.0, 0.0, {t}] }}
 material = {{ young = {E:e}, poisson = {NU}, density = {RHO} }}
 velocity = [0.0, 0.0, -{V0}]
 
@@ -71,7 +82,9 @@ def main():
     ap.add_argument('--lsolver', default='mumps')
     ap.add_argument('--signorini-scene', action='store_true', help='print the signorini scene and exit')
     ap.add_argument('--pairs', type=int, default=0, help='run K GetFEM/signorini pairs in turn and print medians')
-    ap.add_argument('--signorini', default='target/release/signorini', help='the signorini binary (with --pairs)')
+    ap.add_argument('--signorini', default='target/release/signorini', help='the signorini binary (with --pairs, --scaling)')
+    ap.add_argument('--scaling', action='store_true', help='signorini alone on two families of blocks: exponents')
+    ap.add_argument('--delassus', default='', help='with --scaling: scheme.delassus for every run (default: the scene\'s auto)')
     args = ap.parse_args()
     n = args.cells
     if args.signorini_scene:
@@ -79,6 +92,9 @@ def main():
         return
     if args.pairs > 0:
         compare(args)
+        return
+    if args.scaling:
+        scaling(args)
         return
     import numpy as np
     import getfem as gf
@@ -153,6 +169,52 @@ def main():
     }), flush=True)
 
 
+def run_signorini(binary, text, tmp, tag, sets=()):
+    """Runs `binary run` on the scene `text` (with `--set` for each of `sets`); its
+    summary as the JSON row of compare()."""
+    import os
+    import subprocess
+    path = os.path.join(tmp, f'{tag}.toml')
+    with open(path, 'w') as f:
+        f.write(text)
+    res = os.path.join(tmp, tag)
+    extra = [a for kv in sets for a in ('--set', kv)]
+    subprocess.run([binary, 'run', path, '--no-fields', '--no-plots', '--out', res] + extra,
+                   check=True, capture_output=True)
+    with open(os.path.join(res, 'summary.json')) as f:
+        s = json.load(f)
+    return {'code': 'signorini', 'dofs': s['dofs'],
+            'steps': s['steps'], 'setup_seconds': s['model_seconds'] + s['integrator_seconds'],
+            'seconds_per_step': s['seconds_per_step'],
+            'newton_iterations_mean': s['iterations']['newton']['mean'],
+            'peak_rss_mib': s['peak_memory_bytes'] / 2**20, 'max_violation': s['max_violation']}
+
+
+def scaling(args):
+    """Set-up, step and memory against dofs and contacts: least-squares exponents."""
+    import tempfile
+    import numpy as np
+    runs = [(n, n) for n in (6, 8, 10, 12, 16, 20)] + [(12, d) for d in (6, 24, 48)]
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for n, d in runs:
+            sets = [f'scheme.delassus="{args.delassus}"'] if args.delassus else []
+            r = run_signorini(args.signorini, scene(n, args.steps, d), tmp, f'b{n}x{d}', sets)
+            r['contacts'] = (n + 1) ** 2
+            r['cells'] = [n, n, d]
+            rows.append(r)
+            print(json.dumps(r), flush=True)
+    x = np.array([[1.0, np.log(r['dofs']), np.log(r['contacts'])] for r in rows])
+    print("| quantity | exponent on dofs | exponent on contacts | largest residual (log) |")
+    print("|---|---|---|---|")
+    for key, name in [('setup_seconds', 'set-up'), ('seconds_per_step', 'time per step'),
+                      ('peak_rss_mib', 'peak memory')]:
+        y = np.log([r[key] for r in rows])
+        coef, *_ = np.linalg.lstsq(x, y, rcond=None)
+        res = np.max(np.abs(x @ coef - y))
+        print(f"| {name} | {coef[1]:.2f} | {coef[2]:.2f} | {res:.2f} |")
+
+
 def compare(args):
     """K pairs in turn (GetFEM, then signorini), medians and the per-step ratio."""
     import os
@@ -160,9 +222,6 @@ def compare(args):
     import subprocess
     import tempfile
     with tempfile.TemporaryDirectory() as tmp:
-        path = os.path.join(tmp, 'two_blocks.toml')
-        with open(path, 'w') as f:
-            f.write(scene(args.cells, args.steps))
         rows = {'getfem': [], 'signorini': []}
         for k in range(args.pairs):
             out = subprocess.run(
@@ -172,16 +231,8 @@ def compare(args):
             g = json.loads([line for line in out.splitlines() if line.startswith('{')][-1])
             rows['getfem'].append(g)
             print(json.dumps(g), flush=True)
-            res = os.path.join(tmp, f'out{k}')
-            subprocess.run([args.signorini, 'run', path, '--no-fields', '--no-plots', '--out', res],
-                           check=True, capture_output=True)
-            with open(os.path.join(res, 'summary.json')) as f:
-                s = json.load(f)
-            r = {'code': 'signorini', 'cells_per_block': args.cells, 'dofs': s['dofs'],
-                 'steps': s['steps'], 'setup_seconds': s['model_seconds'] + s['integrator_seconds'],
-                 'seconds_per_step': s['seconds_per_step'],
-                 'newton_iterations_mean': s['iterations']['newton']['mean'],
-                 'peak_rss_mib': s['peak_memory_bytes'] / 2**20, 'max_violation': s['max_violation']}
+            r = run_signorini(args.signorini, scene(args.cells, args.steps), tmp, f'out{k}')
+            r['cells_per_block'] = args.cells
             rows['signorini'].append(r)
             print(json.dumps(r), flush=True)
     med = {c: {key: statistics.median(x[key] for x in rs)

@@ -98,29 +98,42 @@ impl Metric {
 pub enum DelassusKind {
     /// Dense while the blocks fit in 2 GiB and `G` is constant (or the contacts are
     /// at most [`AUTO_DENSE_MAX_CONTACTS`]); per-active-column otherwise (default).
+    /// Contacts between bodies are condensed on their contact zone, keeping its
+    /// flexibilities in the θ-method schemes ([`ZoneStorage::Flexibility`]) and `Â⁻¹S`
+    /// in Schatzman–Paoli's ([`ZoneStorage::Full`]), the other where the first does not
+    /// fit.
     #[cfg_attr(
         feature = "cli",
         value(
             help = "Dense while the blocks fit in 2 GiB and G is constant (or the contacts \
-                    are at most 64); per-active-column otherwise (default)"
+                    are at most 64); per-active-column otherwise; contacts between bodies \
+                    condensed on their contact zone (default)"
         )
     )]
     #[default]
     Auto,
-    /// Dense `n × m` blocks `Â⁻¹G`, computed once per linearization.
+    /// Dense `n × m` blocks `Â⁻¹G`, computed once per linearization; on a condensed
+    /// contact zone, its `n × z` blocks `Â⁻¹S` ([`ZoneStorage::Full`]) where they fit.
+    #[cfg_attr(
+        feature = "cli",
+        value(
+            help = "Dense n × m blocks M̂⁻¹G, computed once per linearization; on a contact \
+                    zone, its n × z blocks M̂⁻¹S where they fit"
+        )
+    )]
     Dense,
     /// Columns of the active contacts only, computed when first needed.
     Columns,
     /// For a nonlinear contact set condensed onto its contact zone: keep the zone's
     /// flexibilities `F = SᵀÂ⁻¹S` only ([`ZoneStorage::Flexibility`]: less memory,
-    /// corrections by sparse solves) even where the `n × z` blocks would fit; otherwise
-    /// as `auto`.
+    /// corrections by sparse solves) in every scheme, Schatzman–Paoli included, where the
+    /// flexibilities fit; otherwise as `auto`.
     #[cfg_attr(
         feature = "cli",
         value(
             help = "For contacts between bodies condensed on their contact zone: keep only \
-                    the zone's flexibilities F (less memory, corrections by sparse solves); \
-                    otherwise as auto"
+                    the zone's flexibilities F in every scheme (less memory, corrections by \
+                    sparse solves); otherwise as auto"
         )
     )]
     Flexibility,
@@ -222,11 +235,10 @@ pub struct Delassus {
     ng_ready: bool,
     /// The contact zone's condensed data ([`Delassus::condense_zone`]).
     zone: Option<Zone>,
-    /// The path was chosen by [`DelassusKind::Auto`] or [`DelassusKind::Flexibility`]
-    /// (the zone may then switch a per-active-column choice to the dense one).
-    auto: bool,
-    /// [`DelassusKind::Flexibility`]: a condensed zone keeps `F`, `F_E` only.
-    flexibility_only: bool,
+    /// The user's choice of storage (with [`DelassusKind::Auto`] or
+    /// [`DelassusKind::Flexibility`] the zone may switch a per-active-column choice to
+    /// the dense one).
+    kind: DelassusKind,
 }
 
 /// What the contact zone keeps ([`Delassus::condense_zone`]).
@@ -463,8 +475,7 @@ impl Delassus {
             blk2: vec![0.0; if with_d { nb } else { 0 }],
             ng_ready: false,
             zone: None,
-            auto: matches!(kind, DelassusKind::Auto | DelassusKind::Flexibility),
-            flexibility_only: kind == DelassusKind::Flexibility,
+            kind,
         })
     }
 
@@ -475,23 +486,29 @@ impl Delassus {
     /// (also when [`DelassusKind::Auto`] had chosen the per-active-column path for a
     /// nonlinear `G`: its reason, `m` solves per re-linearization, is gone) when the
     /// `m × m` operators and the zone's blocks fit the dense budget: `Y`, `E` and `F`,
-    /// `F_E` ([`ZoneStorage::Full`]), or `F`, `F_E` alone ([`ZoneStorage::Flexibility`]);
-    /// returns the storage taken, `None` when the zone was not condensed. `fixed` flags the
-    /// rows whose column never changes (a linear contact block beside nonlinear ones):
-    /// their entries are formed once.
+    /// `F_E` ([`ZoneStorage::Full`]), or `F`, `F_E` alone ([`ZoneStorage::Flexibility`]),
+    /// the flexibilities first under [`DelassusKind::Flexibility`], and under
+    /// [`DelassusKind::Auto`] when `zone_iterates` (the caller iterates on the zone alone,
+    /// [`Delassus::zone_corrections`]), the blocks first otherwise; returns the storage taken, `None`
+    /// when the zone was not condensed. `fixed` flags the rows whose column never changes
+    /// (a linear contact block beside nonlinear ones): their entries are formed once.
     pub fn condense_zone(
         &mut self,
         zone: &[usize],
         fixed: Vec<bool>,
         stiffness: &SparseMatrix,
+        zone_iterates: bool,
     ) -> Option<ZoneStorage> {
         let (n, z, m) = (self.n, zone.len(), self.m);
         let per = if self.with_d && self.need_wd { 2 } else { 1 };
-        if (!self.dense && !self.auto) || self.g_constant || z == 0 || zone.iter().any(|&d| d >= n)
+        if (!self.dense && self.kind == DelassusKind::Columns)
+            || self.g_constant
+            || z == 0
+            || zone.iter().any(|&d| d >= n)
         {
             return None;
         }
-        let storage = zone_storage(n, z, m, per, self.flexibility_only)?;
+        let storage = zone_storage(n, z, m, per, zone_preference(self.kind, zone_iterates))?;
         if !self.dense {
             // the per-active-column choice becomes the dense one: m × m operators
             self.dense = true;
@@ -701,6 +718,7 @@ impl Delassus {
         g_constant: bool,
         zone: Option<usize>,
         limit: usize,
+        zone_iterates: bool,
     ) -> DelassusPlan {
         let per = if with_d { 2 } else { 1 };
         let dense = choose_dense(kind, n, m, per, g_constant);
@@ -715,7 +733,7 @@ impl Delassus {
                     && z > 0
             })
             .and_then(|z| {
-                zone_storage(n, z, m, per, kind == DelassusKind::Flexibility).map(|s| (z, s))
+                zone_storage(n, z, m, per, zone_preference(kind, zone_iterates)).map(|s| (z, s))
             });
         let (n8, m8) = (n as u64 * 8, m as u64 * 8);
         let per = per as u64;
@@ -1267,23 +1285,40 @@ fn flexibility_scratch_bytes(n: usize, z: usize, per: usize) -> usize {
     n.saturating_mul(ZONE_CHUNK.min(z)).saturating_mul(8 * per)
 }
 
-/// What [`Delassus::condense_zone`] keeps of a zone of `z` dofs: the `n × z` blocks while
-/// they fit the dense budget (and the user did not ask for the flexibilities alone), the
-/// flexibilities alone while those do, else nothing.
+/// The zone storage tried first: the flexibilities where the user asks for them, and
+/// under [`DelassusKind::Auto`] where the integrator iterates on the zone alone (the
+/// θ-method core; Schatzman–Paoli's loop corrects `q` at every iteration and keeps the
+/// columns). Measured with `zone_iterates`, flexibilities against `Y`, `E` (medians of
+/// two runs, `--no-fields --no-plots`): `hex_bars.toml` 300 steps 6.7 against 9.2 ms per
+/// step; two 12³ cubes 33 against 51 ms and 150 against 322 MiB; two 16³ cubes 116
+/// against 178 ms and 387 MiB against 1.1 GiB; `sliding_block_on_slab.toml` 3.9 ms both;
+/// `block_stack.toml` 12.8 against 12.2 ms.
+fn zone_preference(kind: DelassusKind, zone_iterates: bool) -> ZoneStorage {
+    match kind {
+        DelassusKind::Flexibility => ZoneStorage::Flexibility,
+        DelassusKind::Auto if zone_iterates => ZoneStorage::Flexibility,
+        _ => ZoneStorage::Full,
+    }
+}
+
+/// What [`Delassus::condense_zone`] keeps of a zone of `z` dofs: the `preferred` storage
+/// if it fits the dense budget, else the other one if it does, else nothing.
 fn zone_storage(
     n: usize,
     z: usize,
     m: usize,
     per: usize,
-    flexibility_only: bool,
+    preferred: ZoneStorage,
 ) -> Option<ZoneStorage> {
-    if !flexibility_only && zone_bytes(n, z, m, per) <= AUTO_DENSE_MAX_BYTES {
-        Some(ZoneStorage::Full)
-    } else if flexibility_bytes(n, z, m, per) <= AUTO_DENSE_MAX_BYTES {
-        Some(ZoneStorage::Flexibility)
-    } else {
-        None
-    }
+    let fits = |s: ZoneStorage| match s {
+        ZoneStorage::Full => zone_bytes(n, z, m, per) <= AUTO_DENSE_MAX_BYTES,
+        ZoneStorage::Flexibility => flexibility_bytes(n, z, m, per) <= AUTO_DENSE_MAX_BYTES,
+    };
+    let other = match preferred {
+        ZoneStorage::Full => ZoneStorage::Flexibility,
+        ZoneStorage::Flexibility => ZoneStorage::Full,
+    };
+    [preferred, other].into_iter().find(|&s| fits(s))
 }
 
 /// `f[i + j z] = x[j n + zone[i]]`: the zone rows of the `n`-columns of `x` (as many as
@@ -1393,6 +1428,64 @@ fn axpy(s: f64, x: &[f64], y: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The zone storage decisions at the sizes the README quotes: the two 8³ cubes keep
+    /// `Y`, `E`; the two 20³ cubes (54 243 dofs, 2 646 zone dofs, 441 rows, with `W_D`)
+    /// would need 2.3 GB of `n × z` blocks and keep the flexibilities (112 MB); the two
+    /// 40³ cubes (408 483 dofs, 10 086 zone dofs, 1 681 rows) keep the flexibilities
+    /// (1.9 GB, under the 2 GiB budget, plus 0.8 GB of set-up scratch in the plan); a
+    /// face of 100 × 100 nodes on both sides (60 000 zone dofs: 58 GB) is not condensed.
+    #[test]
+    fn zone_storage_follows_the_budget() {
+        assert_eq!(
+            zone_storage(4_131, 486, 81, 2, ZoneStorage::Full),
+            Some(ZoneStorage::Full)
+        );
+        assert_eq!(
+            zone_storage(4_131, 486, 81, 2, ZoneStorage::Flexibility),
+            Some(ZoneStorage::Flexibility)
+        );
+        assert!(zone_bytes(54_243, 2_646, 441, 2) > AUTO_DENSE_MAX_BYTES);
+        assert_eq!(
+            zone_storage(54_243, 2_646, 441, 2, ZoneStorage::Full),
+            Some(ZoneStorage::Flexibility)
+        );
+        let b = flexibility_bytes(54_243, 2_646, 441, 2);
+        assert!((110 << 20..130 << 20).contains(&b), "{b}");
+        assert_eq!(
+            zone_storage(408_483, 10_086, 1_681, 2, ZoneStorage::Full),
+            Some(ZoneStorage::Flexibility)
+        );
+        for s in [ZoneStorage::Full, ZoneStorage::Flexibility] {
+            assert_eq!(zone_storage(1_000_000, 60_000, 10_000, 2, s), None);
+        }
+        assert_eq!(
+            zone_preference(DelassusKind::Auto, true),
+            ZoneStorage::Flexibility
+        );
+        assert_eq!(
+            zone_preference(DelassusKind::Auto, false),
+            ZoneStorage::Full
+        );
+        assert_eq!(
+            zone_preference(DelassusKind::Dense, true),
+            ZoneStorage::Full
+        );
+        let plan = Delassus::plan(
+            408_483,
+            1_681,
+            (DelassusKind::Auto, 0),
+            true,
+            false,
+            Some(10_086),
+            4096,
+            true,
+        );
+        let expect = flexibility_bytes(408_483, 10_086, 1_681, 2)
+            + flexibility_scratch_bytes(408_483, 10_086, 2);
+        assert_eq!(plan.bytes, expect as u64);
+        assert!(plan.describe.contains("not kept"), "{}", plan.describe);
+    }
 
     /// The tiled product equals the column-by-column `spmv` bit for bit (same order
     /// of additions per entry), for a column count that is not a multiple of the tile.

@@ -514,8 +514,8 @@ fn slider_crank_steps_do_not_allocate() {
 }
 
 /// Contacts between bodies (issue 18): the coarse hex8 bars of `meshes/hex_bars.toml`
-/// (node-to-surface, the zone-condensed dense path with and without the `n × z` blocks,
-/// and the per-column path) and the
+/// (node-to-surface, the zone-condensed path with its flexibilities (`auto`) and with
+/// the `n × z` blocks (`dense`), and the per-column path) and the
 /// two rods (a constant `G`), under every scheme. The candidate lists are brought up to
 /// date by `prepare()` before each step (it may rebuild the tree and allocate); the step
 /// itself does not allocate.
@@ -527,7 +527,7 @@ fn steps_of_contacts_between_bodies_do_not_allocate() {
         for (file, delassus) in [
             ("hex_bars.toml", "auto"),
             ("hex_bars.toml", "columns"),
-            ("hex_bars.toml", "flexibility"),
+            ("hex_bars.toml", "dense"),
             ("two_bars.toml", "auto"),
         ] {
             let set: Vec<String> = [

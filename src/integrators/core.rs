@@ -947,7 +947,8 @@ impl ThetaCore {
             if !g_constant && core.contacts.condensed() {
                 let zone = core.contacts.zone();
                 let fixed = fixed_rows(core.contacts.as_ref());
-                core.del.condense_zone(&zone, fixed, &core.sys.stiffness);
+                core.del
+                    .condense_zone(&zone, fixed, &core.sys.stiffness, true);
                 if let Some(dofs) = core.del.flexibility_zone() {
                     let z = dofs.len();
                     core.zone = dofs.to_vec();

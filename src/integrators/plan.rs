@@ -126,6 +126,7 @@ pub fn plan(
         g_constant && linear,
         zone,
         ws_cap,
+        !sp,
     );
     // the core's threshold (Schatzman–Paoli and nonlinear structures keep the cap); its
     // columns are stored up to it
@@ -143,6 +144,7 @@ pub fn plan(
             false,
             zone,
             mf_from,
+            !sp,
         );
     }
     let mut ledger = MemoryEstimate::default();

@@ -141,7 +141,7 @@ impl SchatzmanPaoli {
         if !sp.g_constant && sp.contacts.condensed() {
             let zone = sp.contacts.zone();
             let fixed = super::core::fixed_rows(sp.contacts.as_ref());
-            sp.del.condense_zone(&zone, fixed, &sp.sys.stiffness);
+            sp.del.condense_zone(&zone, fixed, &sp.sys.stiffness, false);
         }
         sp.del.refresh(&sp.sys.stiffness);
         sp.del
