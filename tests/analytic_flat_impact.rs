@@ -87,6 +87,13 @@ fn run(text: &str) -> Outcome {
     o
 }
 
+/// `max |a_i − b_i|` over two force histories.
+fn largest_difference(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+}
+
 /// The mass-weighted mean vertical velocity.
 fn mean_vz(integ: &dyn Integrator) -> f64 {
     let sys = integ.system();
@@ -162,11 +169,7 @@ fn flat_impact_follows_the_bar_on_the_matrix_free_path() {
         );
         let dense = run(&scene(kind.name(), h, t_end, 0));
         assert_eq!(dense.global_solves, 0);
-        let diff = free
-            .force
-            .iter()
-            .zip(&dense.force)
-            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        let diff = largest_difference(&free.force, &dense.force);
         assert!(
             diff <= 1e-7 * f_ref,
             "{}: matrix-free and dense forces differ by {diff:e} N",
@@ -270,11 +273,7 @@ target = {{ body = "lower", surface = "z1" }}
     assert_eq!(zone.global_solves, 0);
     let peak = zone.force.iter().fold(0.0f64, |m, f| m.max(*f));
     assert!(peak > 0.0);
-    let diff = free
-        .force
-        .iter()
-        .zip(&zone.force)
-        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    let diff = largest_difference(&free.force, &zone.force);
     assert!(
         diff <= 1e-7 * peak,
         "matrix-free and zone forces differ by {diff:e} N (peak {peak} N)"
@@ -291,11 +290,7 @@ target = {{ body = "lower", surface = "z1" }}
     // Newton loop and the exact solvers carry (1e-9 of the peak; measured below 1e-12)
     let flex = run(&text("flexibility"));
     assert_eq!(flex.global_solves, 0);
-    let diff = flex
-        .force
-        .iter()
-        .zip(&zone.force)
-        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    let diff = largest_difference(&flex.force, &zone.force);
     assert!(
         diff <= 1e-9 * peak,
         "flexibility and full zone forces differ by {diff:e} N (peak {peak} N)"
