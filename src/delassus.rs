@@ -36,12 +36,15 @@
 //!   column. `Y = Â⁻¹S`, `E = Â⁻¹K N S` (`n × z`) and the zone flexibilities `F = SᵀY`,
 //!   `F_E = SᵀE` (`z × z`) are formed once (`z` or `2z` solves); a re-linearization is
 //!   then `W = BᵀFB`, `W_D = BᵀF_E B` without a solve, and a correction `Â⁻¹G x` is
-//!   `Y (B x)` over the zone columns under the rows that carry an impulse. When the
-//!   `n × z` blocks do not fit the dense budget but `F`, `F_E` and the `m × m` operators
-//!   do (two 20³ hex8 cubes: `Y`, `E` would take 2.3 GB, `F`, `F_E` take 112 MB), only
-//!   the flexibilities are kept ([`ZoneStorage::Flexibility`]): they are formed
-//!   [`ZONE_CHUNK`] columns at a time (`n × ZONE_CHUNK` scratch, threaded solves), and a
-//!   correction is one sparse solve of `G x`, as on the per-active-column path.
+//!   `Y (B x)` over the zone columns under the rows that carry an impulse
+//!   ([`ZoneStorage::Full`]). The θ-method schemes, which iterate on the zone alone
+//!   ([`Delassus::zone_corrections`]), keep only the flexibilities by default
+//!   ([`ZoneStorage::Flexibility`]; faster on every between-body scene measured but one,
+//!   and smaller: two 20³ hex8 cubes' `Y`, `E` would take 2.3 GB, their `F`, `F_E`
+//!   112 MB): they are formed [`ZONE_CHUNK`] columns at a time (`n × ZONE_CHUNK`
+//!   scratch, threaded solves), and an `n`-space correction is one sparse solve of
+//!   `G x`, as on the per-active-column path. Each storage falls back on the other where
+//!   it does not fit the dense budget.
 //!
 //! * **matrix-free** (any path, [`Delassus::product`]): `W x = Gᵀ Â⁻¹ (G x)` through the
 //!   factor, one sparse solve per product, no column stored. [`Delassus::mul_add`] falls
@@ -247,8 +250,8 @@ pub enum ZoneStorage {
     /// `Y = Â⁻¹S`, `E = Â⁻¹K N S` (`n × z`) and `F`, `F_E` (`z × z`): corrections are
     /// combinations of the columns of `Y` and `E`.
     Full,
-    /// `F`, `F_E` only: corrections by one sparse solve of `G x` (blocks `n × z` past the
-    /// dense budget).
+    /// `F`, `F_E` only: `n`-space corrections by one sparse solve of `G x`, zone rows by
+    /// [`Delassus::zone_corrections`].
     Flexibility,
 }
 
