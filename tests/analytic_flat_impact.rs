@@ -241,32 +241,7 @@ fn sliding_block_decelerates_at_mu_g_on_the_matrix_free_path() {
 /// one to 1e-12 relative; a missing row or a stale column shows at 1e-2).
 #[test]
 fn two_blocks_on_the_matrix_free_path_match_the_zone_path() {
-    let text = |delassus: &str| {
-        format!(
-            r#"
-[time]
-dt = 1e-5
-t_end = 2e-4
-[scheme]
-kind = "combined-projection"
-delassus = "{delassus}"
-[[bodies]]
-name = "lower"
-mesh = {{ generator = "box", cell = "hex8", cells = [8, 8, 8], size = [0.1, 0.1, 0.1] }}
-material = {{ young = 1e7, poisson = 0.3, density = 1000.0 }}
-fixed = ["z0"]
-[[bodies]]
-name = "upper"
-mesh = {{ generator = "box", cell = "hex8", cells = [8, 8, 8], size = [0.1, 0.1, 0.1], origin = [0.0, 0.0, 0.1] }}
-material = {{ young = 1e7, poisson = 0.3, density = 1000.0 }}
-velocity = [0.0, 0.0, -1.0]
-[[contacts]]
-body = "upper"
-nodes = "z0"
-target = {{ body = "lower", surface = "z1" }}
-"#
-        )
-    };
+    let text = |delassus: &str| common::blocks::two_cubes(2e-4, delassus);
     let free = run(&text("columns"));
     let zone = run(&text("dense"));
     assert!(free.global_solves > 0, "the matrix-free path did not run");

@@ -6,35 +6,10 @@
 //! closing: every impulse and every coordinate of `q` bitwise equal. Any dependence of a
 //! column on its thread or on its neighbours in a batch shows in the last bits.
 
+mod common;
+
 use signorini::integrators::Integrator;
 use signorini::scene::file::Scene;
-
-fn scene(delassus: &str) -> String {
-    format!(
-        r#"
-[time]
-dt = 1e-5
-t_end = 4e-4
-[scheme]
-kind = "combined-projection"
-delassus = "{delassus}"
-[[bodies]]
-name = "lower"
-mesh = {{ generator = "box", cell = "hex8", cells = [8, 8, 8], size = [0.1, 0.1, 0.1] }}
-material = {{ young = 1e7, poisson = 0.3, density = 1000.0 }}
-fixed = ["z0"]
-[[bodies]]
-name = "upper"
-mesh = {{ generator = "box", cell = "hex8", cells = [8, 8, 8], size = [0.1, 0.1, 0.1], origin = [0.0, 0.0, 0.1] }}
-material = {{ young = 1e7, poisson = 0.3, density = 1000.0 }}
-velocity = [0.0, 0.0, -1.0]
-[[contacts]]
-body = "upper"
-nodes = "z0"
-target = {{ body = "lower", surface = "z1" }}
-"#
-    )
-}
 
 /// The impulses of every step and the final `q`, built and stepped on `threads` threads.
 fn history(delassus: &str, threads: usize) -> (Vec<f64>, Vec<f64>, String) {
@@ -43,7 +18,7 @@ fn history(delassus: &str, threads: usize) -> (Vec<f64>, Vec<f64>, String) {
         .build()
         .unwrap();
     pool.install(|| {
-        let scene = Scene::from_toml(&scene(delassus)).unwrap();
+        let scene = Scene::from_toml(&common::blocks::two_cubes(4e-4, delassus)).unwrap();
         let (model, _) = scene.build().unwrap();
         let h = scene.time.dt;
         let mut integ: Box<dyn Integrator> = model.into_integrator(&scene.scheme, h).unwrap();

@@ -1,4 +1,5 @@
-//! The hex8 block on a rigid floor with friction, shared by the friction tests.
+//! The hex8 block on a rigid floor with friction, shared by the friction tests, and the
+//! two hex8 cubes meeting over a face, shared by the contact-zone tests.
 
 use signorini::integrators::Integrator;
 
@@ -124,4 +125,35 @@ pub fn check_pushed(integ: &mut dyn Integrator, label: &str, t_end: f64) {
         (t / t_star - 1.0).abs() < 0.01,
         "{label}: slides from {t} s, analytic {t_star} s"
     );
+}
+
+/// Two 8³-cell hex8 cubes (0.1 m, E = 1e7 Pa, ν = 0.3, ρ = 1000 kg/m³) meeting over a
+/// full face, `benches/getfem_two_blocks.py`'s problem at N = 8: the lower one held on its
+/// base, the upper one launched down at 1 m/s, 81 node-to-surface contacts; Algorithm 2
+/// at h = 1e-5 s until `t_end`, Delassus storage `delassus`.
+pub fn two_cubes(t_end: f64, delassus: &str) -> String {
+    format!(
+        r#"
+[time]
+dt = 1e-5
+t_end = {t_end:e}
+[scheme]
+kind = "combined-projection"
+delassus = "{delassus}"
+[[bodies]]
+name = "lower"
+mesh = {{ generator = "box", cell = "hex8", cells = [8, 8, 8], size = [0.1, 0.1, 0.1] }}
+material = {{ young = 1e7, poisson = 0.3, density = 1000.0 }}
+fixed = ["z0"]
+[[bodies]]
+name = "upper"
+mesh = {{ generator = "box", cell = "hex8", cells = [8, 8, 8], size = [0.1, 0.1, 0.1], origin = [0.0, 0.0, 0.1] }}
+material = {{ young = 1e7, poisson = 0.3, density = 1000.0 }}
+velocity = [0.0, 0.0, -1.0]
+[[contacts]]
+body = "upper"
+nodes = "z0"
+target = {{ body = "lower", surface = "z1" }}
+"#
+    )
 }
