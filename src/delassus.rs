@@ -535,7 +535,6 @@ impl Delassus {
         }
         let mut f = vec![0.0; z * z];
         let mut fe = vec![0.0; if per == 2 { z * z } else { 0 }];
-        let (mut y, mut e) = (Vec::new(), Vec::new());
         // the columns of the zone, a chunk of `cols` at a time (all at once when the
         // n × z blocks are kept): Y = Â⁻¹S, E = Â⁻¹K N S, and their zone rows
         let cols = match storage {
@@ -577,9 +576,11 @@ impl Delassus {
                 restrict(zone, eb, n, &mut fe[start * z..(start + w) * z]);
             }
         }
-        if storage == ZoneStorage::Full {
-            (y, e) = (yc, ec);
-        }
+        // the n × z blocks kept, or the chunks' scratch freed
+        let (y, e) = match storage {
+            ZoneStorage::Full => (yc, ec),
+            ZoneStorage::Flexibility => (Vec::new(), Vec::new()),
+        };
         // the n × m blocks are never formed on this path
         self.cg = Vec::new();
         self.d = Vec::new();

@@ -249,29 +249,8 @@ fn matrix_free_solves_do_not_allocate() {
 #[test]
 fn matrix_free_solves_between_bodies_do_not_allocate() {
     use signorini::scene::file::Scene;
-    let text = r#"
-[time]
-dt = 1e-5
-t_end = 1e-4
-[scheme]
-kind = "combined-projection"
-delassus = "columns"
-[[bodies]]
-name = "lower"
-mesh = { generator = "box", cell = "hex8", cells = [8, 8, 8], size = [0.1, 0.1, 0.1] }
-material = { young = 1e7, poisson = 0.3, density = 1000.0 }
-fixed = ["z0"]
-[[bodies]]
-name = "upper"
-mesh = { generator = "box", cell = "hex8", cells = [8, 8, 8], size = [0.1, 0.1, 0.1], origin = [0.0, 0.0, 0.1] }
-material = { young = 1e7, poisson = 0.3, density = 1000.0 }
-velocity = [0.0, 0.0, -1.0]
-[[contacts]]
-body = "upper"
-nodes = "z0"
-target = { body = "lower", surface = "z1" }
-"#;
-    let scene = Scene::from_toml(text).unwrap();
+    let text = common::blocks::two_cubes(1e-4, "columns");
+    let scene = Scene::from_toml(&text).unwrap();
     let (model, _) = scene.build().unwrap();
     let mut integ = model.into_integrator(&scene.scheme, 1e-5).unwrap();
     integ.prepare().unwrap();
