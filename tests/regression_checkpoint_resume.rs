@@ -147,6 +147,45 @@ fn assert_same_hdf5(a: &Path, b: &Path) {
     assert_eq!(steps(&fa), steps(&fb), "NSteps");
 }
 
+/// The `.pvd` of a killed run (issue 19 §3: it is no longer rewritten after every
+/// frame, only after the first, at checkpoints, every few seconds and at the end) is a
+/// whole collection document that lists at least the frames of the last checkpoint,
+/// each of them a complete `.vtu` on disk.
+fn assert_killed_collection_readable(dir: &Path) {
+    let pvd = dir.join("fields.pvd");
+    if !pvd.exists() {
+        return;
+    }
+    let text = std::fs::read_to_string(&pvd).unwrap();
+    assert!(
+        text.starts_with("<?xml") && text.trim_end().ends_with("</VTKFile>"),
+        "{}: not a whole document:\n{text}",
+        pvd.display()
+    );
+    let files: Vec<&str> = text
+        .lines()
+        .filter_map(|l| l.split("file=\"").nth(1))
+        .map(|r| r.split('"').next().unwrap())
+        .collect();
+    let ckpt: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("checkpoint.json")).unwrap())
+            .unwrap();
+    let frames = ckpt["run"]["frames"].as_u64().unwrap() as usize;
+    assert!(
+        files.len() >= frames,
+        "{} lists {} frames, the checkpoint {frames}",
+        pvd.display(),
+        files.len()
+    );
+    for f in files {
+        let vtu = std::fs::read_to_string(dir.join(f)).unwrap();
+        assert!(
+            vtu.trim_end().ends_with("</VTKFile>"),
+            "{f} is not complete"
+        );
+    }
+}
+
 /// Kills `args` after each of `kills` steps, resumes, and compares with one
 /// uninterrupted run.
 fn check_resume(name: &str, args: &[&str], kills: &[usize]) {
@@ -168,6 +207,7 @@ fn check_resume(name: &str, args: &[&str], kills: &[usize]) {
             dir.join("checkpoint.json").exists(),
             "{name}: no checkpoint by step {k}"
         );
+        assert_killed_collection_readable(&dir);
         let o = resume(&dir);
         assert!(
             o.status.success(),

@@ -14,9 +14,14 @@
 //! attributes they do not know); a `String` field-data array would be the VTK way, but
 //! meshio 5.3.5 refuses to open a file holding one (tested), so the units are not there.
 //!
-//! Files: each `.vtu` is written as `NAME.part` and renamed when complete, and the
-//! `.pvd` is rewritten the same way after every frame, so a run killed at any point
-//! leaves a collection that lists exactly the completed frames.
+//! Files: each `.vtu` is written as `NAME.part` and renamed when complete. The `.pvd`
+//! is written the same way after the first frame, at every checkpoint
+//! ([`FrameStream::sync`]), at the end of the run, and otherwise at most every
+//! [`COLLECTION_SECONDS`] of writing: rewriting it after every frame made the run write
+//! O(F²) bytes for F frames (issue 19 §3). A run killed at any point leaves a readable
+//! collection that lists completed frames only: all of them up to its last checkpoint,
+//! at most [`COLLECTION_SECONDS`] behind otherwise. Arrays that do not change between
+//! frames (points, cells, `node_id`) are encoded once.
 //!
 //! The writer is ours rather than vtkio's: vtkio builds a whole owned model of the grid
 //! for every file (a copy of the mesh per frame) and has no `.pvd`, while this writer
@@ -187,6 +192,10 @@ pub enum Encoding {
     Ascii,
 }
 
+/// Longest time between two rewrites of the `.pvd` while frames are written (s): a
+/// run killed without a checkpoint lists the frames of all but its last seconds.
+pub const COLLECTION_SECONDS: f64 = 2.0;
+
 /// Streams frames as `.vtu` files and keeps the `.pvd` collection up to date.
 pub struct FrameWriter {
     dir: PathBuf,
@@ -212,6 +221,11 @@ pub struct FrameWriter {
     xml: String,
     pvd: String,
     static_xml: String,
+    /// The encoded `node_id` point array (it does not change between frames).
+    static_point_xml: String,
+    /// Frames the `.pvd` on disk lists, and when it was written.
+    listed: usize,
+    listed_at: Option<std::time::Instant>,
     raw: Vec<u8>,
     zip: Vec<u8>,
     deflate: flate2::Compress,
@@ -286,6 +300,7 @@ impl FrameWriter {
             }
             w.frames.push((t, name));
         }
+        w.listed = w.frames.len();
         Ok(w)
     }
 
@@ -343,9 +358,16 @@ impl FrameWriter {
             #[cfg(feature = "hdf5")]
             h5: None,
             static_xml: String::new(),
+            static_point_xml: String::new(),
+            listed: 0,
+            listed_at: None,
             geom,
         };
         w.static_xml = w.encode_static();
+        let ids = node_ids(&w.geom);
+        let mut x = String::new();
+        w.array_i64(&mut x, "node_id", 1, &ids);
+        w.static_point_xml = x;
         Ok(w)
     }
 
@@ -404,17 +426,30 @@ impl FrameWriter {
     /// and writes them as the next frame, then rewrites the `.pvd`.
     ///
     /// Allocates a [`Snapshot`]; a run streams through [`FrameStream`] instead, which
-    /// reuses its snapshots and writes on its own thread.
+    /// reuses its snapshots, writes on its own thread and rewrites the `.pvd` only
+    /// where the module doc says.
     pub fn write(&mut self, state: &State, jac: &ContactJacobian, h: f64) -> Result<(), Error> {
         let mut snap = Snapshot::with_statuses(state.q.len(), state.gap.len(), state.status.len());
         snap.copy_from(state, jac, h);
-        self.write_snapshot(&snap)
+        self.write_snapshot(&snap)?;
+        self.write_collection()
     }
 
-    /// Writes `snap` as the next frame, then rewrites the `.pvd`.
+    /// Writes `snap` as the next frame; the `.pvd` is rewritten after the first frame
+    /// and when the last one written is [`COLLECTION_SECONDS`] old
+    /// ([`FrameWriter::write_collection`] writes it now).
     pub fn write_snapshot(&mut self, snap: &Snapshot) -> Result<(), Error> {
         let t0 = std::time::Instant::now();
-        let r = self.write_snapshot_timed(snap);
+        let r = self.write_snapshot_timed(snap).and_then(|()| {
+            let stale = self
+                .listed_at
+                .is_none_or(|t| t.elapsed().as_secs_f64() >= COLLECTION_SECONDS);
+            if stale {
+                self.write_collection_untimed()
+            } else {
+                Ok(())
+            }
+        });
         self.busy += t0.elapsed().as_secs_f64();
         r
     }
@@ -422,6 +457,45 @@ impl FrameWriter {
     /// Seconds spent writing frames so far.
     pub fn busy_seconds(&self) -> f64 {
         self.busy
+    }
+
+    /// Frames listed by the `.pvd` on disk.
+    pub fn listed(&self) -> usize {
+        self.listed
+    }
+
+    /// Rewrites the `.pvd` with every frame written so far (atomically), unless it
+    /// already lists them all.
+    pub fn write_collection(&mut self) -> Result<(), Error> {
+        let t0 = std::time::Instant::now();
+        let r = self.write_collection_untimed();
+        self.busy += t0.elapsed().as_secs_f64();
+        r
+    }
+
+    fn write_collection_untimed(&mut self) -> Result<(), Error> {
+        if self.listed == self.frames.len() && self.listed_at.is_some() {
+            return Ok(());
+        }
+        let mut pvd = std::mem::take(&mut self.pvd);
+        pvd.clear();
+        pvd.push_str(
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" \
+             byte_order=\"LittleEndian\">\n  <Collection>\n",
+        );
+        for (t, f) in &self.frames {
+            let _ = writeln!(
+                pvd,
+                "    <DataSet timestep=\"{t:e}\" group=\"\" part=\"0\" file=\"{f}\"/>"
+            );
+        }
+        pvd.push_str("  </Collection>\n</VTKFile>\n");
+        let r = write_renamed(&self.pvd_path(), pvd.as_bytes());
+        self.pvd = pvd;
+        r?;
+        self.listed = self.frames.len();
+        self.listed_at = Some(std::time::Instant::now());
+        Ok(())
     }
 
     fn write_snapshot_timed(&mut self, snap: &Snapshot) -> Result<(), Error> {
@@ -440,22 +514,7 @@ impl FrameWriter {
         self.encode(snap.time, snap.step);
         write_renamed(&path, self.xml.as_bytes())?;
         self.frames.push((snap.time, name));
-        let mut pvd = std::mem::take(&mut self.pvd);
-        pvd.clear();
-        pvd.push_str(
-            "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" \
-             byte_order=\"LittleEndian\">\n  <Collection>\n",
-        );
-        for (t, f) in &self.frames {
-            let _ = writeln!(
-                pvd,
-                "    <DataSet timestep=\"{t:e}\" group=\"\" part=\"0\" file=\"{f}\"/>"
-            );
-        }
-        pvd.push_str("  </Collection>\n</VTKFile>\n");
-        let r = write_renamed(&self.pvd_path(), pvd.as_bytes());
-        self.pvd = pvd;
-        r
+        Ok(())
     }
 
     /// The cell arrays: `strain` and `stress` (small strain, Hooke) when every body is
@@ -600,8 +659,7 @@ impl FrameWriter {
             self.array_f64(&mut x, "contact_status", 1, &status);
             self.status = status;
         }
-        let ids = node_ids(&self.geom);
-        self.array_i64(&mut x, "node_id", 1, &ids);
+        x.push_str(&self.static_point_xml);
         let [(strain_name, _), (stress_name, _), _] = self.cell_arrays();
         let _ = write!(
             x,
@@ -851,13 +909,16 @@ impl Snapshot {
 /// flight the run waits (the time is reported), so memory stays bounded and frames are
 /// written in order. A write error stops the thread; the run sees it at its next
 /// frame or at [`FrameStream::finish`]. Frames already written stay valid: each
-/// `.vtu` and the `.pvd` are still renamed into place one by one.
+/// `.vtu` and the `.pvd` are still renamed into place one by one, and
+/// [`FrameStream::sync`] leaves a `.pvd` listing every frame pushed.
 ///
 /// std's channels and thread suffice here (a pool of two or three buffers and one
 /// consumer); rayon's pool is for the assembly and the linear algebra.
 pub struct FrameStream {
-    work: Option<std::sync::mpsc::SyncSender<Snapshot>>,
+    work: Option<std::sync::mpsc::SyncSender<Job>>,
     free: std::sync::mpsc::Receiver<Snapshot>,
+    /// The writer's answer to [`Job::Collection`].
+    listed: std::sync::mpsc::Receiver<()>,
     thread: Option<std::thread::JoinHandle<Result<FrameWriter, Error>>>,
     waited: f64,
     /// Snapshots taken back by [`FrameStream::sync`], used before the pool's.
@@ -881,8 +942,10 @@ impl FrameStream {
         pool: usize,
     ) -> Self {
         let pool = pool.max(1);
-        let (work_tx, work_rx) = std::sync::mpsc::sync_channel::<Snapshot>(pool);
+        // a collection request follows the frames, so one more place than snapshots
+        let (work_tx, work_rx) = std::sync::mpsc::sync_channel::<Job>(pool + 1);
         let (free_tx, free_rx) = std::sync::mpsc::sync_channel::<Snapshot>(pool);
+        let (listed_tx, listed_rx) = std::sync::mpsc::sync_channel::<()>(1);
         for _ in 0..pool {
             free_tx
                 .send(Snapshot::with_statuses(n, m, statuses))
@@ -891,17 +954,27 @@ impl FrameStream {
         let thread = std::thread::Builder::new()
             .name("signorini-frames".into())
             .spawn(move || {
-                for snap in work_rx {
-                    writer.write_snapshot(&snap)?;
+                for job in work_rx {
                     // the run may have stopped listening (it failed); that is its report
-                    let _ = free_tx.send(snap);
+                    match job {
+                        Job::Frame(snap) => {
+                            writer.write_snapshot(&snap)?;
+                            let _ = free_tx.send(snap);
+                        }
+                        Job::Collection => {
+                            writer.write_collection()?;
+                            let _ = listed_tx.send(());
+                        }
+                    }
                 }
+                writer.write_collection()?;
                 Ok(writer)
             })
             .expect("spawning the frame writer thread");
         FrameStream {
             work: Some(work_tx),
             free: free_rx,
+            listed: listed_rx,
             thread: Some(thread),
             waited: 0.0,
             spare: Vec::with_capacity(pool),
@@ -922,12 +995,16 @@ impl FrameStream {
         self.waited += t0.elapsed().as_secs_f64();
         snap.copy_from(state, jac, h);
         // the snapshot comes back in a send error only when the writer has stopped
-        let sent = self.work.as_ref().is_some_and(|w| w.send(snap).is_ok());
+        let sent = self
+            .work
+            .as_ref()
+            .is_some_and(|w| w.send(Job::Frame(snap)).is_ok());
         if sent { Ok(()) } else { Err(self.failure()) }
     }
 
-    /// Waits until every queued frame is on disk (a checkpoint's barrier): takes every
-    /// snapshot of the pool back, then keeps them for the next pushes.
+    /// Waits until every queued frame is on disk and listed by the `.pvd` (a
+    /// checkpoint's barrier): takes every snapshot of the pool back, keeps them for the
+    /// next pushes, and has the writer rewrite the `.pvd`.
     pub fn sync(&mut self) -> Result<(), Error> {
         while self.spare.len() < self.pool {
             match self.free.recv() {
@@ -935,7 +1012,15 @@ impl FrameStream {
                 Err(_) => return Err(self.failure()),
             }
         }
-        Ok(())
+        let asked = self
+            .work
+            .as_ref()
+            .is_some_and(|w| w.send(Job::Collection).is_ok());
+        if asked && self.listed.recv().is_ok() {
+            Ok(())
+        } else {
+            Err(self.failure())
+        }
     }
 
     /// Seconds the run spent waiting for a free snapshot.
@@ -971,6 +1056,14 @@ impl FrameStream {
             },
         }
     }
+}
+
+/// What the run hands the writer thread.
+enum Job {
+    /// A frame to write.
+    Frame(Snapshot),
+    /// Rewrite the `.pvd` now (and answer).
+    Collection,
 }
 
 impl Drop for FrameStream {

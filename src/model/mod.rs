@@ -21,7 +21,7 @@ pub mod rod;
 pub mod solid;
 pub mod system;
 
-use crate::linalg::{SparseMatrix, quadratic_form};
+use crate::linalg::{QuadraticForm, SparseMatrix, quadratic_form};
 
 /// How the element mass matrices are formed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -58,6 +58,17 @@ impl MassKind {
             MassKind::Redistributed => "redistributed",
         }
     }
+}
+
+/// The layouts of a system's `M` and `K` read once ([`LinearSystem::energy_forms`]), so
+/// that the energies of every history row take the fast path of their pattern
+/// ([`QuadraticForm`]).
+#[derive(Clone, Debug)]
+pub struct EnergyForms {
+    mass: QuadraticForm,
+    stiffness: QuadraticForm,
+    /// No constant external force: `fᵀ q` is skipped.
+    unloaded: bool,
 }
 
 /// A linear structural model `M v̇ + C v + K q = f + G λ` (eq. 1c).
@@ -645,6 +656,55 @@ impl LinearSystem {
     /// Number of prescribed (eliminated) dofs.
     pub fn prescribed_dofs(&self) -> usize {
         self.prescribed.as_ref().map_or(0, |p| p.velocity.len())
+    }
+
+    /// The layouts of `M` and `K` read once, for [`LinearSystem::energies_with`].
+    pub fn energy_forms(&self) -> EnergyForms {
+        EnergyForms {
+            mass: QuadraticForm::new(self.mass.as_ref()),
+            stiffness: QuadraticForm::new(self.stiffness.as_ref()),
+            unloaded: self.force.iter().all(|&f| f == 0.0),
+        }
+    }
+
+    /// [`LinearSystem::energies`] through `forms` (from [`LinearSystem::energy_forms`]
+    /// of this system): the same energies, their sums reordered for speed (they differ
+    /// by round-off). Does not allocate; what each history row calls.
+    pub fn energies_with(
+        &self,
+        forms: &EnergyForms,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        scratch: &mut [f64],
+    ) -> (f64, f64) {
+        let (k, u) = self.prescribed_energy(t, q, v, scratch);
+        let kinetic = 0.5 * forms.mass.eval(self.mass.as_ref(), v) + self.parts_kinetic(q, v);
+        let mut potential = 0.5 * forms.stiffness.eval(self.stiffness.as_ref(), q);
+        if !forms.unloaded {
+            potential -= crate::linalg::dot_lanes(&self.force, q);
+        }
+        (kinetic + k, potential + self.parts_potential(q) + u)
+    }
+
+    /// The nonlinear parts' kinetic energy (0 without them).
+    fn parts_kinetic(&self, q: &[f64], v: &[f64]) -> f64 {
+        self.nonlinear
+            .iter()
+            .map(|p| p.kinetic_energy(q, v))
+            .sum::<f64>()
+    }
+
+    /// The nonlinear parts' internal energy (0 without them; NaN where a cell is
+    /// inverted).
+    fn parts_potential(&self, q: &[f64]) -> f64 {
+        if self.nonlinear.is_empty() {
+            return 0.0;
+        }
+        self.nonlinear
+            .iter()
+            .map(|r| r.energy(q).unwrap_or(f64::NAN))
+            .sum::<f64>()
     }
 
     /// Kinetic energy of the kept dofs `½ vᵀ M(q) v` (J; `q` matters only with a mass

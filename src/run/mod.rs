@@ -282,6 +282,7 @@ pub fn run_checkpointed(
         frame_count: 0,
         seconds: 0.0,
         scratch: vec![0.0; 2 * integ.system().prescribed_dofs()],
+        forms: integ.system().energy_forms(),
     };
     let mut plan = None;
     let energy0 = match resume {

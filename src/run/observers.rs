@@ -172,6 +172,8 @@ pub(super) struct Writers {
     pub(super) seconds: f64,
     /// Scratch of the prescribed dofs' energy.
     pub(super) scratch: Vec<f64>,
+    /// The layouts of `M` and `K` for the energies of the history rows.
+    pub(super) forms: crate::model::EnergyForms,
 }
 
 impl Writers {
@@ -192,9 +194,10 @@ impl Writers {
             .as_mut()
             .filter(|_| k.is_multiple_of(self.history_stride) || last)
         {
-            let (ke, pe) = integ
-                .system()
-                .energies(s.time, &s.q, &s.v, &mut self.scratch);
+            let (ke, pe) =
+                integ
+                    .system()
+                    .energies_with(&self.forms, s.time, &s.q, &s.v, &mut self.scratch);
             w.row(s, st, ke, pe)?;
         }
         let closed = s.impulse.iter().any(|&p| p > 0.0);
