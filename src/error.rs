@@ -165,6 +165,32 @@ impl Error {
         }
     }
 
+    /// Appends where an input error arose (`sweep point 3 (dt=1e-6)`) to its
+    /// explanation; other errors pass unchanged.
+    pub fn context(self, what: &str) -> Self {
+        match self {
+            Error::InvalidParameter {
+                field,
+                value,
+                reason,
+            } => Error::InvalidParameter {
+                field,
+                value,
+                reason: format!("{reason} (in {what})"),
+            },
+            Error::BadFile {
+                file,
+                where_,
+                detail,
+            } => Error::BadFile {
+                file,
+                where_,
+                detail: format!("{detail} (in {what})"),
+            },
+            other => other,
+        }
+    }
+
     /// Wraps an I/O error with the path it concerns (reading an input: exit code 2).
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {

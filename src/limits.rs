@@ -211,6 +211,13 @@ pub fn peak_memory() -> Option<u64> {
     Some(kb * 1024)
 }
 
+/// Resets the peak resident memory [`peak_memory`] reads to the current resident size
+/// (Linux ≥ 4.0: `5` written to `/proc/self/clear_refs`), so that the runs of a sweep
+/// each report their own peak; `false` where it cannot.
+pub fn reset_peak_memory() -> bool {
+    std::fs::write("/proc/self/clear_refs", b"5").is_ok()
+}
+
 /// A byte count as `12.3 GiB`.
 pub fn bytes(b: u64) -> String {
     let b = b as f64;

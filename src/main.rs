@@ -91,6 +91,11 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Measure the speed–accuracy trade of a scene (a file, or `bar` for the reference
+    /// bar) over a grid of schemes, time steps, mesh refinements, θ, metrics, friction
+    /// solvers and any scene key; `sweep merge DIR` joins the shards of a sharded sweep.
+    /// Writes sweep.csv, the Pareto plot and verdict lines.
+    Sweep(SweepArgs),
     /// Finish a killed run from the checkpoint in its directory (written by
     /// `--checkpoint-every K`): the directory then holds what an uninterrupted run writes.
     Resume {
@@ -139,6 +144,79 @@ struct FclibArgs {
     /// Write r, u, residual, iterations and seconds as JSON.
     #[arg(long, value_name = "OUT.json")]
     solution: Option<PathBuf>,
+}
+
+#[derive(Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+struct SweepArgs {
+    #[command(subcommand)]
+    command: Option<SweepCommand>,
+    #[command(flatten)]
+    run: SweepRunArgs,
+}
+
+#[derive(Subcommand)]
+enum SweepCommand {
+    /// Join the shards (DIR/shard-i-of-N/, from --shard or a Slurm array) of one sweep
+    /// into DIR's table: equal to the unsharded sweep's but for the timings.
+    Merge {
+        /// The sweep's output directory (the --out of every shard).
+        dir: PathBuf,
+    },
+}
+
+#[derive(Args)]
+struct SweepRunArgs {
+    /// The scene file, or `bar` for the reference impacting bar (meshes/bar.toml).
+    #[arg(required = true)]
+    scene: Option<String>,
+    /// Override a key of the scene before the grid's (as `run --set`; repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// Schemes (comma-separated scheme names).
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    scheme: Vec<String>,
+    /// Time steps (s, comma-separated).
+    #[arg(long, value_delimiter = ',', value_name = "H")]
+    dt: Vec<f64>,
+    /// Mesh refinement levels: every generated mesh's cell counts times the level.
+    #[arg(long, value_delimiter = ',', value_name = "LEVELS")]
+    refine: Vec<usize>,
+    /// θ values.
+    #[arg(long, value_delimiter = ',')]
+    theta: Vec<f64>,
+    /// Projection metrics (mass, euclidean).
+    #[arg(long, value_delimiter = ',')]
+    metric: Vec<String>,
+    /// Friction solvers (auto, nsgs, prox, nsn, …).
+    #[arg(long, value_delimiter = ',')]
+    friction_solver: Vec<String>,
+    /// Friction tolerances.
+    #[arg(long, value_delimiter = ',')]
+    friction_tol: Vec<f64>,
+    /// Any scene key over a list of TOML values: KEY=[V1, V2, …] (repeatable), e.g.
+    /// --axis 'bodies[0].material.young=[1e9, 2e9]'.
+    #[arg(long, value_name = "KEY=[VALUES]")]
+    axis: Vec<String>,
+    /// Runs per point; the wall time is their median.
+    #[arg(long)]
+    repeat: Option<usize>,
+    /// Accuracy levels of the verdict (relative, comma-separated; default 0.1,0.01,0.001).
+    #[arg(long, value_delimiter = ',')]
+    levels: Vec<f64>,
+    /// Output directory (default out/sweep-<scene stem>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Keep the runs already recorded in the directory (same grid) and run the rest.
+    #[arg(long)]
+    resume: bool,
+    /// Run only shard i of N (points whose index is i modulo N), into DIR/shard-i-of-N/;
+    /// read from SLURM_ARRAY_TASK_ID/COUNT (less SLURM_ARRAY_TASK_MIN) when not given.
+    #[arg(long, value_name = "i/N")]
+    shard: Option<String>,
+    /// Print only one line per run.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Args)]
@@ -729,6 +807,132 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     Ok(())
 }
 
+/// Progress of a sweep: one line per run on stderr.
+struct SweepLines;
+
+impl signorini::study::sweep::SweepProgress for SweepLines {
+    fn run(&mut self, done: usize, total: usize, r: &signorini::study::sweep::RunRecord, eta: f64) {
+        let what = if r.point.key.is_empty() {
+            "the scene".to_string()
+        } else {
+            r.point.key.clone()
+        };
+        if r.status == "ok" {
+            err!(
+                "  run {done}/{total} {what}: {:.3e} s ({:.2} µs/step, {} steps, {} dofs), violation {:.1e} m; ETA {eta:.0} s",
+                r.wall_seconds,
+                1e6 * r.wall_seconds / r.steps.max(1) as f64,
+                r.steps,
+                r.dofs,
+                r.max_violation
+            );
+        } else {
+            err!(
+                "  run {done}/{total} {what}: FAILED ({}); ETA {eta:.0} s",
+                r.message.as_deref().unwrap_or("")
+            );
+        }
+    }
+}
+
+fn sweep(a: &SweepArgs) -> Result<(), signorini::Error> {
+    use signorini::study::sweep::{self, Shard, Source, SweepSpec};
+    if let Some(SweepCommand::Merge { dir }) = &a.command {
+        let v = sweep::merge(dir)?;
+        for line in v {
+            out!("{line}");
+        }
+        out!(
+            "wrote {}/sweep.csv, sweep-accuracy.png/.svg, verdict.txt",
+            dir.display()
+        );
+        return Ok(());
+    }
+    let r = &a.run;
+    let name = r.scene.clone().expect("clap requires the scene");
+    let source = if name == "bar" && !std::path::Path::new("bar").exists() {
+        Source::Bar
+    } else {
+        Source::File(PathBuf::from(&name))
+    };
+    let mut axes = std::collections::BTreeMap::new();
+    for x in &r.axis {
+        let bad = |why: &str| signorini::Error::invalid("--axis", x, why);
+        let (k, v) = x
+            .split_once('=')
+            .ok_or_else(|| bad("expected KEY=[V1, V2, …]"))?;
+        let t: toml::Table = toml::from_str(&format!("v = {}", v.trim()))
+            .map_err(|_| bad("the values are not a TOML array (quote strings)"))?;
+        let Some(toml::Value::Array(vals)) = t.get("v") else {
+            return Err(bad("the values are not a TOML array, e.g. [1e9, 2e9]"));
+        };
+        if vals.is_empty() {
+            return Err(bad("lists no value"));
+        }
+        axes.insert(k.trim().to_string(), vals.clone());
+    }
+    let flags = SweepSpec {
+        scheme: r.scheme.clone(),
+        dt: r.dt.clone(),
+        refine: r.refine.clone(),
+        theta: r.theta.clone(),
+        metric: r.metric.clone(),
+        friction_solver: r.friction_solver.clone(),
+        friction_tol: r.friction_tol.clone(),
+        axes,
+        repeat: r.repeat,
+        levels: r.levels.clone(),
+    };
+    // the scene's [sweep] table, under the flags
+    let table = source.scene(&r.set, &sweep::points(&SweepSpec::default())[0])?;
+    let spec = flags.over(&table.sweep.clone().unwrap_or_default());
+    let shard = match &r.shard {
+        Some(s) => Some(Shard::parse(s)?),
+        None => Shard::from_slurm(|k| std::env::var(k).ok())?,
+    };
+    let stem = std::path::Path::new(&name)
+        .file_stem()
+        .map_or("bar".into(), |s| s.to_string_lossy().into_owned());
+    let dir = r
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(format!("sweep-{stem}")));
+    let points = sweep::points(&spec).len();
+    if !r.quiet {
+        err!(
+            "signorini sweep {}: {points} points{}, {} run(s) each",
+            source.name(),
+            shard.map_or(String::new(), |s| format!(
+                ", shard {}/{} ({} of them)",
+                s.index,
+                s.count,
+                (0..points).filter(|&i| s.owns(i)).count()
+            )),
+            spec.repeat.unwrap_or(1)
+        );
+    }
+    let job = sweep::Sweep {
+        source,
+        set: r.set.clone(),
+        spec,
+        dir: dir.clone(),
+        resume: r.resume,
+        shard,
+    };
+    let v = job.run(&mut SweepLines)?;
+    if !r.quiet {
+        for line in v {
+            out!("{line}");
+        }
+        let d = shard.map_or(dir.clone(), |s| s.dir(&dir));
+        out!(
+            "wrote {}/sweep.csv, sweep-accuracy.png/.svg, verdict.txt, runs/",
+            d.display()
+        );
+    }
+    Ok(())
+}
+
 fn print_summary(s: &run::Summary, out: &std::path::Path) {
     out!("scheme              {}", s.scheme);
     out!("path                {}", s.path);
@@ -875,6 +1079,7 @@ fn main() -> ExitCode {
                 out!("wrote {}/ {{{}}}", dir.display(), files.join(", "));
             })
         }
+        Some(Command::Sweep(a)) => sweep(&a),
         Some(Command::Resume { dir, quiet }) => run::resume(&dir, progress_sink(quiet).as_mut())
             .map(|r| {
                 if !quiet {

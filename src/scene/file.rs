@@ -103,6 +103,9 @@ pub struct Scene {
     /// Analytic reference to compare with (the impacting bar).
     #[serde(default)]
     pub reference: Option<Reference>,
+    /// The grid `signorini sweep` runs this scene over (ignored by `run`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<crate::study::sweep::SweepSpec>,
 }
 
 /// `[reference]`.
@@ -475,20 +478,26 @@ impl Scene {
             return Self::from_file(path);
         }
         let text = crate::limits::read_text(path, "scene", crate::limits::MAX_SCENE_BYTES)?;
-        // syntax errors are located in the file's own text
-        let mut table: toml::Table = match toml::from_str(&text) {
-            Ok(t) => t,
-            Err(_) => return Self::from_file(path),
+        let mut scene = Self::from_text_with(&text, overrides).map_err(|e| e.in_file(path))?;
+        scene.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        scene.file = Some(path.to_path_buf());
+        Ok(scene)
+    }
+
+    /// [`Scene::from_toml`] with the `KEY=VALUE` overrides of [`Scene::from_file_with`]
+    /// (relative mesh paths then start from the working directory).
+    pub fn from_text_with(text: &str, overrides: &[String]) -> Result<Scene, Error> {
+        // syntax errors are located in the text itself
+        let mut table: toml::Table = match toml::from_str(text) {
+            Ok(t) if !overrides.is_empty() => t,
+            _ => return Self::from_toml(text),
         };
         for o in overrides {
             apply_override(&mut table, o)?;
         }
         let text = toml::to_string(&table)
             .map_err(|e| Error::invalid("--set", "(scene)", &format!("does not serialize: {e}")))?;
-        let mut scene = Self::from_toml(&text).map_err(|e| e.in_file(path))?;
-        scene.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        scene.file = Some(path.to_path_buf());
-        Ok(scene)
+        Self::from_toml(&text)
     }
 
     /// Parses and validates scene text.

@@ -81,6 +81,7 @@ pub fn builtin_scene(name: &str) -> Result<file::Scene, Error> {
         base_dir: std::path::PathBuf::new(),
         file: None,
         reference: None,
+        sweep: None,
     };
     scene.validate()?;
     Ok(scene)

@@ -30,6 +30,7 @@
 
 pub mod bar;
 pub mod slider_crank;
+pub mod sweep;
 
 use std::fmt::Write as _;
 use std::path::Path;
