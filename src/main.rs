@@ -214,6 +214,11 @@ struct SweepRunArgs {
     /// read from SLURM_ARRAY_TASK_ID/COUNT (less SLURM_ARRAY_TASK_MIN) when not given.
     #[arg(long, value_name = "i/N")]
     shard: Option<String>,
+    /// Spread the grid over the ranks of an MPI job (`mpirun -np N signorini sweep …
+    /// --mpi`; builds with the `mpi` feature): rank 0 gathers the records and writes
+    /// the table.
+    #[arg(long, conflicts_with = "shard")]
+    mpi: bool,
     /// Print only one line per run.
     #[arg(long)]
     quiet: bool,
@@ -888,6 +893,7 @@ fn sweep(a: &SweepArgs) -> Result<(), signorini::Error> {
     let spec = flags.over(&table.sweep.clone().unwrap_or_default());
     let shard = match &r.shard {
         Some(s) => Some(Shard::parse(s)?),
+        None if r.mpi => None,
         None => Shard::from_slurm(|k| std::env::var(k).ok())?,
     };
     let stem = std::path::Path::new(&name)
@@ -919,7 +925,23 @@ fn sweep(a: &SweepArgs) -> Result<(), signorini::Error> {
         resume: r.resume,
         shard,
     };
-    let v = job.run(&mut SweepLines)?;
+    let v = if r.mpi {
+        #[cfg(feature = "mpi")]
+        match job.run_mpi(&mut SweepLines)? {
+            Some(v) => v,
+            // not rank 0: rank 0 prints the verdicts
+            None => return Ok(()),
+        }
+        #[cfg(not(feature = "mpi"))]
+        return Err(signorini::Error::invalid(
+            "--mpi",
+            "true",
+            "this signorini was built without the `mpi` cargo feature \
+             (cargo build --release --features mpi, with libopenmpi-dev and libclang-dev)",
+        ));
+    } else {
+        job.run(&mut SweepLines)?
+    };
     if !r.quiet {
         for line in v {
             out!("{line}");

@@ -390,6 +390,9 @@ pub struct RunRecord {
     pub contact_duration: f64,
     /// Cumulative contact impulse `Σ P` at `t_end (i + 1) / TRACE_SAMPLES` (N·s).
     pub impulse: Vec<f64>,
+    /// Which shard or MPI rank made the run (0 for a sweep on one process).
+    #[serde(default)]
+    pub worker: usize,
 }
 
 /// The measures of the table: (column, what it is).
@@ -501,6 +504,7 @@ pub fn run_point(
                     peak_force: f64::NAN,
                     contact_duration: f64::NAN,
                     impulse: Vec::new(),
+                    worker: 0,
                 });
             }
         }
@@ -549,6 +553,7 @@ pub fn run_point(
         peak_force: r.force.iter().copied().fold(0.0, f64::max),
         contact_duration,
         impulse: impulse_trace(&r.force, h, s.t_end),
+        worker: 0,
     })
 }
 
@@ -683,7 +688,7 @@ pub fn csv(rows: &[Row], timings: bool) -> String {
     }
     x.push_str(",status,steps,dofs,time_step");
     if timings {
-        x.push_str(",wall_seconds,us_per_step,setup_seconds,peak_memory_bytes");
+        x.push_str(",wall_seconds,us_per_step,setup_seconds,peak_memory_bytes,worker");
     }
     x.push_str(
         ",memory_planned_bytes,newton_mean,newton_max,projection_mean,lcp_mean,\
@@ -721,11 +726,12 @@ pub fn csv(rows: &[Row], timings: bool) -> String {
         if timings {
             let _ = write!(
                 x,
-                ",{},{},{},{}",
+                ",{},{},{},{},{}",
                 f(c.wall_seconds),
                 f(1e6 * c.wall_seconds / c.steps.max(1) as f64),
                 f(c.setup_seconds),
-                c.peak_memory_bytes.map_or(String::new(), |b| b.to_string())
+                c.peak_memory_bytes.map_or(String::new(), |b| b.to_string()),
+                c.worker
             );
         }
         let _ = write!(
@@ -1029,21 +1035,45 @@ impl Sweep {
     /// Validates every point's scene, runs the points not yet recorded, and writes the
     /// table of the records in its directory; returns the verdicts.
     pub fn run(&self, progress: &mut dyn SweepProgress) -> Result<Vec<String>, Error> {
+        let points = self.validate_points()?;
+        let dir = match self.shard {
+            Some(s) => s.dir(&self.dir),
+            None => self.dir.clone(),
+        };
+        let (_lock, mut done) = self.open_dir(&dir, &points)?;
+        let mine: Vec<&Point> = points
+            .iter()
+            .filter(|p| self.shard.is_none_or(|s| s.owns(p.id)))
+            .collect();
+        let worker = self.shard.map_or(0, |s| s.index);
+        for r in self.run_points(&mine, &done, Some(&dir), worker, progress)? {
+            done.insert(r.point.id, r);
+        }
+        self.finish(&dir, done.into_values().collect())
+    }
+
+    /// Every point, each scene read and validated (before the first run).
+    fn validate_points(&self) -> Result<Vec<Point>, Error> {
         self.spec.validate()?;
         let points = points(&self.spec);
-        // every scene read and validated before the first run
         for p in &points {
             self.source
                 .scene(&self.set, p)
                 .map_err(|e| e.context(&format!("sweep point {} ({})", p.id, p.key)))?;
         }
-        let dir = match self.shard {
-            Some(s) => s.dir(&self.dir),
-            None => self.dir.clone(),
-        };
-        crate::io::check_output_dir("--out", &dir)?;
-        std::fs::create_dir_all(dir.join("runs")).map_err(|e| Error::write(&dir, e))?;
-        let _lock = crate::io::RunLock::acquire(&dir)?;
+        Ok(points)
+    }
+
+    /// Locks `dir`, writes `grid.json`, and returns the records kept by `--resume`
+    /// (none for a new sweep, whose directory loses an earlier sweep's records).
+    fn open_dir(
+        &self,
+        dir: &Path,
+        points: &[Point],
+    ) -> Result<(crate::io::RunLock, BTreeMap<usize, RunRecord>), Error> {
+        crate::io::check_output_dir("--out", dir)?;
+        std::fs::create_dir_all(dir.join("runs")).map_err(|e| Error::write(dir, e))?;
+        let lock = crate::io::RunLock::acquire(dir)?;
         let grid = Grid {
             source: self.source.name(),
             set: self.set.clone(),
@@ -1054,7 +1084,7 @@ impl Sweep {
         let mut done: BTreeMap<usize, RunRecord> = BTreeMap::new();
         if self.resume && grid_path.exists() {
             check_grid(&grid_path, &grid)?;
-            for r in read_records(&dir)? {
+            for r in read_records(dir)? {
                 let ok = points.get(r.point.id).is_some_and(|p| p == &r.point);
                 if !ok {
                     return Err(Error::bad_file(
@@ -1071,7 +1101,7 @@ impl Sweep {
         } else {
             // a new sweep: records of an earlier one would mix two grids
             let _ = std::fs::remove_dir_all(dir.join("runs"));
-            std::fs::create_dir_all(dir.join("runs")).map_err(|e| Error::write(&dir, e))?;
+            std::fs::create_dir_all(dir.join("runs")).map_err(|e| Error::write(dir, e))?;
         }
         write_atomic(
             &grid_path,
@@ -1079,10 +1109,19 @@ impl Sweep {
                 .expect("grid serializes")
                 .as_bytes(),
         )?;
-        let mine: Vec<&Point> = points
-            .iter()
-            .filter(|p| self.shard.is_none_or(|s| s.owns(p.id)))
-            .collect();
+        Ok((lock, done))
+    }
+
+    /// Runs the points of `mine` not in `done`, each record written into `dir/runs/`
+    /// (when given) as soon as it is made; returns the new records.
+    fn run_points(
+        &self,
+        mine: &[&Point],
+        done: &BTreeMap<usize, RunRecord>,
+        dir: Option<&Path>,
+        worker: usize,
+        progress: &mut dyn SweepProgress,
+    ) -> Result<Vec<RunRecord>, Error> {
         let weight = |p: &Point| -> f64 {
             let s = self
                 .source
@@ -1091,41 +1130,155 @@ impl Sweep {
                 .unwrap_or(1);
             s as f64 * (p.refine as f64).powi(2)
         };
-        let total_weight: f64 = mine
-            .iter()
-            .filter(|p| !done.contains_key(&p.id))
-            .map(|p| weight(p))
-            .sum();
+        let todo: Vec<&&Point> = mine.iter().filter(|p| !done.contains_key(&p.id)).collect();
+        let total_weight: f64 = todo.iter().map(|p| weight(p)).sum();
         let (mut spent, mut spent_weight) = (0.0, 0.0);
         let repeat = self.spec.repeat.unwrap_or(1);
-        let count = mine.len();
-        let mut n_done = mine.iter().filter(|p| done.contains_key(&p.id)).count();
-        for p in mine {
-            if done.contains_key(&p.id) {
-                continue;
-            }
+        let mut n_done = mine.len() - todo.len();
+        let mut out = Vec::with_capacity(todo.len());
+        for p in todo {
             let t0 = Instant::now();
-            let rec = run_point(&self.source, &self.set, p, repeat)?;
-            write_atomic(
-                &dir.join("runs").join(format!("{:06}.json", p.id)),
-                serde_json::to_string(&rec)
-                    .expect("record serializes")
-                    .as_bytes(),
-            )?;
+            let mut rec = run_point(&self.source, &self.set, p, repeat)?;
+            rec.worker = worker;
+            if let Some(dir) = dir {
+                write_atomic(
+                    &dir.join("runs").join(format!("{:06}.json", p.id)),
+                    serde_json::to_string(&rec)
+                        .expect("record serializes")
+                        .as_bytes(),
+                )?;
+            }
             spent += t0.elapsed().as_secs_f64();
             spent_weight += weight(p);
             n_done += 1;
             let eta = spent / spent_weight.max(1e-300) * (total_weight - spent_weight).max(0.0);
-            progress.run(n_done, count, &rec, eta);
-            done.insert(p.id, rec);
+            progress.run(n_done, mine.len(), &rec, eta);
+            out.push(rec);
         }
-        let rows = table(done.into_values().collect());
+        Ok(out)
+    }
+
+    /// Writes the table of `records` into `dir`; returns the verdicts.
+    fn finish(&self, dir: &Path, records: Vec<RunRecord>) -> Result<Vec<String>, Error> {
+        let rows = table(records);
         let levels = if self.spec.levels.is_empty() {
             DEFAULT_LEVELS.to_vec()
         } else {
             self.spec.levels.clone()
         };
-        write_table(&dir, &rows, &levels, "sweep")
+        write_table(dir, &rows, &levels, "sweep")
+    }
+
+    /// The sweep spread over the ranks of an MPI job (cargo feature `mpi`): rank r runs
+    /// the points `id ≡ r (mod size)`; every rank's records are gathered on rank 0,
+    /// which alone writes the directory (records, table, verdicts: the same as a sweep
+    /// on one process, timings aside) and returns `Some(verdicts)`; the other ranks
+    /// return `None`. Every rank validates the grid (the same checks, so a bad grid
+    /// stops all of them); a rank whose run cannot be written or whose input turns out
+    /// bad still joins the gather, and rank 0 reports its error. `--resume` works
+    /// through rank 0, which tells the others what is recorded. The records reach the
+    /// directory at the gather: a job killed before it keeps rank 0's records only
+    /// (Slurm arrays with `--shard` keep every finished run).
+    #[cfg(feature = "mpi")]
+    pub fn run_mpi(&self, progress: &mut dyn SweepProgress) -> Result<Option<Vec<String>>, Error> {
+        use mpi::traits::{Communicator, Root};
+        let universe = mpi::initialize().ok_or_else(|| {
+            Error::invalid("--mpi", "", "MPI was already initialized in this process")
+        })?;
+        let world = universe.world();
+        let (rank, size) = (world.rank() as usize, world.size() as usize);
+        let root = world.process_at_rank(0);
+        let points = self.validate_points()?;
+        let shard = Shard {
+            index: rank,
+            count: size,
+        };
+        // rank 0 opens the directory and tells the others which points are recorded
+        let mut opened = None;
+        let mut recorded = vec![0u8; points.len()];
+        let mut open_error = 0u8;
+        if rank == 0 {
+            match self.open_dir(&self.dir, &points) {
+                Ok((lock, done)) => {
+                    for id in done.keys() {
+                        recorded[*id] = 1;
+                    }
+                    opened = Some((lock, done));
+                }
+                Err(e) => {
+                    open_error = 1;
+                    // the others learn it below and stop
+                    root.broadcast_into(&mut open_error);
+                    return Err(e);
+                }
+            }
+        }
+        root.broadcast_into(&mut open_error);
+        if open_error != 0 {
+            return Ok(None);
+        }
+        root.broadcast_into(&mut recorded[..]);
+        let done: BTreeMap<usize, RunRecord> = match &opened {
+            Some((_, d)) => d.clone(),
+            None => BTreeMap::new(),
+        };
+        let mine: Vec<&Point> = points
+            .iter()
+            .filter(|p| shard.owns(p.id) && recorded[p.id] == 0)
+            .collect();
+        let dir = (rank == 0).then_some(self.dir.as_path());
+        let result: Result<Vec<RunRecord>, String> = self
+            .run_points(&mine, &done, dir, rank, progress)
+            .map_err(|e| format!("rank {rank}: {e}"));
+        let bytes = serde_json::to_vec(&result).expect("records serialize");
+        let len = bytes.len() as mpi::Count;
+        if rank != 0 {
+            root.gather_into(&len);
+            root.gather_varcount_into(&bytes[..]);
+            return Ok(None);
+        }
+        let mut lens = vec![0 as mpi::Count; size];
+        root.gather_into_root(&len, &mut lens[..]);
+        let displs: Vec<mpi::Count> = lens
+            .iter()
+            .scan(0, |acc, &x| {
+                let d = *acc;
+                *acc += x;
+                Some(d)
+            })
+            .collect();
+        let mut all = vec![0u8; lens.iter().map(|&l| l as usize).sum()];
+        {
+            let mut part = mpi::datatype::PartitionMut::new(&mut all[..], &lens[..], &displs[..]);
+            root.gather_varcount_into_root(&bytes[..], &mut part);
+        }
+        let (_lock, mut done) = opened.expect("rank 0 opened the directory");
+        for (r, (&d, &l)) in displs.iter().zip(&lens).enumerate() {
+            let slice = &all[d as usize..(d + l) as usize];
+            let got: Result<Vec<RunRecord>, String> =
+                serde_json::from_slice(slice).map_err(|e| {
+                    Error::Numerical(format!("rank {r} sent an unreadable record list: {e}"))
+                })?;
+            match got {
+                Ok(records) => {
+                    for rec in records {
+                        write_atomic(
+                            &self
+                                .dir
+                                .join("runs")
+                                .join(format!("{:06}.json", rec.point.id)),
+                            serde_json::to_string(&rec)
+                                .expect("record serializes")
+                                .as_bytes(),
+                        )?;
+                        done.insert(rec.point.id, rec);
+                    }
+                }
+                Err(msg) => return Err(Error::Numerical(msg)),
+            }
+        }
+        self.finish(&self.dir, done.into_values().collect())
+            .map(Some)
     }
 }
 
