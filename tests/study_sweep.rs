@@ -385,3 +385,31 @@ fn the_cli_shards_and_merges() {
         std::fs::remove_dir_all(&d).unwrap();
     }
 }
+
+/// With the `hdf5` feature the table is also `sweep.h5`: one dataset per column of
+/// `sweep.csv` under `/table`, numbers equal to the CSV's (its shortest round-trip
+/// decimals), text columns as strings.
+#[cfg(feature = "hdf5")]
+#[test]
+fn the_hdf5_table_holds_the_csv_columns() {
+    let dir = tmp("h5");
+    sweep_into(&dir, None, false);
+    let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let f = hdf5::File::open(dir.join("sweep.h5")).unwrap();
+    let g = f.group("table").unwrap();
+    let k = header.iter().position(|h| *h == "accuracy").unwrap();
+    let acc: Vec<f64> = g.dataset("accuracy").unwrap().read_raw().unwrap();
+    assert_eq!(acc.len(), rows.len());
+    for (a, r) in acc.iter().zip(&rows) {
+        assert_eq!(*a, r[k].parse::<f64>().unwrap());
+    }
+    let k = header.iter().position(|h| *h == "scheme").unwrap();
+    let schemes: Vec<hdf5::types::VarLenUnicode> = g.dataset("scheme").unwrap().read_raw().unwrap();
+    for (s, r) in schemes.iter().zip(&rows) {
+        assert_eq!(s.as_str(), r[k]);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -581,3 +581,51 @@ impl History {
         self.run.flush()
     }
 }
+
+/// A column of [`write_table`].
+pub enum TableColumn {
+    /// Numbers (NaN where a cell is empty).
+    Numbers(Vec<f64>),
+    /// Text.
+    Text(Vec<String>),
+}
+
+/// Writes a table as one HDF5 file (`path`, written as `path.part` and renamed): the
+/// group `/table` with one 1-D dataset per column, in order (attribute `columns`: the
+/// names joined by commas). `signorini sweep`'s `sweep.h5`.
+pub fn write_table(path: &Path, columns: &[(String, TableColumn)]) -> Result<(), Error> {
+    let mut part = path.as_os_str().to_owned();
+    part.push(".part");
+    let part = PathBuf::from(part);
+    let write = || -> hdf5::Result<()> {
+        let file = hdf5::File::create(&part)?;
+        let g = file.create_group("table")?;
+        for (name, col) in columns {
+            match col {
+                TableColumn::Numbers(v) => {
+                    g.new_dataset_builder()
+                        .with_data(v.as_slice())
+                        .create(name.as_str())?;
+                }
+                TableColumn::Text(v) => {
+                    let v: Vec<VarLenUnicode> = v
+                        .iter()
+                        .map(|s| s.replace('\0', " ").parse().expect("no NUL left"))
+                        .collect();
+                    g.new_dataset_builder()
+                        .with_data(v.as_slice())
+                        .create(name.as_str())?;
+                }
+            }
+        }
+        let names: Vec<&str> = columns.iter().map(|c| c.0.as_str()).collect();
+        let joined: VarLenUnicode = names.join(",").parse().expect("no NUL in names");
+        g.new_attr::<VarLenUnicode>()
+            .create("columns")?
+            .write_scalar(&joined)?;
+        file.flush()?;
+        Ok(())
+    };
+    write().map_err(|e| h5err(&part, e))?;
+    std::fs::rename(&part, path).map_err(|e| Error::write(path, e))
+}

@@ -770,6 +770,41 @@ pub fn csv(rows: &[Row], timings: bool) -> String {
     x
 }
 
+/// The columns of a CSV written by [`csv`]: numbers where every non-empty cell is
+/// one (empty cells NaN), text otherwise (the HDF5 table's columns).
+#[cfg(feature = "hdf5")]
+fn csv_columns(text: &str) -> Vec<(String, crate::io::h5::TableColumn)> {
+    use crate::io::h5::TableColumn;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    header
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let cells: Vec<&str> = rows
+                .iter()
+                .map(|r| r.get(k).copied().unwrap_or(""))
+                .collect();
+            let numbers: Option<Vec<f64>> = cells
+                .iter()
+                .map(|c| {
+                    if c.is_empty() {
+                        Some(f64::NAN)
+                    } else {
+                        c.parse().ok()
+                    }
+                })
+                .collect();
+            let col = match numbers {
+                Some(v) if name != &"message" => TableColumn::Numbers(v),
+                _ => TableColumn::Text(cells.iter().map(|c| c.to_string()).collect()),
+            };
+            (name.to_string(), col)
+        })
+        .collect()
+}
+
 /// The scheme of a row (its `scheme` axis value, else `scene`).
 fn scheme_of(r: &Row) -> String {
     r.record
@@ -831,8 +866,8 @@ pub fn verdicts(rows: &[Row], levels: &[f64]) -> Vec<String> {
                 .filter(|r| r.errors[0] <= l)
                 .min_by(|a, b| a.record.wall_seconds.total_cmp(&b.record.wall_seconds));
             parts.push(match best {
-                Some(r) => format!("{} reached: {}", pct(l), describe(r)),
-                None => format!("{} not reached", pct(l)),
+                Some(r) => format!("error ≤ {l:.0e}: {}", describe(r)),
+                None => format!("error ≤ {l:.0e} not reached"),
             });
         }
         match mine
@@ -865,8 +900,7 @@ pub fn verdicts(rows: &[Row], levels: &[f64]) -> Vec<String> {
                 .map(|(q, v)| format!(", {:.1}× faster than {}", v / w, scheme_of(q)))
                 .unwrap_or_default();
             out.push(format!(
-                "sweep: cheapest to {}: {} ({:.3e} s{next})",
-                pct(l),
+                "sweep: cheapest to error ≤ {l:.0e}: {} ({:.3e} s{next})",
                 scheme_of(r),
                 w
             ));
@@ -892,7 +926,10 @@ pub fn write_table(
     levels: &[f64],
     stem: &str,
 ) -> Result<Vec<String>, Error> {
-    write_atomic(&dir.join(format!("{stem}.csv")), csv(rows, true).as_bytes())?;
+    let text = csv(rows, true);
+    write_atomic(&dir.join(format!("{stem}.csv")), text.as_bytes())?;
+    #[cfg(feature = "hdf5")]
+    crate::io::h5::write_table(&dir.join(format!("{stem}.h5")), &csv_columns(&text))?;
     let mut schemes: Vec<String> = rows.iter().map(scheme_of).collect();
     schemes.sort();
     schemes.dedup();
