@@ -734,7 +734,7 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     let (model, report) = scene.build().map_err(in_file)?;
     let mut plan = model.plan(&scene.scheme, scene.time.dt).map_err(in_file)?;
     let (m, rows) = (model.contacts.len(), model.contacts.rows());
-    plan.add_history(m, (rows - m) / m.max(1), scene.output.hdf5());
+    plan.add_history(report.dofs, m, (rows - m) / m.max(1), scene.output.hdf5());
     out!("scene               {} (valid)", args.scene.display());
     out!(
         "model               {} bodies, {} cells, {} dofs ({} fixed dofs removed), {} candidate contacts",

@@ -723,6 +723,9 @@ pub struct ThetaCore {
     // n-vectors
     pub(crate) v_free: Vec<f64>,
     work: Vec<f64>,
+    /// `K` as its three diagonals when it is a rod's ([`crate::linalg::TridiagonalRows`]): the free
+    /// velocity's `K (q + hθ v)` without a gather per row.
+    k_rows: Option<crate::linalg::TridiagonalRows>,
     q_lin: Vec<f64>,
     pub(crate) v_new: Vec<f64>,
     pub(crate) q_new: Vec<f64>,
@@ -877,6 +880,7 @@ impl ThetaCore {
         let mut mem = crate::limits::MemoryEstimate::default();
         workspace_ledger(rows, m, params, (friction, with_projection), &mut mem);
         mem.check("scheme.max_active_rows", format!("{ws_cap} rows"))?;
+        let k_rows = crate::linalg::TridiagonalRows::new(sys.stiffness.as_ref());
         let mut core = ThetaCore {
             sys,
             contacts,
@@ -909,6 +913,7 @@ impl ThetaCore {
             vp_b: vec![0.0; np],
             v_free: vec![0.0; n],
             work: vec![0.0; n],
+            k_rows,
             q_lin: vec![0.0; n],
             v_new: vec![0.0; n],
             q_new: vec![0.0; n],
@@ -1067,16 +1072,21 @@ impl ThetaCore {
         for ((ql, q), v) in self.q_lin.iter_mut().zip(&s.q).zip(&s.v) {
             *ql = q + h * th * v;
         }
-        let k = self.sys.stiffness.as_ref();
-        let (kp, ki, kv) = (k.col_ptr(), k.row_idx(), k.val());
-        for (i, (w, f)) in self.work.iter_mut().zip(&self.sys.force).enumerate() {
-            let r = kp[i]..kp[i + 1];
-            let kx: f64 = ki[r.clone()]
-                .iter()
-                .zip(&kv[r])
-                .map(|(&j, &a)| a * self.q_lin[j])
-                .sum();
-            *w = h * (f - kx);
+        if let Some(rows) = &self.k_rows {
+            // the rods' K: the same sums without the gather (bit for bit)
+            rows.scaled_residual(h, &self.sys.force, &self.q_lin, &mut self.work);
+        } else {
+            let k = self.sys.stiffness.as_ref();
+            let (kp, ki, kv) = (k.col_ptr(), k.row_idx(), k.val());
+            for (i, (w, f)) in self.work.iter_mut().zip(&self.sys.force).enumerate() {
+                let r = kp[i]..kp[i + 1];
+                let kx: f64 = ki[r.clone()]
+                    .iter()
+                    .zip(&kv[r])
+                    .map(|(&j, &a)| a * self.q_lin[j])
+                    .sum();
+                *w = h * (f - kx);
+            }
         }
         add_step_loads(
             &self.sys,

@@ -27,8 +27,9 @@ use crate::model::LinearSystem;
 use crate::model::system::Linearity;
 
 /// `n`-vectors the integrators hold (state, free and new velocities, linearization
-/// points, loads, scratch of the solves and of the Delassus corrections), rounded up.
-const STATE_VECTORS: u64 = 24;
+/// points, loads, scratch of the solves and of the Delassus corrections, a rod's `K` as
+/// three diagonals), rounded up.
+const STATE_VECTORS: u64 = 27;
 /// Contact-space vectors (per row: gaps, velocities, impulses, projections, right-hand
 /// sides, masks, warm starts), rounded up.
 const CONTACT_VECTORS: u64 = 32;
@@ -55,10 +56,14 @@ impl Plan {
         )
     }
 
-    /// Adds the history's buffers: the CSV's 64 KiB, and with HDF5 4096 rows of every
-    /// column (`m` contacts with `tangent_dim` tangents).
-    pub fn add_history(&mut self, m: usize, tangent_dim: usize, hdf5: bool) {
+    /// Adds the history's buffers: the CSV's 64 KiB, the energies' forms of `n` dofs,
+    /// and with HDF5 4096 rows of every column (`m` contacts with `tangent_dim`
+    /// tangents).
+    pub fn add_history(&mut self, n: usize, m: usize, tangent_dim: usize, hdf5: bool) {
         self.ledger.add("history buffers (CSV)", 1, 1 << 16);
+        // the energies' quadratic forms: three diagonals of M and of K where they are
+        // tridiagonal (`linalg::QuadraticForm`), counted for every pattern
+        self.ledger.add("history energy forms", 6 * n as u64, 8);
         if hdf5 {
             let cols = 12 + m as u64 * (4 + 2 * tangent_dim as u64 + 1);
             self.ledger

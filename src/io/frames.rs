@@ -459,11 +459,6 @@ impl FrameWriter {
         self.busy
     }
 
-    /// Frames listed by the `.pvd` on disk.
-    pub fn listed(&self) -> usize {
-        self.listed
-    }
-
     /// Rewrites the `.pvd` with every frame written so far (atomically), unless it
     /// already lists them all.
     pub fn write_collection(&mut self) -> Result<(), Error> {

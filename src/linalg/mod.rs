@@ -653,6 +653,73 @@ impl QuadraticForm {
     }
 }
 
+/// A symmetric matrix whose every row holds exactly its three diagonals (two at the
+/// ends): the 1-D rods' `K`, kept as the diagonals so that `h (f − K x)` of the
+/// θ-method's free velocity (eq. 18; [`crate::integrators::core`]'s `begin_step`) is a
+/// vectorizable pass instead of a gather per row (issue 19 §4).
+///
+/// Each row sums its three products in the order the stored row does, with the same
+/// [`Sum`](std::iter::Sum) of `f64`, so the result is the gather's bit for bit; a
+/// matrix with any other stored pattern (a missing off-diagonal entry, an unsorted
+/// column, a nonsymmetric value) is not taken.
+#[derive(Clone, Debug)]
+pub struct TridiagonalRows {
+    /// `a_{i,i−1}` (0 for `i = 0`).
+    left: Vec<f64>,
+    /// `a_ii`.
+    diag: Vec<f64>,
+    /// `a_{i,i+1}` (0 for the last row).
+    right: Vec<f64>,
+}
+
+impl TridiagonalRows {
+    /// The rows of the symmetric CSC matrix `a` (`n ≥ 2`) when every column holds
+    /// exactly rows `j − 1, j, j + 1` (those that exist) in order and `a` is symmetric
+    /// bit for bit; `None` otherwise.
+    pub fn new(a: SparseColMatRef<'_, usize, f64>) -> Option<Self> {
+        let n = a.ncols();
+        if n < 2 || a.nrows() != n {
+            return None;
+        }
+        let (cp, ri, v) = (a.col_ptr(), a.row_idx(), a.val());
+        let (mut left, mut diag, mut right) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        for j in 0..n {
+            let expect: Vec<usize> = (j.saturating_sub(1)..(j + 2).min(n)).collect();
+            if ri[cp[j]..cp[j + 1]] != expect[..] {
+                return None;
+            }
+            for (k, &i) in (cp[j]..cp[j + 1]).zip(&expect) {
+                // column j is row j (symmetry checked below)
+                match i.cmp(&j) {
+                    std::cmp::Ordering::Less => left[j] = v[k],
+                    std::cmp::Ordering::Equal => diag[j] = v[k],
+                    std::cmp::Ordering::Greater => right[j] = v[k],
+                }
+            }
+        }
+        // a_{j+1,j} (below the diagonal of column j) = a_{j,j+1} (above in column j+1)
+        let symmetric = (0..n - 1).all(|j| right[j].to_bits() == left[j + 1].to_bits());
+        symmetric.then_some(TridiagonalRows { left, diag, right })
+    }
+
+    /// `out_i = h (f_i − (K x)_i)`, each row summed as the CSC gather of the same matrix
+    /// would (bit for bit). Does not allocate.
+    pub fn scaled_residual(&self, h: f64, f: &[f64], x: &[f64], out: &mut [f64]) {
+        let n = x.len();
+        debug_assert!(n >= 2 && f.len() == n && out.len() == n && self.diag.len() == n);
+        let (l, d, r) = (&self.left, &self.diag, &self.right);
+        let row2 = |a: f64, b: f64| -> f64 { [a, b].into_iter().sum() };
+        out[0] = h * (f[0] - row2(d[0] * x[0], r[0] * x[1]));
+        for i in 1..n - 1 {
+            let kx: f64 = [l[i] * x[i - 1], d[i] * x[i], r[i] * x[i + 1]]
+                .into_iter()
+                .sum();
+            out[i] = h * (f[i] - kx);
+        }
+        out[n - 1] = h * (f[n - 1] - row2(l[n - 1] * x[n - 2], d[n - 1] * x[n - 1]));
+    }
+}
+
 /// Dot product summed in four lanes (reordered against [`dot`], so it differs from it
 /// by round-off): for diagnostics such as the energies of the history, where a single
 /// running sum would wait on every addition. Does not allocate.
@@ -1131,6 +1198,63 @@ mod tests {
             f.solve_in_place(&mut b);
             assert!(b.iter().all(|x| (x - 1.0).abs() < 1e-15), "{b:?}");
         }
+    }
+
+    /// The rows of a tridiagonal `K` give `h (f − K x)` bit for bit as the CSC gather
+    /// (what `begin_step` did), signed zeros included; another pattern is refused.
+    #[test]
+    fn tridiagonal_rows_equal_the_gather_bit_for_bit() {
+        let n = 9;
+        let mut t = Vec::new();
+        for i in 0..n {
+            t.push(Triplet::new(i, i, 2.0 + 0.1 * i as f64));
+            if i + 1 < n {
+                let off = -1.0 - 0.01 * (i % 4) as f64;
+                t.push(Triplet::new(i, i + 1, off));
+                t.push(Triplet::new(i + 1, i, off));
+            }
+        }
+        let a = SparseMatrix::try_new_from_triplets(n, n, &t).unwrap();
+        let rows = TridiagonalRows::new(a.as_ref()).expect("tridiagonal");
+        let gather = |f: &[f64], x: &[f64], out: &mut [f64]| {
+            let (cp, ri, v) = (a.col_ptr(), a.row_idx(), a.val());
+            for i in 0..n {
+                let kx: f64 = (cp[i]..cp[i + 1]).map(|k| v[k] * x[ri[k]]).sum();
+                out[i] = 1e-3 * (f[i] - kx);
+            }
+        };
+        for x in [
+            (0..n)
+                .map(|i| (i as f64 * 0.9).sin() * 1e-5)
+                .collect::<Vec<_>>(),
+            vec![0.0; n],
+            vec![-0.0; n],
+            (0..n)
+                .map(|i| if i % 2 == 0 { 0.0 } else { -0.0 })
+                .collect(),
+        ] {
+            for f in [
+                vec![0.0; n],
+                vec![-0.0; n],
+                (0..n).map(|i| i as f64).collect(),
+            ] {
+                let (mut a1, mut a2) = (vec![7.0; n], vec![7.0; n]);
+                gather(&f, &x, &mut a1);
+                rows.scaled_residual(1e-3, &f, &x, &mut a2);
+                for (p, q) in a1.iter().zip(&a2) {
+                    assert_eq!(p.to_bits(), q.to_bits(), "{a1:?} vs {a2:?}");
+                }
+            }
+        }
+        // a dropped coupling, and a nonsymmetric value, are refused
+        let mut u = t.clone();
+        u.retain(|e| !(e.row == 3 && e.col == 4));
+        let b = SparseMatrix::try_new_from_triplets(n, n, &u).unwrap();
+        assert!(TridiagonalRows::new(b.as_ref()).is_none());
+        let mut u = t.clone();
+        u.push(Triplet::new(3, 4, 1e-9));
+        let b = SparseMatrix::try_new_from_triplets(n, n, &u).unwrap();
+        assert!(TridiagonalRows::new(b.as_ref()).is_none());
     }
 
     /// The tridiagonal form and the lane dot product against the column walk and a

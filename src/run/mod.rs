@@ -133,7 +133,7 @@ fn run_scene_from(
     let mut plan = model.plan(&scene.scheme, scene.time.dt)?;
     let (m, rows) = (model.contacts.len(), model.contacts.rows());
     if let Some(o) = out {
-        plan.add_history(m, (rows - m) / m.max(1), o.options.hdf5());
+        plan.add_history(report.dofs, m, (rows - m) / m.max(1), o.options.hdf5());
     }
     plan.ledger.check(
         "scene",

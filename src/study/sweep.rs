@@ -15,23 +15,24 @@
 //! loop's, median of `repeat` runs); its record ([`RunRecord`]: cost, iterations, caps,
 //! penetration, energies, the analytic comparison where the scene has one, and the
 //! cumulative contact impulse at [`TRACE_SAMPLES`] times) is written as
-//! `runs/NNNN.json` as soon as it ends, so `--resume` skips what is there and a shard
-//! of a Slurm array or an MPI rank writes only its own points.
+//! `runs/NNNNNN.json` as soon as it ends, so `--resume` skips what is there and a shard
+//! of a Slurm array writes only its own points; under MPI ([`Sweep::run_mpi`]) rank 0
+//! gathers the other ranks' records and writes them.
 //!
 //! The table ([`table`]) is formed from the records alone: errors against the scene's
 //! analytic reference where it has one (the impacting bar: plateau force, contact
-//! duration, release velocity, total impulse), and always against the finest run of
-//! the grid (most refined mesh, then smallest step, then the scene's own scheme and
-//! parameters where they are on the grid): the cumulative impulse history (largest
-//! difference over the run, relative to the reference's total), the peak contact force,
-//! the contact duration and the final energy. The accuracy of a run is its worst
-//! analytic error where there is one, else the worst of its impulse-history and energy
-//! errors. Written: `sweep.csv` (one row per run, a Pareto-front flag per error
-//! measure), `sweep-accuracy.png/.svg` (accuracy against wall time, each scheme's
-//! Pareto front), `verdict.txt` (per scheme, the cheapest run reaching each accuracy
-//! level). A sharded sweep's table covers its own runs; `signorini sweep merge`
-//! gathers every shard's records and writes the whole grid's table, equal to the
-//! unsharded one but for the timings.
+//! duration, release velocity), and always against the finest run of the grid (most
+//! refined mesh, then smallest step, then the first value of every other axis): the
+//! cumulative impulse history (largest difference over the run, relative to the
+//! reference's total), the peak contact force and the final energy. The accuracy of a
+//! run is its worst analytic error where there is one, else the worst of its
+//! impulse-history and energy errors. Written: `sweep.csv` (one row per run, a
+//! Pareto-front flag per error measure), `sweep.h5` (the same columns, cargo feature
+//! `hdf5`), `sweep-accuracy.png/.svg` (accuracy against wall time, each scheme's Pareto
+//! front), `verdict.txt` (per scheme, the cheapest run reaching each accuracy level). A
+//! sharded sweep's table covers its own runs; `signorini sweep merge` gathers every
+//! shard's records and writes the whole grid's table, equal to the unsharded one but for
+//! the timings.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -582,9 +583,8 @@ pub fn impulse_trace(force: &[f64], h: f64, t_end: f64) -> Vec<f64> {
     out
 }
 
-/// The finest run: most refined, then smallest step, then nearest the scene's own
-/// settings (the point with the fewest overrides of scheme values that differ from the
-/// first axis value), then the lowest id.
+/// The finest run: most refined, then smallest step, then the lowest index (the first
+/// value of every other axis); failed runs are never the reference.
 fn reference_run(records: &[RunRecord]) -> Option<usize> {
     records
         .iter()
