@@ -1402,6 +1402,9 @@ pub fn merge(dir: &Path) -> Result<Vec<String>, Error> {
             ),
         ));
     }
+    // held while the merged table is written: a second merge (or a sweep) into the
+    // same directory is refused meanwhile
+    let _lock = crate::io::RunLock::acquire(dir)?;
     let runs = dir.join("runs");
     std::fs::create_dir_all(&runs).map_err(|e| Error::write(&runs, e))?;
     for r in records.values() {
