@@ -413,3 +413,21 @@ fn the_hdf5_table_holds_the_csv_columns() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--mpi` from a build without the `mpi` feature is bad input naming the feature.
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn mpi_without_the_feature_is_refused() {
+    let o = Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["sweep", "bar", "--dt", "1e-6", "--mpi", "--quiet", "--out"])
+        .arg(tmp("no-mpi"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("--mpi") && e.contains("`mpi` cargo feature"),
+        "{e}"
+    );
+}
