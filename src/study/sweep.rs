@@ -16,8 +16,8 @@
 //! penetration, energies, the analytic comparison where the scene has one, and the
 //! cumulative contact impulse at [`TRACE_SAMPLES`] times) is written as
 //! `runs/NNNNNN.json` as soon as it ends, so `--resume` skips what is there and a shard
-//! of a Slurm array writes only its own points; under MPI ([`Sweep::run_mpi`]) rank 0
-//! gathers the other ranks' records and writes them.
+//! of a Slurm array writes only its own points; under MPI (`Sweep::run_mpi`, cargo
+//! feature `mpi`) rank 0 gathers the other ranks' records and writes them.
 //!
 //! The table ([`table`]) is formed from the records alone: errors against the scene's
 //! analytic reference where it has one (the impacting bar: plateau force, contact
