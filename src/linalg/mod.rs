@@ -572,25 +572,17 @@ fn quadratic_form_cols(
 /// history row (issue 19 §3).
 ///
 /// [`quadratic_form`] walks the compressed columns, about 10 cycles per column on the
-/// bar (three entries each): the history's two energies cost half a step. A matrix
-/// whose entries all lie within one diagonal of the main one (the 1-D rods) is kept as
-/// its three diagonals and summed as `Σ_j x_j (a_{j−1,j} x_{j−1} + a_jj x_j +
+/// bar (three entries each): the history's two energies cost half a step. A symmetric
+/// matrix whose rows hold exactly their three diagonals (the 1-D rods) is kept as
+/// them and summed as `Σ_j x_j (a_{j−1,j} x_{j−1} + a_jj x_j +
 /// a_{j+1,j} x_{j+1})` four columns at a time, which the compiler vectorizes; other
-/// matrices keep the column walk. Both sums are reordered against a single running
-/// sum (four lanes added pairwise), which moves the result by round-off only.
+/// matrices keep the column walk. The three-diagonal sum is reordered against a single
+/// running sum (four lanes added pairwise), which moves the result by round-off only.
 #[derive(Clone, Debug)]
 pub enum QuadraticForm {
-    /// The three diagonals of a tridiagonal matrix, column by column: `above[j] =
-    /// a_{j−1,j}` (0 for `j = 0`), `diag[j] = a_jj`, `below[j] = a_{j+1,j}` (0 for the
-    /// last column).
-    Tridiagonal {
-        /// `a_{j−1,j}`.
-        above: Vec<f64>,
-        /// `a_jj`.
-        diag: Vec<f64>,
-        /// `a_{j+1,j}`.
-        below: Vec<f64>,
-    },
+    /// A symmetric tridiagonal matrix, kept as its three diagonals
+    /// ([`TridiagonalRows`], the same arrays the step reads a rod's `K` from).
+    Tridiagonal(TridiagonalRows),
     /// Any other pattern: [`quadratic_form`] on the matrix itself.
     General,
 }
@@ -599,33 +591,19 @@ impl QuadraticForm {
     /// Reads the layout of the square matrix `a` (allocates `3n` values when it is
     /// tridiagonal).
     pub fn new(a: SparseColMatRef<'_, usize, f64>) -> Self {
-        let n = a.ncols();
-        if n < 4 || a.nrows() != n || !Tridiagonal::is_tridiagonal(a) {
+        if a.ncols() < 4 {
             return QuadraticForm::General;
         }
-        let (cp, ri, v) = (a.col_ptr(), a.row_idx(), a.val());
-        let (mut above, mut diag, mut below) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        for j in 0..n {
-            for k in cp[j]..cp[j + 1] {
-                let i = ri[k];
-                // duplicates (an unsorted or unmerged column) add up, as in the column walk
-                if i + 1 == j {
-                    above[j] += v[k];
-                } else if i == j {
-                    diag[j] += v[k];
-                } else {
-                    below[j] += v[k];
-                }
-            }
-        }
-        QuadraticForm::Tridiagonal { above, diag, below }
+        TridiagonalRows::new(a).map_or(QuadraticForm::General, QuadraticForm::Tridiagonal)
     }
 
     /// `xᵀ A x`, `a` the matrix this form was read from. Does not allocate.
     pub fn eval(&self, a: SparseColMatRef<'_, usize, f64>, x: &[f64]) -> f64 {
         match self {
             QuadraticForm::General => quadratic_form(a, x),
-            QuadraticForm::Tridiagonal { above, diag, below } => {
+            QuadraticForm::Tridiagonal(rows) => {
+                // row i of a symmetric matrix is its column i
+                let (above, diag, below) = (&rows.left, &rows.diag, &rows.right);
                 let n = x.len();
                 debug_assert_eq!(diag.len(), n);
                 // the first and last columns miss a neighbour
@@ -654,7 +632,8 @@ impl QuadraticForm {
 }
 
 /// A symmetric matrix whose every row holds exactly its three diagonals (two at the
-/// ends): the 1-D rods' `K`, kept as the diagonals so that `h (f − K x)` of the
+/// ends): the 1-D rods' `M` and `K`, kept as the diagonals for the history's energies
+/// ([`QuadraticForm`]) and so that `h (f − K x)` of the
 /// θ-method's free velocity (eq. 18; [`crate::integrators::core`]'s `begin_step`) is a
 /// vectorizable pass instead of a gather per row (issue 19 §4).
 ///
@@ -1268,13 +1247,22 @@ mod tests {
             for i in 0..n {
                 t.push(Triplet::new(i, i, 2.5 + (i % 7) as f64));
                 if i + 1 < n {
-                    t.push(Triplet::new(i, i + 1, -1.0 - (i % 3) as f64 * 0.3));
-                    t.push(Triplet::new(i + 1, i, -1.1 - (i % 5) as f64 * 0.2));
+                    let off = -1.0 - (i % 3) as f64 * 0.3 - (i % 5) as f64 * 0.2;
+                    t.push(Triplet::new(i, i + 1, off));
+                    t.push(Triplet::new(i + 1, i, off));
                 }
             }
             let a = SparseMatrix::try_new_from_triplets(n, n, &t).unwrap();
             let form = QuadraticForm::new(a.as_ref());
-            assert!(matches!(form, QuadraticForm::Tridiagonal { .. }), "n = {n}");
+            assert!(matches!(form, QuadraticForm::Tridiagonal(_)), "n = {n}");
+            // made nonsymmetric by one entry: the column walk
+            let mut u = t.clone();
+            u.push(Triplet::new(1, 0, 1e-3));
+            let b = SparseMatrix::try_new_from_triplets(n, n, &u).unwrap();
+            assert!(matches!(
+                QuadraticForm::new(b.as_ref()),
+                QuadraticForm::General
+            ));
             let x: Vec<f64> = (0..n).map(|i| 1e-4 + (i as f64 * 0.37).sin()).collect();
             let walk = quadratic_form(a.as_ref(), &x);
             let fast = form.eval(a.as_ref(), &x);
