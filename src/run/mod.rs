@@ -282,7 +282,7 @@ pub fn run_checkpointed(
         frame_count: 0,
         seconds: 0.0,
         scratch: vec![0.0; 2 * integ.system().prescribed_dofs()],
-        forms: integ.system().energy_forms(),
+        forms: None,
     };
     let mut plan = None;
     let energy0 = match resume {
@@ -359,6 +359,7 @@ pub fn run_checkpointed(
             writers.frames = Some(w);
         }
         writers.history = Some(hist);
+        writers.forms = Some(integ.system().energy_forms());
         writers.frame_stride = o.options.frame_stride(steps);
         writers.history_stride = o.options.history_stride;
         let every = resume.map_or(o.options.checkpoint_every, |c| c.every);

@@ -172,8 +172,9 @@ pub(super) struct Writers {
     pub(super) seconds: f64,
     /// Scratch of the prescribed dofs' energy.
     pub(super) scratch: Vec<f64>,
-    /// The layouts of `M` and `K` for the energies of the history rows.
-    pub(super) forms: crate::model::EnergyForms,
+    /// The layouts of `M` and `K` for the energies of the history rows (read when a
+    /// history is written).
+    pub(super) forms: Option<crate::model::EnergyForms>,
 }
 
 impl Writers {
@@ -189,15 +190,16 @@ impl Writers {
         let t0 = Instant::now();
         let s = integ.state();
         let k = s.step;
-        if let Some(w) = self
-            .history
-            .as_mut()
-            .filter(|_| k.is_multiple_of(self.history_stride) || last)
-        {
+        if let (Some(w), Some(forms)) = (
+            self.history
+                .as_mut()
+                .filter(|_| k.is_multiple_of(self.history_stride) || last),
+            self.forms.as_ref(),
+        ) {
             let (ke, pe) =
                 integ
                     .system()
-                    .energies_with(&self.forms, s.time, &s.q, &s.v, &mut self.scratch);
+                    .energies_with(forms, s.time, &s.q, &s.v, &mut self.scratch);
             w.row(s, st, ke, pe)?;
         }
         let closed = s.impulse.iter().any(|&p| p > 0.0);
