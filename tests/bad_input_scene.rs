@@ -362,6 +362,41 @@ const CASES: &[Case] = &[
         ],
     ),
     (
+        "probe on an unknown body",
+        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"c\"\nnodes = \"z1\"\ntimes = [1e-4, 5e-4]\n[[contacts]]")],
+        &["probes[0].body", "c", "names no body"],
+    ),
+    (
+        "probe on an unknown node set",
+        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"top\"\ntimes = [1e-4, 5e-4]\n[[contacts]]")],
+        &["probes[0].nodes", "top", "no such node set"],
+    ),
+    (
+        "probe time past the end",
+        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [1e-4, 2e-3]\n[[contacts]]")],
+        &["probes[0].times[1]", "0.002", "time.t_end = 0.001"],
+    ),
+    (
+        "probe times not increasing",
+        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [5e-4, 1e-4]\n[[contacts]]")],
+        &["probes[0].times[1]", "0.0001", "must increase"],
+    ),
+    (
+        "probe without times",
+        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = []\n[[contacts]]")],
+        &["probes[0].times", "0 times", "1 to 100000"],
+    ),
+    (
+        "NaN probe time",
+        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [nan]\n[[contacts]]")],
+        &["probes[0].times[0]", "NaN"],
+    ),
+    (
+        "two probes of one name",
+        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [1e-4, 5e-4]\n[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [1e-4, 5e-4]\n[[contacts]]")],
+        &["probes[1].name", "top", "probes[0] has that name"],
+    ),
+    (
         "unknown output encoding",
         &[("[time]\n", "[output]\nencoding = \"xml\"\n[time]\n")],
         &["output.encoding", "unknown variant `xml`"],
@@ -506,6 +541,10 @@ fn tables_an_example_scene_would_ignore_are_refused() {
             "[[prescribed]]\nbody = \"ball\"\nnodes = \"all\"\nvelocity = [1.0]\n",
         ),
         ("loads", "[loads]\ngravity = [-9.81]\n"),
+        (
+            "probes",
+            "[[probes]]\nname = \"p\"\nbody = \"ball\"\nnodes = \"all\"\ntimes = [1.0]\n",
+        ),
         (
             "reference",
             "[reference.impacting_bar]\nlength = 1.0\narea = 1e-4\nyoung = 2e11\ndensity = 7800.0\nvelocity = -0.1\n",

@@ -188,7 +188,7 @@ fn assert_killed_collection_readable(dir: &Path) {
 
 /// Kills `args` after each of `kills` steps, resumes, and compares with one
 /// uninterrupted run.
-fn check_resume(name: &str, args: &[&str], kills: &[usize]) {
+fn check_resume(name: &str, args: &[&str], kills: &[usize]) -> serde_json::Value {
     let whole = tmp(&format!("{name}-whole"));
     let o = run(args, &whole, None);
     assert!(
@@ -216,6 +216,7 @@ fn check_resume(name: &str, args: &[&str], kills: &[usize]) {
         );
         assert_same_run(&whole, &dir);
     }
+    serde_json::from_slice(&std::fs::read(whole.join("summary.json")).unwrap()).unwrap()
 }
 
 #[test]
@@ -246,8 +247,8 @@ fn every_scheme_resumes_to_the_uninterrupted_bar() {
     }
 }
 
-/// A scene copy with a shorter `t_end`, its mesh paths kept: its directory (removed when
-/// dropped) and the scene file.
+/// A scene copy with a shorter `t_end` (its probes' times moved within it), its mesh
+/// paths kept: its directory (removed when dropped) and the scene file.
 fn short_scene(name: &str, t_end: f64) -> (Scratch, PathBuf) {
     let src = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("meshes")
@@ -257,6 +258,15 @@ fn short_scene(name: &str, t_end: f64) -> (Scratch, PathBuf) {
     for l in text.lines() {
         if l.starts_with("t_end") {
             out.push_str(&format!("t_end = {t_end}\n"));
+        } else if l.starts_with("times") {
+            // a probe's times within the shorter run: at a step, between two steps,
+            // at the end (the sliding block's probe: values saved before a kill)
+            let h = 2e-4;
+            out.push_str(&format!(
+                "times = [{}, {}, {t_end}]\n",
+                0.25 * t_end,
+                0.5277 * t_end + 0.5 * h
+            ));
         } else {
             out.push_str(l);
             out.push('\n');
@@ -277,7 +287,10 @@ fn frictional_and_curved_scenes_resume_exactly() {
     // Coulomb friction (NSGS warm-started from the previous step's impulses), 3-D
     let (_slide_dir, slide) = short_scene("sliding_block.toml", 0.04);
     let args = ["run", slide.to_str().unwrap(), "--checkpoint-every", "37"];
-    check_resume("sliding", &args, &[40, 111, 199]);
+    let s = check_resume("sliding", &args, &[40, 111, 199]);
+    // its probe's three times were read (one before the kill at 111, kept in the
+    // checkpoint), and resumed runs read the same values (`assert_same_run`)
+    assert_eq!(s["probes"][0]["displacement"].as_array().unwrap().len(), 3);
     // a curved obstacle: G(q) and the Delassus data re-formed every step
     let (_cyl_dir, cyl) = short_scene("block_on_cylinder.toml", 0.03);
     let args = ["run", cyl.to_str().unwrap(), "--checkpoint-every", "64"];

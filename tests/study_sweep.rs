@@ -199,7 +199,8 @@ fn without_a_closed_form_the_finest_run_is_the_reference() {
     std::fs::write(
         &scene,
         format!(
-            "{text}\n[sweep]\nscheme = [\"combined-projection\"]\ndt = [8e-6, 4e-6, 2e-6, 1e-6]\n"
+            "{text}\n[sweep]\nscheme = [\"combined-projection\"]\ndt = [8e-6, 4e-6, 2e-6, 1e-6]\n\
+             [[probes]]\nname = \"tip\"\nbody = \"bar\"\nnodes = \"x1\"\ntimes = [1e-4, 3e-4]\n"
         ),
     )
     .unwrap();
@@ -235,6 +236,24 @@ fn without_a_closed_form_the_finest_run_is_the_reference() {
         acc.windows(2).all(|w| w[1] < w[0]) && acc[0] > 0.0,
         "impulse history errors {acc:?} do not shrink with the step"
     );
+    // the probe (the free end's displacement) against the finest run's: no closed form
+    // without `[reference]`, so the finest run's values; shrinking with the step, and
+    // part of the accuracy (the worst of impulse history, energy and probes)
+    let probe: Vec<f64> = rows
+        .iter()
+        .filter(|r| !r.is_reference)
+        .map(|r| r.errors[8])
+        .collect();
+    assert!(
+        probe.windows(2).all(|w| w[1] < w[0]) && probe[2] > 0.0,
+        "probe errors {probe:?} do not shrink with the step"
+    );
+    assert!(reference[0].errors[8].is_nan());
+    assert_eq!(reference[0].record.probes.len(), 2);
+    assert!(reference[0].record.probes_analytic.is_none());
+    for r in rows.iter().filter(|r| !r.is_reference) {
+        assert_eq!(r.errors[0], r.errors[4].max(r.errors[6]).max(r.errors[8]));
+    }
     let csv = std::fs::read_to_string(dir.join("sweep.csv")).unwrap();
     assert!(
         csv.contains("itself (the finest run)") && csv.contains("run 3"),

@@ -48,6 +48,25 @@ impl ImpactingBar {
     pub fn release_velocity(&self) -> f64 {
         -self.velocity
     }
+    /// The displacement `u(x, t)` (m) of the point at distance `x` from the impacting end
+    /// (the bar touches the wall at `t = 0`). The compression front reaches `x` at
+    /// `x/c0` and stops it; the unloading front reflected at the free end reaches it at
+    /// `(2L − x)/c0` and sends it back at `−v0`, which it keeps after release at `2L/c0`
+    /// (the bar then moves rigidly, stress-free):
+    /// `u = v0 t` before the first front, `v0 x/c0` between them, `v0 x/c0 − v0 (t −
+    /// (2L − x)/c0)` after the second.
+    pub fn displacement(&self, x: f64, t: f64) -> f64 {
+        let c0 = self.wave_speed();
+        let v0 = self.velocity;
+        let (t1, t2) = (x / c0, (2.0 * self.length - x) / c0);
+        if t <= t1 {
+            v0 * t
+        } else if t <= t2 {
+            v0 * t1
+        } else {
+            v0 * t1 - v0 * (t - t2)
+        }
+    }
 }
 
 #[cfg(test)]
@@ -67,5 +86,34 @@ mod tests {
         assert!((b.wave_speed() - 5188.745).abs() < 5e-4);
         assert!((b.contact_duration() - 3.8545e-4).abs() < 5e-9);
         assert!((b.contact_force() - 1271.472).abs() < 5e-4);
+    }
+
+    #[test]
+    fn displacement_is_continuous_and_ends_stress_free() {
+        let b = ImpactingBar {
+            length: 1.0,
+            area: std::f64::consts::PI * 1e-4,
+            young: 210e9,
+            density: 7800.0,
+            velocity: -0.1,
+        };
+        let (c0, t_end) = (b.wave_speed(), b.contact_duration());
+        // the contact end never moves during contact; the free end turns at L/c0, where
+        // it has moved v0 L / c0, and is back at 0 at release
+        assert_eq!(b.displacement(0.0, 0.5 * t_end), 0.0);
+        let tip = b.displacement(1.0, 1.0 / c0);
+        assert!((tip - (-0.1 / c0)).abs() < 1e-20, "{tip}");
+        for x in [0.0, 0.25, 0.5, 1.0] {
+            // at release every point is back at u = 0 (uniform zero strain), and the
+            // whole bar then moves at −v0
+            assert!(b.displacement(x, t_end).abs() < 1e-19, "x = {x}");
+            let later = b.displacement(x, t_end + 1e-4);
+            assert!((later - 1e-5).abs() < 1e-18, "x = {x}: {later}");
+            // continuous at both fronts
+            for t in [x / c0, (2.0 - x) / c0] {
+                let (a, c) = (b.displacement(x, t * (1.0 - 1e-12)), b.displacement(x, t * (1.0 + 1e-12)));
+                assert!((a - c).abs() < 1e-15, "x = {x}, t = {t}");
+            }
+        }
     }
 }

@@ -61,6 +61,26 @@ impl Geometry {
     }
 }
 
+/// A displacement probe of a built model (a scene's `[[probes]]` entry, resolved): the
+/// mean displacement of `points` at `times`, read by the run's probe observer through
+/// [`Geometry::dof_of`] and [`Geometry::prescribed`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Probe {
+    /// Name.
+    pub name: String,
+    /// Body name.
+    pub body: String,
+    /// The node set's name.
+    pub nodes: String,
+    /// The set's points (indices into [`Geometry::points`]).
+    pub points: Vec<usize>,
+    /// Increasing times (s).
+    pub times: Vec<f64>,
+    /// For a rod: each point's distance from the body's end of smallest `x` (m), where
+    /// the impacting bar's closed form is measured from.
+    pub rod_abscissa: Option<Vec<f64>>,
+}
+
 /// A rigid part drawn as line segments.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Outline {

@@ -120,6 +120,9 @@ pub struct RunState {
     pub frames: usize,
     /// A contact was closed at the checkpointed step (frames are saved at switches).
     pub closed_before: bool,
+    /// The probes' values recorded so far (`run::probes::ProbeSet::save`).
+    #[serde(default)]
+    pub probes: Vec<Floats>,
 }
 
 /// One input file of a run as the checkpoint saw it.

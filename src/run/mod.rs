@@ -10,6 +10,7 @@
 pub mod checkpoint;
 pub mod driver;
 mod observers;
+pub mod probes;
 pub mod summary;
 
 pub use driver::{Observer, Progress, Quiet, RunChecks, drive};
@@ -101,6 +102,7 @@ fn run_bar_from(
         out.map(|o| (o, geometry)),
         progress,
         ckpt,
+        probes::ProbeSet::default(),
     )
     .and_then(|r| {
         let planned = scene.memory().total() + crate::limits::PROCESS_BYTES;
@@ -128,6 +130,7 @@ fn run_scene_from(
     let t0 = Instant::now();
     progress.phase("building the model (mesh, assembly, contacts)");
     let (mut model, report) = scene.build()?;
+    let probes = probes::ProbeSet::new(&model.probes, &model.geometry);
     let geometry = std::mem::take(&mut model.geometry);
     // the run's memory ledger, checked before anything is factored
     let mut plan = model.plan(&scene.scheme, scene.time.dt)?;
@@ -176,6 +179,7 @@ fn run_scene_from(
         out.map(|o| (o, geometry)),
         progress,
         ckpt,
+        probes,
     )
     .and_then(|r| finish(r, setup, plan.ledger.total(), out))
 }
@@ -240,12 +244,22 @@ pub fn run(
     progress: &mut dyn Progress,
 ) -> Result<RunResult, Error> {
     run_checkpointed(
-        integ, steps, elements, theta, checks, reference, parameters, out, progress, None,
+        integ,
+        steps,
+        elements,
+        theta,
+        checks,
+        reference,
+        parameters,
+        out,
+        progress,
+        None,
+        probes::ProbeSet::default(),
     )
 }
 
 /// [`run`], writing checkpoints when `out.options.checkpoint_every > 0` (then `ckpt`
-/// says what to rebuild), or resuming from `ckpt.resume`.
+/// says what to rebuild), or resuming from `ckpt.resume`, and reading `probes`.
 #[allow(clippy::too_many_arguments)]
 pub fn run_checkpointed(
     integ: &mut dyn Integrator,
@@ -258,6 +272,7 @@ pub fn run_checkpointed(
     out: Option<(Output, Geometry)>,
     progress: &mut dyn Progress,
     ckpt: Option<Checkpointing>,
+    mut probes: probes::ProbeSet,
 ) -> Result<RunResult, Error> {
     let h = integ.dt();
     let m = integ.state().gap.len();
@@ -393,6 +408,7 @@ pub fn run_checkpointed(
         writers,
         h,
         plan,
+        probes: probes::ProbeSet::default(),
         // Schatzman–Paoli's velocity is a central difference: its discrete energy is
         // not the θ-method's, whose balance the check reads
         energy: (integ.name() != "schatzman-paoli").then(|| {
@@ -405,6 +421,13 @@ pub fn run_checkpointed(
             }
         }),
     };
+    {
+        let s = integ.state();
+        let saved: Option<Vec<Vec<f64>>> =
+            resume.map(|c| c.run.probes.iter().map(|f| f.0.clone()).collect());
+        probes.start(s.time, h, &s.q, saved.as_deref());
+    }
+    obs.probes = probes;
     if let Some(c) = resume {
         obs.restore(&c.run);
         if let Some(e) = obs.energy.as_mut() {
@@ -421,6 +444,7 @@ pub fn run_checkpointed(
         mut writers,
         plan,
         energy,
+        probes,
         ..
     } = obs;
     let energy_balance = energy.map(|e| EnergyBalance {
@@ -496,6 +520,7 @@ pub fn run_checkpointed(
         max_lcp_residual: acc.lcp_res,
         energy: [energy0, energy1],
         energy_balance,
+        probes: probes.summaries(reference.as_ref()),
         path: integ.path(),
         model_seconds: 0.0,
         integrator_seconds: 0.0,

@@ -247,6 +247,7 @@ pub(super) struct RunObserver {
     pub(super) h: f64,
     pub(super) plan: Option<CheckpointPlan>,
     pub(super) energy: Option<EnergyCheck>,
+    pub(super) probes: super::probes::ProbeSet,
 }
 
 /// Steps between two checks of the energy balance (each costs the two quadratic forms
@@ -316,6 +317,7 @@ impl Observer for RunObserver {
         let f = s.impulse.iter().sum::<f64>() / self.h;
         let g = s.gap.iter().copied().fold(f64::INFINITY, f64::min);
         self.tracker.push(s.step - 1, f, g);
+        self.probes.observe(s.time, self.h, &s.q, last);
         self.writers.observe(integ, st, last)?;
         if let Some((every, abort_after)) = self.plan.as_ref().map(|p| (p.every, p.abort_after)) {
             if !last && s.step.is_multiple_of(every) {
@@ -383,6 +385,7 @@ impl RunObserver {
             history_rows: self.writers.history.as_ref().map_or(0, |h| h.rows()),
             frames: self.writers.frame_count,
             closed_before: self.writers.closed_before,
+            probes: self.probes.save().into_iter().map(Floats).collect(),
         };
         Checkpoint {
             format: checkpoint::FORMAT.to_string(),

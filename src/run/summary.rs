@@ -199,6 +199,9 @@ pub struct Summary {
     /// motion, and the largest excess met relative to the run's energy scale (`None` for
     /// Schatzman–Paoli, whose discrete energy is not the θ-method's).
     pub energy_balance: Option<EnergyBalance>,
+    /// The displacement probes (a scene's `[[probes]]`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub probes: Vec<super::probes::ProbeSummary>,
     /// Linear-algebra path taken.
     pub path: String,
     /// Seconds to build the model (mesh, parallel assembly of `M` and `K`, contacts).

@@ -129,6 +129,7 @@ impl BarScene {
                 outlines: vec![wall(-self.gap, 0.2 * self.length)],
                 ..Geometry::rod(self.length, self.elements, self.young, self.density)
             },
+            probes: Vec::new(),
         })
     }
 

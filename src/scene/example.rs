@@ -217,6 +217,7 @@ impl ExampleSpec {
                     q0: q0.to_vec(),
                     v0: v0.to_vec(),
                     geometry: Geometry::default(),
+                    probes: Vec::new(),
                 },
                 ExampleSpec::SliderCrank {
                     restitution,
@@ -238,6 +239,7 @@ impl ExampleSpec {
                         q0: q0.to_vec(),
                         v0: v0.to_vec(),
                         geometry: Geometry::default(),
+                        probes: Vec::new(),
                     }
                 }
             })
@@ -261,5 +263,6 @@ fn on_the_line(
         q0: vec![q0],
         v0: vec![v0],
         geometry: Geometry::default(),
+        probes: Vec::new(),
     })
 }

@@ -57,6 +57,7 @@ use crate::model::solid::{
     CellKind, Formulation, Material, MaterialModel, Mesh, assemble_with_contacts,
 };
 use crate::model::system::HyperelasticPart;
+use crate::model::geometry::Probe;
 use crate::model::{LinearSystem, MassKind};
 use crate::scene::Model;
 
@@ -91,6 +92,10 @@ pub struct Scene {
     /// Prescribed velocities of node sets with a time function.
     #[serde(default)]
     pub prescribed: Vec<PrescribedSpec>,
+    /// Displacement probes: the displacement of node sets at named times, reported in
+    /// `summary.json` and compared by `signorini sweep`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub probes: Vec<ProbeSpec>,
     /// Output options.
     #[serde(default)]
     pub output: crate::io::OutputOptions,
@@ -423,6 +428,29 @@ pub struct PrescribedSpec {
     pub time: Option<Vec<[f64; 2]>>,
 }
 
+/// `[[probes]]`: the mean displacement of a node set of one body at named times.
+///
+/// The θ-method's displacement is linear within a step (`q_{k+1} = q_k + h(θ v_{k+1} +
+/// (1−θ) v_k)`, eq. 18), so a time between two steps is read by linear interpolation
+/// between them; a time at a step is read exactly.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProbeSpec {
+    /// The probe's name (unique; the summary's and the sweep's label).
+    pub name: String,
+    /// Body name.
+    pub body: String,
+    /// A node set of the body's mesh (a set, `boundary` or `all`): the probe reads the
+    /// mean displacement of its nodes (one node: that node's displacement).
+    pub nodes: String,
+    /// The times (s), increasing, within `[0, time.t_end]`.
+    pub times: Vec<f64>,
+}
+
+/// Most times one probe may name (each costs one displacement vector in the summary
+/// and in a checkpoint).
+pub const MAX_PROBE_TIMES: usize = 100_000;
+
 /// `[loads]`.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -541,6 +569,7 @@ impl Scene {
                 (!self.contacts.is_empty(), "contacts"),
                 (!self.forces.is_empty(), "forces"),
                 (!self.prescribed.is_empty(), "prescribed"),
+                (!self.probes.is_empty(), "probes"),
                 (self.loads.gravity.is_some(), "loads"),
                 (self.reference.is_some(), "reference"),
             ];
@@ -718,6 +747,51 @@ impl Scene {
             let at = format!("forces[{i}]");
             self.driven_body(&at, &f.body, ("total", &f.total, "N"), &f.time)?;
         }
+        self.validate_probes()
+    }
+
+    /// Checks the `[[probes]]`: unique non-empty names, existing bodies, increasing
+    /// finite times within `[0, time.t_end]`, at most [`MAX_PROBE_TIMES`] each.
+    fn validate_probes(&self) -> Result<(), Error> {
+        for (i, p) in self.probes.iter().enumerate() {
+            let key = |k: &str| format!("probes[{i}].{k}");
+            if p.name.trim().is_empty() {
+                return Err(Error::invalid(&key("name"), "\"\"", "a probe needs a name"));
+            }
+            if let Some(j) = self.probes[..i].iter().position(|o| o.name == p.name) {
+                return Err(Error::invalid(
+                    &key("name"),
+                    &p.name,
+                    &format!("probes[{j}] has that name already; names must be unique"),
+                ));
+            }
+            if !self.bodies.iter().any(|b| b.name == p.body) {
+                return Err(Error::invalid(&key("body"), &p.body, "names no body"));
+            }
+            if p.times.is_empty() || p.times.len() > MAX_PROBE_TIMES {
+                return Err(Error::invalid(
+                    &key("times"),
+                    format!("{} times", p.times.len()),
+                    &format!("expected 1 to {MAX_PROBE_TIMES} times"),
+                ));
+            }
+            for (k, &t) in p.times.iter().enumerate() {
+                if !(0.0..=self.time.t_end).contains(&t) {
+                    return Err(Error::invalid(
+                        &format!("probes[{i}].times[{k}]"),
+                        t,
+                        &format!("expected a time in [0, time.t_end = {}] s", self.time.t_end),
+                    ));
+                }
+                if k > 0 && t <= p.times[k - 1] {
+                    return Err(Error::invalid(
+                        &format!("probes[{i}].times[{k}]"),
+                        t,
+                        &format!("times must increase (times[{}] = {})", k - 1, p.times[k - 1]),
+                    ));
+                }
+            }
+        }
         Ok(())
     }
 
@@ -802,6 +876,8 @@ impl Scene {
         // each contact's nodes, found once with its body's mesh: they take no mass under
         // the redistributed mass, then become the contact set below
         let mut nodes_of: Vec<Vec<usize>> = vec![Vec::new(); self.contacts.len()];
+        // each body's first point in `geometry.points` (for the probes)
+        let mut point_base = Vec::with_capacity(self.bodies.len());
         // every mesh first: a contact between bodies needs both sides' meshes
         let mut all_meshes = Vec::with_capacity(self.bodies.len());
         for (bi, b) in self.bodies.iter().enumerate() {
@@ -927,6 +1003,7 @@ impl Scene {
             }
             fixed.extend(fx);
             let base = geometry.points.len();
+            point_base.push(base);
             match &b.mesh {
                 MeshSpec::Rod { elements, .. } => {
                     geometry.cells.extend(
@@ -1157,6 +1234,7 @@ impl Scene {
             linear_structure: system.nonlinear.is_empty(),
             interfaces,
         };
+        let probes = self.probes(&meshes, &point_base)?;
         let n = system.ndof();
         if crate::model::ordering::worth_ordering(&geometry) {
             system.ordering = Some(crate::model::ordering::nested_dissection(&geometry, n));
@@ -1168,9 +1246,41 @@ impl Scene {
                 q0: vec![0.0; n],
                 v0,
                 geometry,
+                probes,
             },
             report,
         ))
+    }
+
+    /// The `[[probes]]` on the built meshes: each set's points in the geometry, and a
+    /// rod's abscissae from its end of smallest `x`.
+    fn probes(&self, meshes: &[Mesh], point_base: &[usize]) -> Result<Vec<Probe>, Error> {
+        let mut out = Vec::with_capacity(self.probes.len());
+        for (i, p) in self.probes.iter().enumerate() {
+            let bi = self.body_index(&p.body);
+            let mesh = &meshes[bi];
+            let nodes = node_set(mesh, &p.nodes).map_err(|e| prefix(&format!("probes[{i}]"), e))?;
+            if nodes.is_empty() {
+                return Err(Error::invalid(
+                    &format!("probes[{i}].nodes"),
+                    &p.nodes,
+                    "the node set is empty",
+                ));
+            }
+            let rod_abscissa = matches!(self.bodies[bi].mesh, MeshSpec::Rod { .. }).then(|| {
+                let x0 = mesh.points.iter().map(|x| x[0]).fold(f64::INFINITY, f64::min);
+                nodes.iter().map(|&v| mesh.points[v][0] - x0).collect()
+            });
+            out.push(Probe {
+                name: p.name.clone(),
+                body: p.body.clone(),
+                nodes: p.nodes.clone(),
+                points: nodes.iter().map(|&v| point_base[bi] + v).collect(),
+                times: p.times.clone(),
+                rod_abscissa,
+            });
+        }
+        Ok(out)
     }
 
     /// The nodes of contact `c` on `mesh`: its node set (`boundary` and `all`

@@ -26,6 +26,8 @@ pub struct Model {
     pub v0: Vec<f64>,
     /// Points, cells and dof map for the field output.
     pub geometry: crate::io::frames::Geometry,
+    /// Displacement probes (a scene's `[[probes]]`).
+    pub probes: Vec<crate::model::geometry::Probe>,
 }
 
 impl Model {
@@ -77,6 +79,7 @@ pub fn builtin_scene(name: &str) -> Result<file::Scene, Error> {
         loads: file::Loads::default(),
         forces: Vec::new(),
         prescribed: Vec::new(),
+        probes: Vec::new(),
         output: crate::io::OutputOptions::default(),
         base_dir: std::path::PathBuf::new(),
         file: None,

@@ -150,6 +150,7 @@ impl SolidBarScene {
             q0: vec![0.0; n],
             v0,
             geometry,
+            probes: Vec::new(),
         })
     }
 

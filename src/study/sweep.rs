@@ -24,9 +24,13 @@
 //! duration, release velocity), and always against the finest run of the grid (most
 //! refined mesh, then smallest step, then the first value of every other axis): the
 //! cumulative impulse history (largest difference over the run, relative to the
-//! reference's total), the peak contact force and the final energy. The accuracy of a
+//! reference's total), the peak contact force and the final energy; and the scene's
+//! displacement probes (`[[probes]]`: the displacement of node sets at named times,
+//! `run::probes`) against the closed form where every probe has one (rods of the
+//! impacting bar), else against the finest run (largest difference over every probe,
+//! time and component, relative to the largest reference value). The accuracy of a
 //! run is its worst analytic error where there is one, else the worst of its
-//! impulse-history and energy errors. Written: `sweep.csv` (one row per run, a
+//! impulse-history, energy and probe errors. Written: `sweep.csv` (one row per run, a
 //! Pareto-front flag per error measure), `sweep.h5` (the same columns, cargo feature
 //! `hdf5`), `sweep-accuracy.png/.svg` (accuracy against wall time, each scheme's Pareto
 //! front), `verdict.txt` (per scheme, the cheapest run reaching each accuracy level). A
@@ -394,13 +398,21 @@ pub struct RunRecord {
     /// Which shard or MPI rank made the run (0 for a sweep on one process).
     #[serde(default)]
     pub worker: usize,
+    /// The scene's displacement probes: every probe's displacement at its times, one
+    /// component per dimension, in the scene's order (m).
+    #[serde(default)]
+    pub probes: Vec<f64>,
+    /// The impacting bar's closed form at the same probes, when every probe has it.
+    #[serde(default)]
+    pub probes_analytic: Option<Vec<f64>>,
 }
 
 /// The measures of the table: (column, what it is).
-pub const MEASURES: [(&str, &str); 8] = [
+pub const MEASURES: [(&str, &str); 9] = [
     (
         "accuracy",
-        "worst analytic error, else worst of impulse history and energy",
+        "worst analytic error (the probes' too where they have one), else worst of impulse \
+         history, energy and probes",
     ),
     (
         "plateau_force_error",
@@ -424,6 +436,10 @@ pub const MEASURES: [(&str, &str); 8] = [
     ),
     ("energy_error", "final energy against the finest run"),
     ("max_violation", "largest penetration (m)"),
+    (
+        "probe_error",
+        "displacement at the probes against the analytic value, else the finest run",
+    ),
 ];
 
 /// A row of the table: the record and its errors.
@@ -432,9 +448,9 @@ pub struct Row {
     /// The run.
     pub record: RunRecord,
     /// Values of [`MEASURES`] (NaN where not measured).
-    pub errors: [f64; 8],
+    pub errors: [f64; 9],
     /// On the Pareto front (wall time against the error) per measure.
-    pub front: [bool; 8],
+    pub front: [bool; 9],
     /// The finest run, which the others are compared with.
     pub is_reference: bool,
 }
@@ -506,6 +522,8 @@ pub fn run_point(
                     contact_duration: f64::NAN,
                     impulse: Vec::new(),
                     worker: 0,
+                    probes: Vec::new(),
+                    probes_analytic: None,
                 });
             }
         }
@@ -555,6 +573,18 @@ pub fn run_point(
         contact_duration,
         impulse: impulse_trace(&r.force, h, s.t_end),
         worker: 0,
+        probes: s
+            .probes
+            .iter()
+            .flat_map(|p| p.displacement.iter().flatten().copied())
+            .collect(),
+        probes_analytic: s
+            .probes
+            .iter()
+            .map(|p| p.analytic.as_ref())
+            .collect::<Option<Vec<_>>>()
+            .filter(|a| !a.is_empty())
+            .map(|a| a.into_iter().flatten().flatten().copied().collect()),
     })
 }
 
@@ -609,7 +639,21 @@ pub fn table(mut records: Vec<RunRecord>) -> Vec<Row> {
         .into_iter()
         .enumerate()
         .map(|(i, r)| {
-            let mut e = [f64::NAN; 8];
+            let mut e = [f64::NAN; 9];
+            // max |u − u_ref| / max |u_ref| over every probe, time and component
+            let probe_error = |u: &[f64], v: &[f64]| {
+                let scale = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                (scale > 0.0 && !u.is_empty() && u.len() == v.len()).then(|| {
+                    u.iter()
+                        .zip(v)
+                        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+                        / scale
+                })
+            };
+            let probe_analytic = r
+                .probes_analytic
+                .as_deref()
+                .and_then(|a| probe_error(&r.probes, a));
             if r.status == "ok" {
                 if let Some(a) = r.analytic {
                     e[1] = a[0].abs();
@@ -636,10 +680,16 @@ pub fn table(mut records: Vec<RunRecord>) -> Vec<Row> {
                     }
                 }
                 e[7] = r.max_violation;
+                e[8] = match (probe_analytic, refr.as_ref().filter(|_| Some(i) != reference)) {
+                    (Some(x), _) => x,
+                    (None, Some(f)) => probe_error(&r.probes, &f.probes).unwrap_or(f64::NAN),
+                    (None, None) => f64::NAN,
+                };
                 e[0] = if r.analytic.is_some() {
-                    e[1].max(e[2]).max(e[3])
+                    let probes = probe_analytic.unwrap_or(0.0);
+                    e[1].max(e[2]).max(e[3]).max(probes)
                 } else {
-                    [e[4], e[6]]
+                    [e[4], e[6], e[8]]
                         .into_iter()
                         .filter(|x| !x.is_nan())
                         .fold(f64::NAN, f64::max)
@@ -648,12 +698,12 @@ pub fn table(mut records: Vec<RunRecord>) -> Vec<Row> {
             Row {
                 record: r,
                 errors: e,
-                front: [false; 8],
+                front: [false; 9],
                 is_reference: Some(i) == reference,
             }
         })
         .collect();
-    for m in 0..8 {
+    for m in 0..MEASURES.len() {
         let mut idx: Vec<usize> = (0..rows.len())
             .filter(|&i| !rows[i].errors[m].is_nan() && rows[i].record.wall_seconds.is_finite())
             .collect();
