@@ -765,6 +765,18 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     for line in &report.interfaces {
         out!("interface           {line}");
     }
+    for p in &model.probes {
+        out!(
+            "probe               \"{}\": mean displacement of {} node(s) of {} (set `{}`) at {} time(s) from {:e} to {:e} s",
+            p.name,
+            p.points.len(),
+            p.body,
+            p.nodes,
+            p.times.len(),
+            p.times[0],
+            p.times[p.times.len() - 1]
+        );
+    }
     out!(
         "time                {} steps of {:e} s, scheme {}, θ = {}",
         scene.steps(),
