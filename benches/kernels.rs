@@ -1,4 +1,5 @@
-//! The kernels of one bar step, timed alone: the sparse Cholesky solve with `M̂`, the
+//! The kernels of one bar step, timed alone: the tridiagonal solve with `M̂` (fused
+//! multiply-add where the CPU has it, and portable), the
 //! stiffness product `K x`, the energy's quadratic form `xᵀ K x`, and the free-velocity computation that combines them.
 //! Run: `cargo bench --bench kernels`.
 
@@ -17,13 +18,19 @@ fn kernels(c: &mut Criterion) {
         let sys = s.rod().assemble().unwrap();
         let h = 1e-7;
         let mhat = linear_combination(&[(1.0, &sys.mass), (h * h / 4.0, &sys.stiffness)]);
-        let mut f = SpdFactor::new(mhat.as_ref(), "M̂").unwrap();
         let mut x: Vec<f64> = (0..=n).map(|i| (i as f64 * 0.1).sin()).collect();
         let mut y = vec![0.0; n + 1];
         g.throughput(Throughput::Elements(n as u64 + 1));
-        g.bench_function(BenchmarkId::new("cholesky_solve", n), |b| {
-            b.iter(|| f.solve_in_place(std::hint::black_box(&mut x)))
-        });
+        // the tridiagonal L D Lᵀ solve in the default arithmetic (fused multiply-add
+        // where the CPU has it) and in the portable one
+        for (name, portable) in [("cholesky_solve", false), ("cholesky_solve_portable", true)] {
+            signorini::linalg::set_portable_arithmetic(portable);
+            let mut f = SpdFactor::new(mhat.as_ref(), "M̂").unwrap();
+            g.bench_function(BenchmarkId::new(name, n), |b| {
+                b.iter(|| f.solve_in_place(std::hint::black_box(&mut x)))
+            });
+        }
+        signorini::linalg::set_portable_arithmetic(false);
         g.bench_function(BenchmarkId::new("energy_quadratic_form", n), |b| {
             b.iter(|| quadratic_form(sys.stiffness.as_ref(), std::hint::black_box(&x)))
         });

@@ -11,6 +11,11 @@
 //! largest magnitude of its column (a relative test per value would fail on quantities
 //! that are round-off around zero, such as a violation of 1e-40 m next to 0). Any change
 //! of the arithmetic of the frictionless path beyond reordering shows up far above it.
+//!
+//! The golden files are the portable arithmetic's (separate multiply and add: the same
+//! bits on every CPU), which `--portable-arithmetic` selects; the default arithmetic
+//! (fused multiply-add in the tridiagonal solve where the CPU has it) is held to a
+//! round-off tolerance per kind of column instead (issue 19 §4).
 
 use std::path::Path;
 use std::process::Command;
@@ -66,12 +71,18 @@ fn read(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     (header, rows)
 }
 
-#[test]
-fn frictionless_histories_match_the_golden_files() {
+/// Runs every case with `extra` arguments and returns, per case, its header, the golden
+/// rows and the new rows.
+#[allow(clippy::type_complexity)]
+fn run_cases(extra: &[&str]) -> Vec<(&'static str, Vec<String>, Vec<Vec<f64>>, Vec<Vec<f64>>)> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut out_rows = Vec::new();
     for (name, args) in CASES {
-        let out =
-            std::env::temp_dir().join(format!("signorini-golden-{}-{name}", std::process::id()));
+        let out = std::env::temp_dir().join(format!(
+            "signorini-golden-{}-{name}-{}",
+            std::process::id(),
+            extra.len()
+        ));
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_signorini"));
         cmd.current_dir(root).args(*args);
         if args[0] == "bar" {
@@ -80,6 +91,7 @@ fn frictionless_histories_match_the_golden_files() {
         let status = cmd
             .args(["--quiet", "--no-fields", "--no-plots", "--out"])
             .arg(&out)
+            .args(extra)
             .status()
             .unwrap();
         assert!(status.success(), "{name}: {status}");
@@ -88,27 +100,91 @@ fn frictionless_histories_match_the_golden_files() {
         // the new layer adds columns (tangential quantities) only for frictional scenes
         assert_eq!(h, gh, "{name}: header");
         assert_eq!(now.len(), gold.len(), "{name}: rows");
-        let cols = gh.len();
-        let scale: Vec<f64> = (0..cols)
-            .map(|c| gold.iter().map(|r| r[c].abs()).fold(0.0, f64::max))
-            .collect();
-        let mut worst = (0.0, 0, 0);
-        for (i, (a, b)) in now.iter().zip(&gold).enumerate() {
-            for c in 0..cols {
-                let d = (a[c] - b[c]).abs();
-                let rel = if scale[c] > 0.0 { d / scale[c] } else { d };
-                if rel > worst.0 {
-                    worst = (rel, i, c);
-                }
+        let _ = std::fs::remove_dir_all(&out);
+        out_rows.push((*name, gh, gold, now));
+    }
+    out_rows
+}
+
+/// The largest difference of each column relative to the golden column's largest
+/// magnitude (the difference itself where the column is all zero).
+fn worst_by_column(gold: &[Vec<f64>], now: &[Vec<f64>]) -> Vec<f64> {
+    let cols = gold[0].len();
+    (0..cols)
+        .map(|c| {
+            let scale = gold.iter().map(|r| r[c].abs()).fold(0.0, f64::max);
+            let d = now
+                .iter()
+                .zip(gold)
+                .map(|(a, b)| (a[c] - b[c]).abs())
+                .fold(0.0, f64::max);
+            if scale > 0.0 { d / scale } else { d }
+        })
+        .collect()
+}
+
+/// The portable arithmetic (`--portable-arithmetic`: separate multiply and add, the
+/// arithmetic the golden files were written in) reproduces them to 1e-13 of each
+/// column's scale.
+#[test]
+fn frictionless_histories_match_the_golden_files() {
+    for (name, gh, gold, now) in run_cases(&["--portable-arithmetic"]) {
+        let w = worst_by_column(&gold, &now);
+        let (c, worst) = w
+            .iter()
+            .enumerate()
+            .fold((0, 0.0), |m, (c, &x)| if x > m.1 { (c, x) } else { m });
+        assert!(
+            worst <= 1e-13,
+            "{name}: column {} differs by {worst:e} of the column's scale",
+            gh[c]
+        );
+    }
+}
+
+/// The default arithmetic (fused multiply-add in the tridiagonal solve where the CPU has
+/// it; on a CPU without FMA it is the portable one) changes the bar's histories by
+/// round-off only: each value within 1e-11 of its column's scale (measured ≤ 3.6e-13,
+/// the contact node's velocity after 300 steps of impacts), the violations within
+/// 1e-18 m (round-off of displacements of 1e-5 m, 2e-21 m per rounding; measured
+/// ≤ 3.5e-20 m), and the iteration counts within one per row: the projection schemes
+/// project to machine accuracy (tolerance 0, DESIGN.md §3), so whether a step takes a
+/// projection iteration depends on whether its free step left a violation of round-off
+/// size (5.9e-39 m) or none (measured: Algorithm 2's projection count moves by one on
+/// 59 of 300 rows, 38 against 55 in all; Newton and index-set counts unchanged).
+#[test]
+fn fused_arithmetic_moves_the_histories_by_round_off_only() {
+    for (name, gh, gold, now) in run_cases(&[]) {
+        let w = worst_by_column(&gold, &now);
+        for (c, col) in gh.iter().enumerate() {
+            if col.ends_with("violation") {
+                let d = now
+                    .iter()
+                    .zip(&gold)
+                    .map(|(a, b)| (a[c] - b[c]).abs())
+                    .fold(0.0, f64::max);
+                assert!(d <= 1e-18, "{name}: {col} differs by {d:e} m");
+            } else if col.ends_with("iterations") {
+                let moved: Vec<f64> = now
+                    .iter()
+                    .zip(&gold)
+                    .map(|(a, b)| (a[c] - b[c]).abs())
+                    .filter(|&d| d > 0.0)
+                    .collect();
+                assert!(
+                    moved.iter().all(|&d| d <= 1.0),
+                    "{name}: {col} moved on {} of {} rows (by up to {:?})",
+                    moved.len(),
+                    gold.len(),
+                    moved.iter().copied().fold(0.0, f64::max)
+                );
+            } else {
+                assert!(
+                    w[c] <= 1e-11,
+                    "{name}: column {col} differs by {:e} of the column's scale",
+                    w[c]
+                );
             }
         }
-        assert!(
-            worst.0 <= 1e-13,
-            "{name}: row {} column {} differs by {:e} of the column's scale",
-            worst.1,
-            gh[worst.2],
-            worst.0
-        );
-        let _ = std::fs::remove_dir_all(&out);
     }
 }

@@ -89,12 +89,105 @@ struct FaerLlt {
 /// for the 1001-dof bar, while `y_i = r_i − l_i y_{i−1}` and
 /// `x_i = y_i/d_i − l_{i+1} x_{i+1}` keep one fused multiply-add per row in the chain
 /// (3.8 ns per row, `cargo bench --bench kernels`).
+///
+/// Where the CPU has fused multiply-add (x86-64 with FMA, every aarch64) and the
+/// process has not asked for [`Arithmetic::Portable`], both recurrences run fused
+/// (pulp's run-time dispatch, so a build without `target-cpu=native` gets it): one
+/// rounding per row instead of two, and half the latency of the chain. The results then
+/// differ from the unfused ones by round-off (see [`arithmetic`]).
 #[derive(Debug, Default)]
 struct Tridiagonal {
     /// `l_i` for `i ≥ 1` (`l[0]` unused).
     l: Vec<f64>,
     /// `1 / d_i`.
     dinv: Vec<f64>,
+    /// Solve with fused multiply-add (decided at factorization).
+    fused: bool,
+}
+
+/// The floating-point arithmetic of the chain recurrences (the tridiagonal solve).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Arithmetic {
+    /// Fused multiply-add where the CPU has it: the fastest, but the last bits of a
+    /// result depend on the CPU.
+    Fused,
+    /// Separate multiply and add everywhere: the same bits on every CPU (the golden
+    /// histories of `tests/golden/` are this arithmetic's). faer's own kernels (the
+    /// sparse Cholesky of solids) choose their instructions at run time in either mode.
+    Portable,
+}
+
+impl Arithmetic {
+    /// The name written to `summary.json` and checkpoints.
+    pub fn name(self) -> &'static str {
+        match self {
+            Arithmetic::Fused => "fused",
+            Arithmetic::Portable => "portable",
+        }
+    }
+}
+
+static PORTABLE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Asks for [`Arithmetic::Portable`] (`true`) or the default (`false`) in factorizations
+/// made from now on, process-wide (`signorini --portable-arithmetic`).
+pub fn set_portable_arithmetic(on: bool) {
+    PORTABLE.store(on, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Whether this CPU has fused multiply-add.
+pub fn cpu_has_fma() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::is_x86_feature_detected!("fma")
+    }
+    #[cfg(target_arch = "aarch64")]
+    {
+        true
+    }
+    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+    {
+        false
+    }
+}
+
+/// The arithmetic factorizations made now use: [`Arithmetic::Fused`] where the CPU has
+/// FMA unless [`set_portable_arithmetic`] asked otherwise.
+pub fn arithmetic() -> Arithmetic {
+    if !PORTABLE.load(std::sync::atomic::Ordering::Relaxed) && cpu_has_fma() {
+        Arithmetic::Fused
+    } else {
+        Arithmetic::Portable
+    }
+}
+
+/// The fused tridiagonal solve, compiled for the CPU's vector extension by pulp's
+/// dispatch (so `mul_add` is one instruction).
+struct FusedSolve<'a> {
+    l: &'a [f64],
+    dinv: &'a [f64],
+    x: &'a mut [f64],
+}
+
+impl pulp::WithSimd for FusedSolve<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let (l, dinv, x) = (self.l, self.dinv, self.x);
+        let n = x.len();
+        let mut y = x[0];
+        for i in 1..n {
+            y = (-l[i]).mul_add(y, x[i]);
+            x[i] = y;
+        }
+        let mut xn = x[n - 1] * dinv[n - 1];
+        x[n - 1] = xn;
+        for i in (0..n - 1).rev() {
+            xn = (-l[i + 1]).mul_add(xn, x[i] * dinv[i]);
+            x[i] = xn;
+        }
+    }
 }
 
 impl Tridiagonal {
@@ -114,6 +207,7 @@ impl Tridiagonal {
         let mut t = Tridiagonal {
             l: vec![0.0; n],
             dinv: vec![0.0; n],
+            fused: false,
         };
         t.refactor(a)?;
         Ok(t)
@@ -123,6 +217,7 @@ impl Tridiagonal {
     /// without allocating: `dinv` first holds the diagonal and `l` the subdiagonal.
     fn refactor(&mut self, a: SparseColMatRef<'_, usize, f64>) -> Result<(), usize> {
         let n = a.nrows();
+        self.fused = arithmetic() == Arithmetic::Fused;
         let (cp, ri, v) = (a.col_ptr(), a.row_idx(), a.val());
         let (l, dinv) = (&mut self.l, &mut self.dinv);
         debug_assert_eq!(l.len(), n);
@@ -160,6 +255,13 @@ impl Tridiagonal {
         let n = x.len();
         if n == 0 {
             return;
+        }
+        if self.fused {
+            return pulp::Arch::new().dispatch(FusedSolve {
+                l: &self.l,
+                dinv: &self.dinv,
+                x,
+            });
         }
         let mut y = x[0];
         for i in 1..n {

@@ -229,6 +229,14 @@ pub struct Checkpoint {
     pub out_dir: PathBuf,
     /// The run's input files as they were at its start.
     pub inputs: Vec<InputFile>,
+    /// The arithmetic of the run's factorizations ([`crate::linalg::arithmetic`]): a
+    /// resumed run takes the same, so that it ends byte for byte as the uninterrupted one.
+    #[serde(default = "portable")]
+    pub arithmetic: crate::linalg::Arithmetic,
+}
+
+fn portable() -> crate::linalg::Arithmetic {
+    crate::linalg::Arithmetic::Portable
 }
 
 impl Checkpoint {

@@ -191,6 +191,19 @@ fn run_scene_from(
 pub fn resume(dir: &Path, progress: &mut dyn Progress) -> Result<RunResult, Error> {
     let c = Checkpoint::read(dir)?;
     c.verify(dir)?;
+    // the run's arithmetic, for the same bits as the uninterrupted run
+    match c.arithmetic {
+        crate::linalg::Arithmetic::Fused if !crate::linalg::cpu_has_fma() => {
+            return Err(Error::bad_file(
+                &dir.join(checkpoint::FILE),
+                "`arithmetic`",
+                "fused: the run was started on a CPU with fused multiply-add and this one has \
+                 none, so the resumed steps would round differently; resume on such a CPU"
+                    .to_string(),
+            ));
+        }
+        a => crate::linalg::set_portable_arithmetic(a == crate::linalg::Arithmetic::Portable),
+    }
     let out = Output {
         dir,
         options: &c.output,
@@ -521,6 +534,7 @@ pub fn run_checkpointed(
         energy: [energy0, energy1],
         energy_balance,
         probes: probes.summaries(reference.as_ref()),
+        arithmetic: crate::linalg::arithmetic().name().to_string(),
         path: integ.path(),
         model_seconds: 0.0,
         integrator_seconds: 0.0,

@@ -399,6 +399,7 @@ impl RunObserver {
             build: checkpoint::build_id(),
             out_dir: p.out_dir.clone(),
             inputs: p.inputs.clone(),
+            arithmetic: crate::linalg::arithmetic(),
         }
         .write(&p.dir)
     }

@@ -199,6 +199,10 @@ pub struct Summary {
     /// motion, and the largest excess met relative to the run's energy scale (`None` for
     /// Schatzman–Paoli, whose discrete energy is not the θ-method's).
     pub energy_balance: Option<EnergyBalance>,
+    /// The arithmetic of the chain solves: `fused` (fused multiply-add, this CPU's bits)
+    /// or `portable` (`--portable-arithmetic`, or a CPU without FMA: the same bits on
+    /// every CPU); see [`crate::linalg::Arithmetic`].
+    pub arithmetic: String,
     /// The displacement probes (a scene's `[[probes]]`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub probes: Vec<super::probes::ProbeSummary>,
