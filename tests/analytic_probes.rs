@@ -64,7 +64,10 @@ times = [1e-4, 2e-4, 3.5e-4]
     for (t, u) in end.times.iter().zip(&end.displacement) {
         assert!(u[0].abs() < 1e-20, "contact end at t = {t}: {:e}", u[0]);
     }
-    assert!(end.analytic_error.is_none(), "zero reference: no relative error");
+    assert!(
+        end.analytic_error.is_none(),
+        "zero reference: no relative error"
+    );
 }
 
 #[test]

@@ -363,37 +363,58 @@ const CASES: &[Case] = &[
     ),
     (
         "probe on an unknown body",
-        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"c\"\nnodes = \"z1\"\ntimes = [1e-4, 5e-4]\n[[contacts]]")],
+        &[(
+            "[[contacts]]",
+            "[[probes]]\nname = \"top\"\nbody = \"c\"\nnodes = \"z1\"\ntimes = [1e-4, 5e-4]\n[[contacts]]",
+        )],
         &["probes[0].body", "c", "names no body"],
     ),
     (
         "probe on an unknown node set",
-        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"top\"\ntimes = [1e-4, 5e-4]\n[[contacts]]")],
+        &[(
+            "[[contacts]]",
+            "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"top\"\ntimes = [1e-4, 5e-4]\n[[contacts]]",
+        )],
         &["probes[0].nodes", "top", "no such node set"],
     ),
     (
         "probe time past the end",
-        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [1e-4, 2e-3]\n[[contacts]]")],
+        &[(
+            "[[contacts]]",
+            "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [1e-4, 2e-3]\n[[contacts]]",
+        )],
         &["probes[0].times[1]", "0.002", "time.t_end = 0.001"],
     ),
     (
         "probe times not increasing",
-        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [5e-4, 1e-4]\n[[contacts]]")],
+        &[(
+            "[[contacts]]",
+            "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [5e-4, 1e-4]\n[[contacts]]",
+        )],
         &["probes[0].times[1]", "0.0001", "must increase"],
     ),
     (
         "probe without times",
-        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = []\n[[contacts]]")],
+        &[(
+            "[[contacts]]",
+            "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = []\n[[contacts]]",
+        )],
         &["probes[0].times", "0 times", "1 to 100000"],
     ),
     (
         "NaN probe time",
-        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [nan]\n[[contacts]]")],
+        &[(
+            "[[contacts]]",
+            "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [nan]\n[[contacts]]",
+        )],
         &["probes[0].times[0]", "NaN"],
     ),
     (
         "two probes of one name",
-        &[("[[contacts]]", "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [1e-4, 5e-4]\n[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [1e-4, 5e-4]\n[[contacts]]")],
+        &[(
+            "[[contacts]]",
+            "[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [1e-4, 5e-4]\n[[probes]]\nname = \"top\"\nbody = \"b\"\nnodes = \"z1\"\ntimes = [1e-4, 5e-4]\n[[contacts]]",
+        )],
         &["probes[1].name", "top", "probes[0] has that name"],
     ),
     (

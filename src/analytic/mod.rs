@@ -111,7 +111,10 @@ mod tests {
             assert!((later - 1e-5).abs() < 1e-18, "x = {x}: {later}");
             // continuous at both fronts
             for t in [x / c0, (2.0 - x) / c0] {
-                let (a, c) = (b.displacement(x, t * (1.0 - 1e-12)), b.displacement(x, t * (1.0 + 1e-12)));
+                let (a, c) = (
+                    b.displacement(x, t * (1.0 - 1e-12)),
+                    b.displacement(x, t * (1.0 + 1e-12)),
+                );
                 assert!((a - c).abs() < 1e-15, "x = {x}, t = {t}");
             }
         }

@@ -51,13 +51,13 @@ use crate::error::{Error, require_positive};
 use crate::integrators::SchemeParams;
 use crate::io::frames::{GeomCell, Geometry, Outline, orthonormal};
 use crate::model::generate::{box_mesh, rectangle_mesh};
+use crate::model::geometry::Probe;
 use crate::model::hyperelastic::{HyperBody, Hyperelastic};
 use crate::model::rod::Rod;
 use crate::model::solid::{
     CellKind, Formulation, Material, MaterialModel, Mesh, assemble_with_contacts,
 };
 use crate::model::system::HyperelasticPart;
-use crate::model::geometry::Probe;
 use crate::model::{LinearSystem, MassKind};
 use crate::scene::Model;
 
@@ -787,7 +787,11 @@ impl Scene {
                     return Err(Error::invalid(
                         &format!("probes[{i}].times[{k}]"),
                         t,
-                        &format!("times must increase (times[{}] = {})", k - 1, p.times[k - 1]),
+                        &format!(
+                            "times must increase (times[{}] = {})",
+                            k - 1,
+                            p.times[k - 1]
+                        ),
                     ));
                 }
             }
@@ -1268,7 +1272,11 @@ impl Scene {
                 ));
             }
             let rod_abscissa = matches!(self.bodies[bi].mesh, MeshSpec::Rod { .. }).then(|| {
-                let x0 = mesh.points.iter().map(|x| x[0]).fold(f64::INFINITY, f64::min);
+                let x0 = mesh
+                    .points
+                    .iter()
+                    .map(|x| x[0])
+                    .fold(f64::INFINITY, f64::min);
                 nodes.iter().map(|&v| mesh.points[v][0] - x0).collect()
             });
             out.push(Probe {

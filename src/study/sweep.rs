@@ -680,7 +680,10 @@ pub fn table(mut records: Vec<RunRecord>) -> Vec<Row> {
                     }
                 }
                 e[7] = r.max_violation;
-                e[8] = match (probe_analytic, refr.as_ref().filter(|_| Some(i) != reference)) {
+                e[8] = match (
+                    probe_analytic,
+                    refr.as_ref().filter(|_| Some(i) != reference),
+                ) {
                     (Some(x), _) => x,
                     (None, Some(f)) => probe_error(&r.probes, &f.probes).unwrap_or(f64::NAN),
                     (None, None) => f64::NAN,
