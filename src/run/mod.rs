@@ -195,7 +195,7 @@ pub fn resume(dir: &Path, progress: &mut dyn Progress) -> Result<RunResult, Erro
     match c.arithmetic {
         crate::linalg::Arithmetic::Fused if !crate::linalg::cpu_has_fma() => {
             return Err(Error::bad_file(
-                &dir.join(checkpoint::FILE),
+                dir.join(checkpoint::FILE),
                 "`arithmetic`",
                 "fused: the run was started on a CPU with fused multiply-add and this one has \
                  none, so the resumed steps would round differently; resume on such a CPU"
