@@ -149,6 +149,9 @@ impl Integrator for Leaky {
     fn system(&self) -> &LinearSystem {
         self.0.system()
     }
+    fn shared_system(&self) -> std::sync::Arc<LinearSystem> {
+        self.0.shared_system()
+    }
     fn dt(&self) -> f64 {
         self.0.dt()
     }

@@ -643,6 +643,9 @@ macro_rules! delegate_to_core {
         fn system(&self) -> &$crate::model::LinearSystem {
             &self.core.sys
         }
+        fn shared_system(&self) -> std::sync::Arc<$crate::model::LinearSystem> {
+            self.core.sys.clone()
+        }
         fn dt(&self) -> f64 {
             self.core.h
         }
@@ -671,7 +674,8 @@ pub(crate) use delegate_to_core;
 
 /// Shared θ-method data and buffers (see the module doc).
 pub struct ThetaCore {
-    pub(crate) sys: LinearSystem,
+    /// The structure, shared (read-only after the build) with the history thread.
+    pub(crate) sys: std::sync::Arc<LinearSystem>,
     pub(crate) contacts: Box<dyn ContactSet>,
     pub(crate) h: f64,
     pub(crate) theta: f64,
@@ -882,7 +886,7 @@ impl ThetaCore {
         mem.check("scheme.max_active_rows", format!("{ws_cap} rows"))?;
         let k_rows = crate::linalg::TridiagonalRows::new(sys.stiffness.as_ref());
         let mut core = ThetaCore {
-            sys,
+            sys: std::sync::Arc::new(sys),
             contacts,
             h,
             theta,

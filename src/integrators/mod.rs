@@ -81,6 +81,28 @@ pub struct State {
 }
 
 impl State {
+    /// Copies this state into `dst`, reusing `dst`'s buffers: no allocation when `dst`
+    /// has this state's sizes (a writer thread's copy of the step's state).
+    pub fn copy_to(&self, dst: &mut State) {
+        dst.step = self.step;
+        dst.time = self.time;
+        dst.tangent_dim = self.tangent_dim;
+        for (d, s) in [
+            (&mut dst.q, &self.q),
+            (&mut dst.v, &self.v),
+            (&mut dst.gap, &self.gap),
+            (&mut dst.local_velocity, &self.local_velocity),
+            (&mut dst.impulse, &self.impulse),
+            (&mut dst.projection, &self.projection),
+            (&mut dst.tangent_velocity, &self.tangent_velocity),
+            (&mut dst.tangent_impulse, &self.tangent_impulse),
+            (&mut dst.impulse_rows, &self.impulse_rows),
+        ] {
+            d.clone_from(s);
+        }
+        dst.status.clone_from(&self.status);
+    }
+
     /// The state at `t = 0` with `m` frictionless contacts (contact quantities zero
     /// until the integrator evaluates them).
     pub fn initial(q0: &[f64], v0: &[f64], m: usize) -> Self {
@@ -190,6 +212,9 @@ pub trait Integrator {
     fn state(&self) -> &State;
     /// The mechanical system being integrated.
     fn system(&self) -> &LinearSystem;
+    /// The same system, shared: nothing changes it after the build, so a writer thread
+    /// may read it while the run steps (the history's energies).
+    fn shared_system(&self) -> std::sync::Arc<LinearSystem>;
     /// The time step `h` (s).
     fn dt(&self) -> f64;
     /// A one-line description of the solution path taken (factorization, Delassus

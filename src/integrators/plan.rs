@@ -64,6 +64,10 @@ impl Plan {
         // the energies' quadratic forms: three diagonals of M and of K where they are
         // tridiagonal (`linalg::QuadraticForm`), counted for every pattern
         self.ledger.add("history energy forms", 6 * n as u64, 8);
+        // the history thread's copies of q and v (`run::history_thread::POOL` = 2 of
+        // them; counted for every size, the thread runs from 4096 dofs)
+        self.ledger
+            .add("history thread state copies", 4 * n as u64, 8);
         if hdf5 {
             let cols = 12 + m as u64 * (4 + 2 * tangent_dim as u64 + 1);
             self.ledger

@@ -26,7 +26,7 @@ use crate::model::LinearSystem;
 
 /// The Schatzman–Paoli integrator.
 pub struct SchatzmanPaoli {
-    sys: LinearSystem,
+    sys: std::sync::Arc<LinearSystem>,
     contacts: Box<dyn ContactSet>,
     h: f64,
     theta: f64,
@@ -106,7 +106,7 @@ impl SchatzmanPaoli {
             g_constant,
         );
         let mut sp = SchatzmanPaoli {
-            sys,
+            sys: std::sync::Arc::new(sys),
             contacts,
             h,
             theta,
@@ -311,6 +311,9 @@ impl Integrator for SchatzmanPaoli {
     }
     fn system(&self) -> &LinearSystem {
         &self.sys
+    }
+    fn shared_system(&self) -> std::sync::Arc<LinearSystem> {
+        self.sys.clone()
     }
     fn dt(&self) -> f64 {
         self.h

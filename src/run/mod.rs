@@ -9,6 +9,7 @@
 
 pub mod checkpoint;
 pub mod driver;
+pub mod history_thread;
 mod observers;
 pub mod probes;
 pub mod summary;
@@ -309,8 +310,6 @@ pub fn run_checkpointed(
         closed_before: false,
         frame_count: 0,
         seconds: 0.0,
-        scratch: vec![0.0; 2 * integ.system().prescribed_dofs()],
-        forms: None,
     };
     let mut plan = None;
     let energy0 = match resume {
@@ -386,8 +385,11 @@ pub fn run_checkpointed(
             }
             writers.frames = Some(w);
         }
-        writers.history = Some(hist);
-        writers.forms = Some(integ.system().energy_forms());
+        writers.history = Some(history_thread::History::new(
+            hist,
+            integ.shared_system(),
+            integ.state(),
+        ));
         writers.frame_stride = o.options.frame_stride(steps);
         writers.history_stride = o.options.history_stride;
         let every = resume.map_or(o.options.checkpoint_every, |c| c.every);
@@ -465,6 +467,7 @@ pub fn run_checkpointed(
         excess_max: acc.energy_excess,
     });
     output_seconds += writers.seconds;
+    let history_thread = matches!(writers.history, Some(history_thread::History::Thread(_)));
     if let Some(w) = writers.history.take() {
         w.finish()?;
     }
@@ -535,6 +538,7 @@ pub fn run_checkpointed(
         energy_balance,
         probes: probes.summaries(reference.as_ref()),
         arithmetic: crate::linalg::arithmetic().name().to_string(),
+        history_thread,
         path: integ.path(),
         model_seconds: 0.0,
         integrator_seconds: 0.0,

@@ -12,8 +12,8 @@ use super::summary::{FrictionSummary, Iterations, MeanMax};
 use crate::error::Error;
 use crate::integrators::saved::{Bits, Floats};
 use crate::integrators::{Integrator, StepStats};
+use crate::io::OutputOptions;
 use crate::io::frames::FrameStream;
-use crate::io::{HistoryWriter, OutputOptions};
 
 #[derive(Default)]
 pub(super) struct Acc {
@@ -162,7 +162,7 @@ impl ContactTracker {
 
 /// Where the run's output goes and what it costs: the history and frame observers.
 pub(super) struct Writers {
-    pub(super) history: Option<HistoryWriter>,
+    pub(super) history: Option<super::history_thread::History>,
     pub(super) frames: Option<FrameStream>,
     pub(super) frame_stride: usize,
     pub(super) history_stride: usize,
@@ -170,11 +170,6 @@ pub(super) struct Writers {
     /// Frames pushed (for checkpoints).
     pub(super) frame_count: usize,
     pub(super) seconds: f64,
-    /// Scratch of the prescribed dofs' energy.
-    pub(super) scratch: Vec<f64>,
-    /// The layouts of `M` and `K` for the energies of the history rows (read when a
-    /// history is written).
-    pub(super) forms: Option<crate::model::EnergyForms>,
 }
 
 impl Writers {
@@ -190,17 +185,12 @@ impl Writers {
         let t0 = Instant::now();
         let s = integ.state();
         let k = s.step;
-        if let (Some(w), Some(forms)) = (
-            self.history
-                .as_mut()
-                .filter(|_| k.is_multiple_of(self.history_stride) || last),
-            self.forms.as_ref(),
-        ) {
-            let (ke, pe) =
-                integ
-                    .system()
-                    .energies_with(forms, s.time, &s.q, &s.v, &mut self.scratch);
-            w.row(s, st, ke, pe)?;
+        if let Some(w) = self
+            .history
+            .as_mut()
+            .filter(|_| k.is_multiple_of(self.history_stride) || last)
+        {
+            w.row(integ.system(), s, st)?;
         }
         let closed = s.impulse.iter().any(|&p| p > 0.0);
         let switch = closed != self.closed_before;
@@ -327,7 +317,7 @@ impl Observer for RunObserver {
             }
             if abort_after == Some(s.step) {
                 if let Some(h) = self.writers.history.as_mut() {
-                    h.flush()?;
+                    h.sync()?;
                 }
                 std::process::abort();
             }
@@ -342,9 +332,10 @@ impl RunObserver {
         let Some(p) = &self.plan else {
             return Ok(());
         };
-        if let Some(h) = self.writers.history.as_mut() {
-            h.flush()?;
-        }
+        let (history_bytes, history_rows) = match self.writers.history.as_mut() {
+            Some(h) => h.sync()?,
+            None => (0, 0),
+        };
         if let Some(f) = self.writers.frames.as_mut() {
             f.sync()?;
         }
@@ -381,8 +372,8 @@ impl RunObserver {
             contact_done: t.done,
             total_force: Bits(t.total_force),
             energy0: Bits(p.energy0),
-            history_bytes: self.writers.history.as_ref().map_or(0, |h| h.bytes()),
-            history_rows: self.writers.history.as_ref().map_or(0, |h| h.rows()),
+            history_bytes,
+            history_rows,
             frames: self.writers.frame_count,
             closed_before: self.writers.closed_before,
             probes: self.probes.save().into_iter().map(Floats).collect(),

@@ -199,6 +199,9 @@ pub struct Summary {
     /// motion, and the largest excess met relative to the run's energy scale (`None` for
     /// Schatzman–Paoli, whose discrete energy is not the θ-method's).
     pub energy_balance: Option<EnergyBalance>,
+    /// Whether the history rows were formed on a thread of their own
+    /// (`run::history_thread`: from 4096 dofs on more than one core).
+    pub history_thread: bool,
     /// The arithmetic of the chain solves: `fused` (fused multiply-add, this CPU's bits)
     /// or `portable` (`--portable-arithmetic`, or a CPU without FMA: the same bits on
     /// every CPU); see [`crate::linalg::Arithmetic`].
