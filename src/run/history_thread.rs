@@ -31,9 +31,10 @@ pub const THREAD_MIN_DOFS: usize = 4096;
 pub const POOL: usize = 2;
 
 /// What the loop hands the history thread.
+#[allow(clippy::large_enum_variant)] // rows are the traffic; a flush is rare
 enum Job {
     /// A row: the state after the step and its statistics.
-    Row(Box<(State, StepStats)>),
+    Row((State, StepStats)),
     /// Flush the writer and answer with its bytes and rows (a checkpoint's barrier).
     Flush,
 }
@@ -41,10 +42,10 @@ enum Job {
 /// The history thread.
 pub struct HistoryThread {
     work: Option<SyncSender<Job>>,
-    free: Receiver<Box<(State, StepStats)>>,
+    free: Receiver<(State, StepStats)>,
     flushed: Receiver<(u64, u64)>,
     thread: Option<JoinHandle<Result<HistoryWriter, Error>>>,
-    spare: Vec<Box<(State, StepStats)>>,
+    spare: Vec<(State, StepStats)>,
 }
 
 impl HistoryThread {
@@ -57,11 +58,11 @@ impl HistoryThread {
         template: &State,
     ) -> Self {
         let (work_tx, work_rx) = sync_channel::<Job>(POOL + 1);
-        let (free_tx, free_rx) = sync_channel::<Box<(State, StepStats)>>(POOL);
+        let (free_tx, free_rx) = sync_channel::<(State, StepStats)>(POOL);
         let (flushed_tx, flushed_rx) = sync_channel::<(u64, u64)>(1);
         for _ in 0..POOL {
             free_tx
-                .send(Box::new((template.clone(), StepStats::default())))
+                .send((template.clone(), StepStats::default()))
                 .expect("the pool channel holds POOL buffers");
         }
         let mut scratch = vec![0.0; 2 * sys.prescribed_dofs()];
@@ -71,7 +72,7 @@ impl HistoryThread {
                 for job in work_rx {
                     match job {
                         Job::Row(row) => {
-                            let (s, st) = &*row;
+                            let (s, st) = &row;
                             let (ke, pe) =
                                 sys.energies_with(&forms, s.time, &s.q, &s.v, &mut scratch);
                             writer.row(s, st, ke, pe)?;
@@ -169,6 +170,7 @@ impl Drop for HistoryThread {
 }
 
 /// The run's history: written on the loop thread, or by a [`HistoryThread`].
+#[allow(clippy::large_enum_variant)] // one per run, never moved in the loop
 pub enum History {
     /// Rows formed and written by the loop.
     Inline {
