@@ -830,15 +830,22 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
 }
 
 /// Progress of a sweep: one line per run on stderr.
-struct SweepLines;
+/// The sweep's line per run; `ranks` under MPI, where every rank prints its own runs
+/// (counted within its share) and the lines start with the rank.
+struct SweepLines {
+    ranks: bool,
+}
 
 impl signorini::study::sweep::SweepProgress for SweepLines {
     fn run(&mut self, done: usize, total: usize, r: &signorini::study::sweep::RunRecord, eta: f64) {
-        let what = if r.point.key.is_empty() {
+        let mut what = if r.point.key.is_empty() {
             "the scene".to_string()
         } else {
             r.point.key.clone()
         };
+        if self.ranks {
+            what = format!("{what} [rank {}]", r.worker);
+        }
         if r.status == "ok" {
             err!(
                 "  run {done}/{total} {what}: {:.3e} s ({:.2} µs/step, {} steps, {} dofs), violation {:.1e} m; ETA {eta:.0} s",
@@ -944,7 +951,7 @@ fn sweep(a: &SweepArgs) -> Result<(), signorini::Error> {
     };
     let v = if r.mpi {
         #[cfg(feature = "mpi")]
-        match job.run_mpi(&mut SweepLines)? {
+        match job.run_mpi(&mut SweepLines { ranks: true })? {
             Some(v) => v,
             // not rank 0: rank 0 prints the verdicts
             None => return Ok(()),
@@ -957,7 +964,7 @@ fn sweep(a: &SweepArgs) -> Result<(), signorini::Error> {
              (cargo build --release --features mpi, with libopenmpi-dev and libclang-dev)",
         ));
     } else {
-        job.run(&mut SweepLines)?
+        job.run(&mut SweepLines { ranks: false })?
     };
     if !r.quiet {
         for line in v {
