@@ -35,7 +35,8 @@ pub struct Geometry {
     /// Rigid obstacles drawn as outlines (written once to `obstacles.vtu`).
     pub outlines: Vec<Outline>,
     /// Components moved at a prescribed velocity (eliminated, so not in `dof_of`):
-    /// `(point · dim + component, w, index into prescribed_functions)`; the frames show
+    /// `(point · dim + component, w, index into prescribed_functions)`, in increasing
+    /// order of the first; the frames show
     /// `u = w ∫₀ᵗ φ`, `v = w φ(t)` there.
     pub prescribed: Vec<(usize, f64, usize)>,
     /// The time functions `φ` of `prescribed`.

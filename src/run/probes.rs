@@ -93,11 +93,14 @@ impl ProbeSet {
                     .flat_map(|&pt| (0..dim).map(move |i| pt * dim + i))
                     .map(|k| match geometry.dof_of.get(k).copied().flatten() {
                         Some(d) => Source::Dof(d),
+                        // `prescribed` lists its components in increasing order
                         None => geometry
                             .prescribed
-                            .iter()
-                            .find(|x| x.0 == k)
-                            .map_or(Source::Fixed, |&(_, w, f)| Source::Prescribed(w, f)),
+                            .binary_search_by_key(&k, |x| x.0)
+                            .map_or(Source::Fixed, |i| {
+                                let (_, w, f) = geometry.prescribed[i];
+                                Source::Prescribed(w, f)
+                            }),
                     })
                     .collect();
                 let n = p.points.len().max(1) as f64;
@@ -299,6 +302,32 @@ mod tests {
         }
         assert_eq!(s[1].position, [0.5, 0.0, 0.0]);
         assert_eq!(s[0].node_count, 1);
+    }
+
+    #[test]
+    fn a_prescribed_component_reads_its_prescribed_displacement() {
+        // point 0 on dof 0, point 1 moved at w φ(t) = 2 m/s (φ = 1): u = 2 t
+        let g = Geometry {
+            dim: 1,
+            points: vec![[0.0; 3], [1.0, 0.0, 0.0]],
+            dof_of: vec![Some(0), None],
+            prescribed: vec![(1, 2.0, 0)],
+            prescribed_functions: vec![TimeFunction::one()],
+            ..Geometry::default()
+        };
+        let probe = Probe {
+            name: "driven".into(),
+            points: vec![1],
+            times: vec![0.3],
+            ..Probe::default()
+        };
+        let mut p = ProbeSet::new(&[probe], &g);
+        p.start(0.0, 0.1, &[0.0], None);
+        for k in 1..=5 {
+            p.observe(k as f64 * 0.1, 0.1, &[0.0], k == 5);
+        }
+        let u = p.save()[0][0];
+        assert!((u - 0.6).abs() < 1e-14, "{u}");
     }
 
     #[test]
