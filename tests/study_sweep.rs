@@ -450,3 +450,69 @@ fn mpi_without_the_feature_is_refused() {
         "{e}"
     );
 }
+
+/// With the bar's closed form, probes on the rod are compared with `u(x, t)` (not with
+/// the finest run): `probe_error` is the record's own distance to the closed form, the
+/// reference row has one too, and it enters the accuracy with the contact errors.
+#[test]
+fn probes_on_the_bar_are_compared_with_the_closed_form() {
+    let dir = tmp("probes-analytic");
+    let scene = dir.with_extension("toml");
+    std::fs::create_dir_all(dir.parent().unwrap()).unwrap();
+    std::fs::write(
+        &scene,
+        format!(
+            "{BAR_SCENE}\n[[probes]]\nname = \"tip\"\nbody = \"bar\"\nnodes = \"x1\"\n\
+             times = [1e-4, 3e-4]\n"
+        ),
+    )
+    .unwrap();
+    let spec = SweepSpec {
+        scheme: vec!["combined-projection".into()],
+        dt: vec![4e-6, 2e-6],
+        ..SweepSpec::default()
+    };
+    Sweep {
+        source: Source::File(scene.clone()),
+        set: small_bar(),
+        spec,
+        dir: dir.clone(),
+        resume: false,
+        shard: None,
+    }
+    .run(&mut Count(0))
+    .unwrap();
+    let rows = sweep::table(sweep::read_records(&dir).unwrap());
+    assert_eq!(rows.len(), 2);
+    let bar = signorini::analytic::ImpactingBar {
+        length: 1.0,
+        area: std::f64::consts::PI * 1e-4,
+        young: 210e9,
+        density: 7800.0,
+        velocity: -0.1,
+    };
+    for r in &rows {
+        let a = r.record.probes_analytic.as_ref().expect("a rod of the bar");
+        assert_eq!(
+            a,
+            &vec![bar.displacement(1.0, 1e-4), bar.displacement(1.0, 3e-4)]
+        );
+        let u = &r.record.probes;
+        let want = (u[0] - a[0]).abs().max((u[1] - a[1]).abs()) / a[0].abs().max(a[1].abs());
+        assert_eq!(
+            r.errors[8], want,
+            "the reference row too: {}",
+            r.is_reference
+        );
+        assert!(want > 0.0 && want < 0.05, "40 elements: {want}");
+        assert_eq!(
+            r.errors[0],
+            r.errors[1]
+                .max(r.errors[2])
+                .max(r.errors[3])
+                .max(r.errors[8])
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::remove_file(&scene).unwrap();
+}
