@@ -172,7 +172,8 @@ enum SweepCommand {
 
 #[derive(Args)]
 struct SweepRunArgs {
-    /// The scene file, or `bar` for the reference impacting bar (meshes/bar.toml).
+    /// The scene file, or `bar` for the reference impacting bar (meshes/bar.toml; a
+    /// file named `bar` is `./bar`).
     #[arg(required = true)]
     scene: Option<String>,
     /// Override a key of the scene before the grid's (as `run --set`; repeatable).
@@ -879,7 +880,8 @@ fn sweep(a: &SweepArgs) -> Result<(), signorini::Error> {
     }
     let r = &a.run;
     let name = r.scene.clone().expect("clap requires the scene");
-    let source = if name == "bar" && !std::path::Path::new("bar").exists() {
+    // `bar` is always the built-in bar (a file of that name is `./bar`)
+    let source = if name == "bar" {
         Source::Bar
     } else {
         Source::File(PathBuf::from(&name))
