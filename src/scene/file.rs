@@ -880,8 +880,6 @@ impl Scene {
         // each contact's nodes, found once with its body's mesh: they take no mass under
         // the redistributed mass, then become the contact set below
         let mut nodes_of: Vec<Vec<usize>> = vec![Vec::new(); self.contacts.len()];
-        // each body's first point in `geometry.points` (for the probes)
-        let mut point_base = Vec::with_capacity(self.bodies.len());
         // every mesh first: a contact between bodies needs both sides' meshes
         let mut all_meshes = Vec::with_capacity(self.bodies.len());
         for (bi, b) in self.bodies.iter().enumerate() {
@@ -895,6 +893,16 @@ impl Scene {
             }
             all_meshes.push(b.mesh(&self.base_dir).map_err(at)?);
         }
+        // the probes' node sets, before any assembly: a misspelt set is refused at once
+        let point_base: Vec<usize> = all_meshes
+            .iter()
+            .scan(0, |acc, m| {
+                let base = *acc;
+                *acc += m.points.len();
+                Some(base)
+            })
+            .collect();
+        let probes = self.probes(&all_meshes, &point_base)?;
         // the master surface of each contact between bodies (facets over its body's
         // node numbers, outward)
         let mut facets_of: Vec<Vec<Vec<usize>>> = vec![Vec::new(); self.contacts.len()];
@@ -1007,7 +1015,6 @@ impl Scene {
             }
             fixed.extend(fx);
             let base = geometry.points.len();
-            point_base.push(base);
             match &b.mesh {
                 MeshSpec::Rod { elements, .. } => {
                     geometry.cells.extend(
@@ -1238,7 +1245,6 @@ impl Scene {
             linear_structure: system.nonlinear.is_empty(),
             interfaces,
         };
-        let probes = self.probes(&meshes, &point_base)?;
         let n = system.ndof();
         if crate::model::ordering::worth_ordering(&geometry) {
             system.ordering = Some(crate::model::ordering::nested_dissection(&geometry, n));
