@@ -16,13 +16,7 @@ fn bar_with(probes: &str) -> Vec<ProbeSummary> {
     run_scene(&scene, None, &mut Quiet).unwrap().summary.probes
 }
 
-const BAR: ImpactingBar = ImpactingBar {
-    length: 1.0,
-    area: std::f64::consts::PI * 1e-4,
-    young: 210e9,
-    density: 7800.0,
-    velocity: -0.1,
-};
+const BAR: ImpactingBar = ImpactingBar::REFERENCE;
 
 #[test]
 fn the_bar_ends_move_as_the_closed_form_says() {

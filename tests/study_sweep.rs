@@ -484,13 +484,7 @@ fn probes_on_the_bar_are_compared_with_the_closed_form() {
     .unwrap();
     let rows = sweep::table(sweep::read_records(&dir).unwrap());
     assert_eq!(rows.len(), 2);
-    let bar = signorini::analytic::ImpactingBar {
-        length: 1.0,
-        area: std::f64::consts::PI * 1e-4,
-        young: 210e9,
-        density: 7800.0,
-        velocity: -0.1,
-    };
+    let bar = signorini::analytic::ImpactingBar::REFERENCE;
     for r in &rows {
         let a = r.record.probes_analytic.as_ref().expect("a rod of the bar");
         assert_eq!(

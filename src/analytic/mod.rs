@@ -28,6 +28,16 @@ pub struct ImpactingBar {
 }
 
 impl ImpactingBar {
+    /// The reference bar (sec. 6.2, Table 1 with `S = π·10⁻⁴ m²`, DESIGN.md §7): `L = 1 m`,
+    /// `E = 210 GPa`, `ρ = 7800 kg/m³`, `v0 = −0.1 m/s`.
+    pub const REFERENCE: ImpactingBar = ImpactingBar {
+        length: 1.0,
+        area: std::f64::consts::PI * 1e-4,
+        young: 210e9,
+        density: 7800.0,
+        velocity: -0.1,
+    };
+
     /// `c0 = √(E/ρ)` (m/s).
     pub fn wave_speed(&self) -> f64 {
         (self.young / self.density).sqrt()
@@ -73,18 +83,9 @@ impl ImpactingBar {
 mod tests {
     use super::*;
 
-    /// The reference bar (DESIGN.md §7).
-    const REFERENCE: ImpactingBar = ImpactingBar {
-        length: 1.0,
-        area: std::f64::consts::PI * 1e-4,
-        young: 210e9,
-        density: 7800.0,
-        velocity: -0.1,
-    };
-
     #[test]
     fn reference_bar_matches_design_numbers() {
-        let b = REFERENCE;
+        let b = ImpactingBar::REFERENCE;
         // DESIGN.md §7: c0 = 5188.745 m/s, T = 3.8545e-4 s, r = 1271.472 N (printed digits)
         assert!((b.wave_speed() - 5188.745).abs() < 5e-4);
         assert!((b.contact_duration() - 3.8545e-4).abs() < 5e-9);
@@ -93,7 +94,7 @@ mod tests {
 
     #[test]
     fn displacement_is_continuous_and_ends_stress_free() {
-        let b = REFERENCE;
+        let b = ImpactingBar::REFERENCE;
         let (c0, t_end) = (b.wave_speed(), b.contact_duration());
         // the contact end never moves during contact; the free end turns at L/c0, where
         // it has moved v0 L / c0, and is back at 0 at release
