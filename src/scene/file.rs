@@ -894,14 +894,7 @@ impl Scene {
             all_meshes.push(b.mesh(&self.base_dir).map_err(at)?);
         }
         // the probes' node sets, before any assembly: a misspelt set is refused at once
-        let point_base: Vec<usize> = all_meshes
-            .iter()
-            .scan(0, |acc, m| {
-                let base = *acc;
-                *acc += m.points.len();
-                Some(base)
-            })
-            .collect();
+        let point_base = starts(all_meshes.iter().map(|m| m.points.len()));
         let probes = self.probes(&all_meshes, &point_base)?;
         // the master surface of each contact between bodies (facets over its body's
         // node numbers, outward)
@@ -1037,14 +1030,7 @@ impl Scene {
             systems.push(sys);
         }
         let meshes = all_meshes;
-        let offsets: Vec<usize> = systems
-            .iter()
-            .scan(0, |acc, s| {
-                let o = *acc;
-                *acc += s.ndof();
-                Some(o)
-            })
-            .collect();
+        let offsets = starts(systems.iter().map(LinearSystem::ndof));
         let full = LinearSystem::block_diagonal(systems)?;
         let fixed_dofs = fixed.iter().filter(|&&f| f).count();
         // prescribed velocities: eliminated with their coupling blocks
@@ -1661,6 +1647,18 @@ fn generator_checks(
     let dim = cells.len() as u64;
     crate::limits::mesh_memory(prod(1), n_cells, cell.nodes() as u64, dim)
         .check("mesh.cells", format!("{cells:?}"))
+}
+
+/// Where each of consecutive blocks of `sizes` starts (the exclusive prefix sums): the
+/// bodies' first point and first dof.
+fn starts(sizes: impl Iterator<Item = usize>) -> Vec<usize> {
+    sizes
+        .scan(0, |acc, n| {
+            let start = *acc;
+            *acc += n;
+            Some(start)
+        })
+        .collect()
 }
 
 /// The time function of a `[[forces]]` / `[[prescribed]]` entry (1 when absent).
