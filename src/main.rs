@@ -64,6 +64,11 @@ struct Cli {
     /// about 1.8× the cost of the bar's tridiagonal solve.
     #[arg(long, global = true)]
     portable_arithmetic: bool,
+    /// Factor and solve M̂ with MUMPS over the ranks of an MPI job (`mpirun -np N
+    /// signorini run SCENE --mumps`; cargo feature `mumps`): rank 0 runs the command and
+    /// the contact problems, the other ranks join MUMPS' factor and solves.
+    #[arg(long, global = true)]
+    mumps: bool,
 }
 
 #[derive(Subcommand)]
@@ -1103,9 +1108,54 @@ fn print_summary(s: &run::Summary, out: &std::path::Path) {
     );
 }
 
+/// `--mumps`: MPI and the host's guard on rank 0 (`Some`), `None` on the other ranks
+/// once the host is done with them, or when the flag is off.
+#[cfg(feature = "mumps")]
+fn start_mumps(cli: &Cli) -> Result<Option<signorini::linalg::mumps::HostGuard>, signorini::Error> {
+    use signorini::linalg::mumps::{Role, start};
+    if !cli.mumps {
+        return Ok(None);
+    }
+    if matches!(&cli.command, Some(Command::Sweep(a)) if a.run.mpi) {
+        return Err(signorini::Error::invalid(
+            "--mumps",
+            "true",
+            "not with `sweep --mpi`: there the ranks run the sweep's points, each with its \
+             own serial factor",
+        ));
+    }
+    Ok(match start("--mumps")? {
+        Role::Host(g) => Some(g),
+        Role::Worker => None,
+    })
+}
+
+#[cfg(not(feature = "mumps"))]
+fn start_mumps(cli: &Cli) -> Result<Option<()>, signorini::Error> {
+    if cli.mumps {
+        return Err(signorini::Error::invalid(
+            "--mumps",
+            "true",
+            "this signorini was built without the `mumps` cargo feature (cargo build \
+             --release --features mumps, with libmumps-dev, libopenmpi-dev and libclang-dev)",
+        ));
+    }
+    Ok(None)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     signorini::linalg::set_portable_arithmetic(cli.portable_arithmetic);
+    // kept to the end of main: dropping it releases the other ranks and finalizes MPI
+    let _mumps_host = match start_mumps(&cli) {
+        Ok(Some(host)) => Some(host),
+        Ok(None) if cli.mumps => return ExitCode::SUCCESS, // another rank: served, done
+        Ok(None) => None,
+        Err(e) => {
+            err!("error: {e}");
+            return ExitCode::from(e.exit_code());
+        }
+    };
     let result = match cli.command {
         Some(Command::Bar(a)) => run_bar(&a),
         Some(Command::Run(a)) => run_scene(&a),

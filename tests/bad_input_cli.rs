@@ -126,3 +126,14 @@ fn help_texts_carry_no_rustdoc_links() {
     let dense = signorini::delassus::AUTO_DENSE_MAX_CONTACTS;
     assert!(all.contains(&format!("are at most {dense})")), "{all}");
 }
+
+#[cfg(not(feature = "mumps"))]
+#[test]
+fn mumps_without_its_feature_names_the_feature() {
+    let (code, err) = signorini(&["--mumps", "--quiet", "--t-end", "1e-6"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("--mumps") && err.contains("--features mumps"),
+        "{err}"
+    );
+}

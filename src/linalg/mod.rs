@@ -21,6 +21,8 @@
 //!   most a few hundred rows). It works on caller-owned buffers, so the MLCP solver
 //!   does not allocate inside the step loop.
 
+#[cfg(feature = "mumps")]
+pub mod mumps;
 pub mod solver;
 
 pub use solver::{LinearSolver, SolverKind};

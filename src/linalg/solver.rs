@@ -16,7 +16,11 @@
 //! - [`SparseLu`]: faer's sparse LU with partial pivoting for nonsymmetric iteration
 //!   matrices (gyroscopic and follower terms);
 //! - [`DenseSolver`]: faer's dense partial-pivoting LU, for systems of a few coordinates
-//!   (rigid multibody models), where sparse bookkeeping costs more than the flops.
+//!   (rigid multibody models), where sparse bookkeeping costs more than the flops;
+//! - `Mumps` (cargo feature `mumps`, module `linalg::mumps`): the sparse kinds factored
+//!   and solved by MUMPS over the ranks of an MPI job, when the process hosts one
+//!   (`signorini run … --mumps` under `mpirun`); [`factor`] then builds it for every
+//!   sparse kind.
 //!
 //! Allocation: after construction, [`LinearSolver::refactor`] and the solves allocate
 //! nothing for [`SpdFactor`], [`SparseLdlt`] and [`DenseSolver`]
@@ -126,6 +130,10 @@ pub fn factor(
     kind: SolverKind,
     ordering: Option<&[usize]>,
 ) -> Result<Box<dyn LinearSolver>, Error> {
+    #[cfg(feature = "mumps")]
+    if let Some(f) = super::mumps::factor_if_active(a, what, kind) {
+        return f;
+    }
     Ok(match kind {
         SolverKind::Cholesky => Box::new(SpdFactor::with_ordering(a, what, ordering)?),
         SolverKind::Ldlt => Box::new(SparseLdlt::new(a, what)?),
