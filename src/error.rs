@@ -58,6 +58,18 @@ pub enum Error {
         /// What went wrong, with the value and the limit.
         detail: String,
     },
+    /// The caller asked the run to stop ([`crate::run::Progress::cancelled`]: Ctrl-C in
+    /// the Python package): the history and the frames written so far are finished and
+    /// readable; no summary is written (exit 1: the run did not complete).
+    #[error(
+        "run interrupted after step {step} (t = {time:e} s): the outputs hold the steps up to it"
+    )]
+    Interrupted {
+        /// The last completed step.
+        step: usize,
+        /// Its time (s).
+        time: f64,
+    },
     /// Writing an output file failed (disk full, permissions): the run fails (exit 1).
     #[error("cannot write {path}: {}", os_reason(source))]
     Write {
@@ -117,6 +129,7 @@ impl Error {
             Error::Numerical(_)
             | Error::NotConverged { .. }
             | Error::RunFailed { .. }
+            | Error::Interrupted { .. }
             | Error::Write { .. } => 1,
         }
     }

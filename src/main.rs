@@ -741,46 +741,35 @@ fn fclib(a: &FclibArgs) -> Result<bool, signorini::Error> {
 
 fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     let scene = Scene::from_file_with(&args.scene, &args.set)?;
-    let in_file = |e: signorini::Error| e.in_file(&args.scene);
-    let (model, report) = scene.build().map_err(in_file)?;
-    let mut plan = model.plan(&scene.scheme, scene.time.dt).map_err(in_file)?;
-    let (m, rows) = (model.contacts.len(), model.contacts.rows());
-    plan.add_history(report.dofs, m, (rows - m) / m.max(1), scene.output.hdf5());
+    let c = scene.check().map_err(|e| e.in_file(&args.scene))?;
+    // printed in full even when the memory does not fit (the error comes last)
     out!("scene               {} (valid)", args.scene.display());
     out!(
         "model               {} bodies, {} cells, {} dofs ({} fixed dofs removed), {} candidate contacts",
-        scene.bodies.len(),
-        report.cells,
-        report.dofs,
-        report.fixed_dofs,
-        report.contacts
+        c.bodies,
+        c.cells,
+        c.dofs,
+        c.fixed_dofs,
+        c.contacts
     );
-    let friction = if report.max_friction > 0.0 {
-        format!(
-            "Coulomb, μ up to {} ({} on the velocity problem of each step: De Saxcé's \
-             cone complementarity, eq. 15; tol {:e}, cap {} sweeps)",
-            report.max_friction,
-            scene.scheme.friction.solver.describe(),
-            scene.scheme.friction.tol,
-            scene.scheme.friction.max_iterations
-        )
-    } else {
-        "none (no contact has friction > 0: no friction solver)".to_string()
+    let friction = match &c.friction_solver {
+        Some(solver) => format!("Coulomb, μ up to {} ({solver})", c.max_friction),
+        None => "none (no contact has friction > 0: no friction solver)".to_string(),
     };
     out!(
         "physics             damping {}, gravity {}, friction {}",
-        if report.damping { "Rayleigh" } else { "none" },
-        if report.gravity { "yes" } else { "none" },
+        if c.damping { "Rayleigh" } else { "none" },
+        if c.gravity { "yes" } else { "none" },
         friction
     );
-    for line in &report.interfaces {
+    for line in &c.interfaces {
         out!("interface           {line}");
     }
-    for p in &model.probes {
+    for p in &c.probes {
         out!(
             "probe               \"{}\": mean displacement of {} node(s) of {} (set `{}`) at {} time(s) from {:e} to {:e} s",
             p.name,
-            p.points.len(),
+            p.node_count,
             p.body,
             p.nodes,
             p.times.len(),
@@ -790,49 +779,27 @@ fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     }
     out!(
         "time                {} steps of {:e} s, scheme {}, θ = {}",
-        scene.steps(),
-        scene.time.dt,
-        scene.scheme.kind.name(),
-        scene.scheme.theta
+        c.steps,
+        c.dt,
+        c.scheme,
+        c.theta
     );
-    out!(
-        "newton              {}",
-        match (report.linear_structure, report.linear_contacts) {
-            (true, true) => {
-                "not needed for the dynamics (linear structure, constant G): factor once, never refactor"
-            }
-            (true, false) => {
-                "needed: G(q) changes with q (curved obstacle or contact between bodies), \
-                 re-linearized every iteration (M̂ still factored once)"
-            }
-            (false, _) if scene.scheme.newton.modified => {
-                "nonlinear structure: modified Newton (M̂ⁿ formed at each step's first iterate, \
-                 re-formed when the iterates stop contracting)"
-            }
-            (false, _) => "nonlinear structure: full Newton (M̂ⁿ refactored at every iterate)",
-        }
-    );
-    out!("path                {}", plan.describe());
-    let limit = signorini::limits::memory_limit();
+    out!("newton              {}", c.newton);
+    out!("path                {}", c.path);
     out!(
         "memory              {} planned (limit {}): {}",
-        signorini::limits::bytes(plan.ledger.total()),
-        signorini::limits::bytes(limit),
-        plan.ledger
-            .parts()
+        signorini::limits::bytes(c.memory_planned),
+        signorini::limits::bytes(c.memory_limit),
+        c.memory_parts
             .iter()
-            .filter(|(_, b)| *b > 0)
             .map(|(w, b)| format!("{w} {}", signorini::limits::bytes(*b)))
             .collect::<Vec<_>>()
             .join(", ")
     );
-    plan.ledger
-        .check(
-            "scene",
-            format!("{} dofs, {} contacts", report.dofs, report.contacts),
-        )
-        .map_err(in_file)?;
-    Ok(())
+    match c.memory_error {
+        Some(e) => Err(e.in_file(&args.scene)),
+        None => Ok(()),
+    }
 }
 
 /// Progress of a sweep: one line per run on stderr.

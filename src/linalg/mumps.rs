@@ -248,6 +248,9 @@ pub struct Mumps {
     pick: Vec<usize>,
     ranks: usize,
     ordering: &'static str,
+    /// MUMPS' memory for the last factor: the largest rank's and all ranks' (MB,
+    /// `INFOG(21)`, `INFOG(22)`).
+    memory_mb: (i32, i32),
     /// Relaxation of the workspace estimate for the next factor (`ICNTL(14)`).
     relax: i32,
     /// The first failed solve's message (solves return no error: their output is NaN).
@@ -330,6 +333,7 @@ impl Mumps {
             pick,
             ranks: SimpleCommunicator::world().size() as usize,
             ordering: "",
+            memory_mb: (0, 0),
             relax: 0,
             solve_error: None,
         };
@@ -387,6 +391,7 @@ impl Mumps {
                 self.relax = (self.relax.max(10)).saturating_mul(2);
                 continue;
             }
+            self.memory_mb = (self.inst.infog(21), self.inst.infog(22));
             return self.check(what, "factor");
         }
         unreachable!("the last attempt returns")
@@ -397,12 +402,22 @@ impl Mumps {
         self.ranks
     }
 
+    /// MUMPS' memory for the last factor in MB: on the largest rank and on all ranks
+    /// together (`INFOG(21)`, `INFOG(22)`): what spreading the factor buys.
+    pub fn memory_mb(&self) -> (i32, i32) {
+        self.memory_mb
+    }
+
     /// The first solve that failed since the factor, if any (its output was NaN).
     pub fn solve_error(&self) -> Option<&str> {
         self.solve_error.as_deref()
     }
 
-    fn solve(&mut self, x: &mut [f64], k: usize) {
+    /// Solves the `k` columns of `x` in one collective solve phase; `one_by_one` sets
+    /// MUMPS' right-hand-side blocking `ICNTL(27)` to 1, so that each column goes
+    /// through the single-column arithmetic and its result does not depend on the
+    /// others' (the contract of [`LinearSolver::solve_columns_independently`]).
+    fn solve(&mut self, x: &mut [f64], k: usize, one_by_one: bool) {
         let n = self.n;
         // MUMPS reads and writes n·k values: never more than `x` holds
         let k = k.min(x.len() / n.max(1));
@@ -413,9 +428,14 @@ impl Mumps {
         s.rhs = x.as_mut_ptr();
         s.nrhs = k as i32;
         s.lrhs = n as i32;
+        let blocking = s.icntl[26];
+        if one_by_one {
+            s.icntl[26] = 1;
+        }
         broadcast([cmd::SOLVE, self.id, 0]);
         self.inst.call(job::SOLVE);
         self.inst.s.rhs = std::ptr::null_mut();
+        self.inst.s.icntl[26] = blocking;
         if self.inst.infog(1) < 0 {
             if self.solve_error.is_none() {
                 self.solve_error = self.check("M̂", "solve").err().map(|e| e.to_string());
@@ -445,10 +465,13 @@ impl LinearSolver for Mumps {
             .map(|&c| c as u8 as char)
             .collect();
         format!(
-            "MUMPS {} ({what}, {} ordering) over {} MPI rank(s)",
+            "MUMPS {} ({what}, {} ordering) over {} MPI rank(s), factor {} MB on the \
+             largest rank, {} MB in all",
             v.trim(),
             self.ordering,
-            self.ranks
+            self.ranks,
+            self.memory_mb.0,
+            self.memory_mb.1
         )
     }
     fn refactor(&mut self, a: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<(), Error> {
@@ -467,10 +490,13 @@ impl LinearSolver for Mumps {
         self.factor(what)
     }
     fn solve_in_place(&mut self, x: &mut [f64]) {
-        self.solve(x, 1);
+        self.solve(x, 1, true);
+    }
+    fn solve_columns_independently(&mut self, x: &mut [f64], k: usize) {
+        self.solve(x, k, true);
     }
     fn solve_block_in_place(&mut self, x: &mut [f64], k: usize) {
-        self.solve(x, k);
+        self.solve(x, k, false);
     }
 }
 

@@ -16,6 +16,13 @@ pub trait Progress {
     /// Called once right before the first step, with the number of steps (rates and
     /// ETAs count from here, not from the set-up).
     fn start(&mut self, _total: usize) {}
+    /// Asked after each [`Progress::update`]: `true` stops the run with
+    /// [`Error::Interrupted`] after the step just taken (its outputs finished and
+    /// readable). The CLI never cancels (Ctrl-C ends the process; the files are written
+    /// incrementally and atomically); the Python package does on `KeyboardInterrupt`.
+    fn cancelled(&mut self) -> bool {
+        false
+    }
 }
 
 /// A progress sink that prints nothing.
@@ -216,6 +223,13 @@ pub fn drive(
         }
         if (k + 1) % report_every == 0 || last {
             progress.update(k + 1, steps);
+            if progress.cancelled() {
+                let s = integ.state();
+                return Err(Error::Interrupted {
+                    step: s.step,
+                    time: s.time,
+                });
+            }
         }
     }
     Ok(())

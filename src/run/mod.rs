@@ -451,7 +451,18 @@ pub fn run_checkpointed(
         }
     }
     let start = Instant::now();
-    drive(integ, steps, checks, &mut [&mut obs], progress)?;
+    if let Err(e) = drive(integ, steps, checks, &mut [&mut obs], progress) {
+        if matches!(e, Error::Interrupted { .. }) {
+            // asked to stop: leave the history and the frames (with their .pvd) readable
+            if let Some(w) = obs.writers.history.take() {
+                w.finish()?;
+            }
+            if let Some(f) = obs.writers.frames.take() {
+                f.finish()?;
+            }
+        }
+        return Err(e);
+    }
     let t_fin = Instant::now();
     let RunObserver {
         acc,
@@ -547,6 +558,7 @@ pub fn run_checkpointed(
     Ok(RunResult {
         summary,
         force: tracker.trace.unwrap_or_default(),
+        state: integ.state().clone(),
     })
 }
 

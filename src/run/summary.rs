@@ -227,6 +227,9 @@ pub struct RunResult {
     /// checkpoints (a checkpoint does not grow with the run) and beyond
     /// [`FORCE_TRACE_MAX_STEPS`](super::FORCE_TRACE_MAX_STEPS).
     pub force: Vec<f64>,
+    /// The state after the last step (one copy, made once at the end: the Python
+    /// package's `sim.q`, `sim.v`, … after `run()`).
+    pub state: crate::integrators::State,
 }
 
 /// Writes `summary.json` into `dir` atomically.

@@ -528,6 +528,20 @@ impl Scene {
         Self::from_toml(&text)
     }
 
+    /// This scene with the `KEY=VALUE` overrides of [`Scene::from_file_with`] applied,
+    /// keeping its file and base directory (the Python package's keyword arguments).
+    pub fn with_overrides(&self, overrides: &[String]) -> Result<Scene, Error> {
+        if overrides.is_empty() {
+            return Ok(self.clone());
+        }
+        let text = toml::to_string(self)
+            .map_err(|e| Error::invalid("--set", "(scene)", &format!("does not serialize: {e}")))?;
+        let mut scene = Self::from_text_with(&text, overrides)?;
+        scene.base_dir = self.base_dir.clone();
+        scene.file = self.file.clone();
+        Ok(scene)
+    }
+
     /// Parses and validates scene text.
     pub fn from_toml(text: &str) -> Result<Scene, Error> {
         let at = |span: Option<std::ops::Range<usize>>| match span {

@@ -5,6 +5,7 @@
 //! TOML scene files and meshes come with the solid-mesh work.
 
 pub mod bar;
+pub mod check;
 pub mod example;
 pub mod file;
 pub mod solid_bar;

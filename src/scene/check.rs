@@ -1,0 +1,160 @@
+//! What `signorini check` reports about a scene, as data ([`CheckReport`]): the model it
+//! builds, the physics it includes (and the solvers it will therefore run), the time
+//! stepping, whether the Newton loop will iterate, the planned linear-algebra path and
+//! the memory ledger. The CLI prints it; the Python package returns it as a dict.
+
+use serde::Serialize;
+
+use super::file::Scene;
+use crate::error::Error;
+
+/// One `[[probes]]` entry as built.
+#[derive(Clone, Debug, Serialize)]
+pub struct ProbeCheck {
+    /// The probe's name.
+    pub name: String,
+    /// Its body.
+    pub body: String,
+    /// Its node set.
+    pub nodes: String,
+    /// Nodes in the set.
+    pub node_count: usize,
+    /// Recording times (s).
+    pub times: Vec<f64>,
+}
+
+/// What a scene builds and how it will run ([`Scene::check`]).
+#[derive(Debug, Serialize)]
+pub struct CheckReport {
+    /// Bodies in the scene.
+    pub bodies: usize,
+    /// Cells over all bodies.
+    pub cells: usize,
+    /// Degrees of freedom after Dirichlet elimination.
+    pub dofs: usize,
+    /// Dofs removed by `fixed` node sets.
+    pub fixed_dofs: usize,
+    /// Candidate contacts.
+    pub contacts: usize,
+    /// Whether Rayleigh damping is present.
+    pub damping: bool,
+    /// Whether a body force is applied.
+    pub gravity: bool,
+    /// Largest friction coefficient (0: frictionless, no friction solver).
+    pub max_friction: f64,
+    /// The friction solver's description (`None` when no contact has friction).
+    pub friction_solver: Option<String>,
+    /// One line per contact between bodies.
+    pub interfaces: Vec<String>,
+    /// The probes.
+    pub probes: Vec<ProbeCheck>,
+    /// Steps of the run.
+    pub steps: usize,
+    /// Time step (s).
+    pub dt: f64,
+    /// The scheme's name.
+    pub scheme: String,
+    /// θ of the θ-method.
+    pub theta: f64,
+    /// Whether the structure is linear.
+    pub linear_structure: bool,
+    /// Whether every gap is linear in q.
+    pub linear_contacts: bool,
+    /// What the Newton loop will do.
+    pub newton: String,
+    /// The planned linear-algebra path.
+    pub path: String,
+    /// Planned memory (bytes), with the history's rows.
+    pub memory_planned: u64,
+    /// The memory limit (bytes).
+    pub memory_limit: u64,
+    /// The ledger's nonzero parts (what, bytes).
+    pub memory_parts: Vec<(String, u64)>,
+    /// Whether the planned memory fits the limit ([`CheckReport::memory_error`] says
+    /// why not).
+    pub memory_fits: bool,
+    /// The run's refusal when it would not fit (the error a run of the scene returns).
+    #[serde(skip)]
+    pub memory_error: Option<Error>,
+}
+
+impl Scene {
+    /// Builds the model and plans the run without factoring anything: what `signorini
+    /// check` prints. Errors are those of [`Scene::build`]; a run that would not fit the
+    /// memory limit is reported in the result (`memory_fits`, `memory_error`).
+    pub fn check(&self) -> Result<CheckReport, Error> {
+        let (model, report) = self.build()?;
+        let mut plan = model.plan(&self.scheme, self.time.dt)?;
+        let (m, rows) = (model.contacts.len(), model.contacts.rows());
+        plan.add_history(report.dofs, m, (rows - m) / m.max(1), self.output.hdf5());
+        let newton = match (report.linear_structure, report.linear_contacts) {
+            (true, true) => {
+                "not needed for the dynamics (linear structure, constant G): factor once, never refactor"
+            }
+            (true, false) => {
+                "needed: G(q) changes with q (curved obstacle or contact between bodies), \
+                 re-linearized every iteration (M̂ still factored once)"
+            }
+            (false, _) if self.scheme.newton.modified => {
+                "nonlinear structure: modified Newton (M̂ⁿ formed at each step's first iterate, \
+                 re-formed when the iterates stop contracting)"
+            }
+            (false, _) => "nonlinear structure: full Newton (M̂ⁿ refactored at every iterate)",
+        };
+        let friction_solver = (report.max_friction > 0.0).then(|| {
+            format!(
+                "{} on the velocity problem of each step: De Saxcé's cone complementarity, \
+                 eq. 15; tol {:e}, cap {} sweeps",
+                self.scheme.friction.solver.describe(),
+                self.scheme.friction.tol,
+                self.scheme.friction.max_iterations
+            )
+        });
+        let fits = plan.ledger.check(
+            "scene",
+            format!("{} dofs, {} contacts", report.dofs, report.contacts),
+        );
+        Ok(CheckReport {
+            bodies: self.bodies.len(),
+            cells: report.cells,
+            dofs: report.dofs,
+            fixed_dofs: report.fixed_dofs,
+            contacts: report.contacts,
+            damping: report.damping,
+            gravity: report.gravity,
+            max_friction: report.max_friction,
+            friction_solver,
+            interfaces: report.interfaces.clone(),
+            probes: model
+                .probes
+                .iter()
+                .map(|p| ProbeCheck {
+                    name: p.name.clone(),
+                    body: p.body.clone(),
+                    nodes: p.nodes.clone(),
+                    node_count: p.points.len(),
+                    times: p.times.clone(),
+                })
+                .collect(),
+            steps: self.steps(),
+            dt: self.time.dt,
+            scheme: self.scheme.kind.name().to_string(),
+            theta: self.scheme.theta,
+            linear_structure: report.linear_structure,
+            linear_contacts: report.linear_contacts,
+            newton: newton.to_string(),
+            path: plan.describe(),
+            memory_planned: plan.ledger.total(),
+            memory_limit: crate::limits::memory_limit(),
+            memory_parts: plan
+                .ledger
+                .parts()
+                .iter()
+                .filter(|(_, b)| *b > 0)
+                .cloned()
+                .collect(),
+            memory_fits: fits.is_ok(),
+            memory_error: fits.err(),
+        })
+    }
+}
