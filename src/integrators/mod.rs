@@ -192,8 +192,9 @@ pub struct StepStats {
     pub global_products: usize,
 }
 
-/// A time integrator for a linear structure with contacts.
-pub trait Integrator {
+/// A time integrator for a linear structure with contacts. `Send`: a built integrator
+/// can move to another thread (the Python package steps it with the GIL released).
+pub trait Integrator: Send {
     /// Short name, as on the command line.
     fn name(&self) -> &'static str;
     /// Advances one step of size `h`. Does not allocate, unless the contact search had

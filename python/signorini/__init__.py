@@ -1,0 +1,297 @@
+"""signorini: impact and contact of elastic structures, from Python.
+
+The same scenes, schemes and results as the ``signorini`` command line (one Rust
+library under both; no copy of the solver)::
+
+    import signorini
+    bar = signorini.Scene.bar()                      # the reference impacting bar
+    sim = bar.simulation(scheme="moreau-jean", dt=5e-7)
+    sim.run(out="out/bar")                           # GIL released; Ctrl-C stops cleanly
+    h = sim.history                                  # dict of numpy arrays, one per column
+    force = h["impulse_0"] / sim.summary["dt"]
+
+Arrays are owned ``float64`` copies (``sim.q`` is a new array at each access): the solver
+overwrites its state at every step, so a view would change under the caller.
+Errors raise :class:`BadInput` (the CLI's exit code 2: the message names the file, the
+key path or line, the value and what was expected) or :class:`RunFailed` (exit code 1).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Union
+
+import numpy as np
+
+from ._signorini import BadInput, RunFailed, SignoriniError, _Scene, _Simulation
+from ._signorini import __version__
+
+__all__ = [
+    "Scene",
+    "Simulation",
+    "SignoriniError",
+    "BadInput",
+    "RunFailed",
+    "__version__",
+]
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _toml_value(value: Any, key: str) -> str:
+    """A Python value as a TOML value for a ``--set`` override."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise BadInput(f"invalid value for `{key}`: {value} (a finite number is expected)")
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v, key) for v in value) + "]"
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f"{k} = {_toml_value(v, key)}" for k, v in value.items()) + "}"
+    raise BadInput(f"invalid value for `{key}`: {value!r} (a bool, number, string, list or dict)")
+
+
+def _overrides(set: Optional[Mapping[str, Any]]) -> List[str]:
+    return [f"{k}={_toml_value(v, k)}" for k, v in (set or {}).items()]
+
+
+def _json(data: Any, what: str) -> str:
+    try:
+        return json.dumps(data, allow_nan=False)
+    except ValueError as e:
+        raise BadInput(f"{what}: {e} (finite numbers are expected)") from None
+    except TypeError as e:
+        raise BadInput(f"{what}: {e}") from None
+
+
+class Scene:
+    """A validated scene: a scene file, a dict of its tables, the built-in bar or one of
+    the paper's examples. Immutable: :meth:`simulation` takes the run's parameters."""
+
+    __slots__ = ("_inner",)
+
+    def __init__(self, inner: _Scene):
+        self._inner = inner
+
+    @classmethod
+    def from_toml(cls, source: Union[PathLike, str], set: Optional[Mapping[str, Any]] = None) -> "Scene":
+        """A scene from a ``.toml`` file (a path) or from TOML text. ``set`` overrides
+        keys as ``signorini run --set`` does: ``{"time.dt": 1e-6}``."""
+        if isinstance(source, os.PathLike) or (
+            isinstance(source, str) and "\n" not in source and "=" not in source
+        ):
+            return cls(_Scene.from_file(os.fspath(source), _overrides(set)))
+        return cls(_Scene.from_text(source, _overrides(set)))
+
+    @classmethod
+    def from_dict(
+        cls,
+        tables: Mapping[str, Any],
+        set: Optional[Mapping[str, Any]] = None,
+        base_dir: Optional[PathLike] = None,
+    ) -> "Scene":
+        """A scene from the tables of a scene file as Python data (``{"time": {"dt": …},
+        "bodies": [...]}``); mesh paths are relative to ``base_dir`` (default: the
+        working directory). Equal to the same scene read from TOML."""
+        base = None if base_dir is None else os.fspath(base_dir)
+        return cls(_Scene.from_json(_json(tables, "scene dict"), _overrides(set), base))
+
+    @classmethod
+    def bar(cls, **params: Any) -> "Scene":
+        """The built-in impacting bar (the CLI's main job), with any of its parameters:
+        ``elements``, ``dt``, ``t_end``, ``length``, ``area``, ``young``, ``density``,
+        ``velocity``, ``gap``, ``restitution``, ``mass``, ``scheme`` (a dict of the scheme's
+        parameters, or its name)."""
+        if isinstance(params.get("scheme"), str):
+            params["scheme"] = {"kind": params["scheme"]}
+        return cls(_Scene.bar(_json(params, "bar")))
+
+    @classmethod
+    def example(cls, name: str) -> "Scene":
+        """One of the paper's academic examples: ``bouncing-ball``, ``oscillator``,
+        ``rocking-block``, ``slider-crank``."""
+        return cls(_Scene.example(name))
+
+    @property
+    def is_bar(self) -> bool:
+        """Whether this is the built-in bar."""
+        return self._inner.is_bar()
+
+    @property
+    def steps(self) -> int:
+        """Steps of a run of this scene."""
+        return self._inner.steps()
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The scene as Python data (file scenes: its tables; the bar: its parameters)."""
+        return json.loads(self._inner.to_json())
+
+    def to_toml(self) -> str:
+        """The scene as TOML text."""
+        return self._inner.to_toml()
+
+    def check(self) -> Dict[str, Any]:
+        """What ``signorini check`` reports: model size, physics, time stepping, the Newton
+        loop, the planned path and memory (``memory_fits`` is False when a run would be
+        refused for its memory)."""
+        return json.loads(self._inner.check())
+
+    def with_params(
+        self,
+        scheme: Optional[str] = None,
+        dt: Optional[float] = None,
+        t_end: Optional[float] = None,
+        theta: Optional[float] = None,
+        set: Optional[Mapping[str, Any]] = None,
+    ) -> "Scene":
+        """This scene with a scheme, time step, end time, θ or any key changed."""
+        if self.is_bar:
+            p = self.to_dict()
+            for key, value in (("dt", dt), ("t_end", t_end)):
+                if value is not None:
+                    p[key] = value
+            if scheme is not None:
+                p["scheme"]["kind"] = scheme
+            if theta is not None:
+                p["scheme"]["theta"] = theta
+            for key, value in (set or {}).items():
+                node = p
+                *path, last = key.split(".")
+                for part in path:
+                    node = node.setdefault(part, {})
+                node[last] = value
+            return Scene(_Scene.bar(_json(p, "bar")))
+        keys: Dict[str, Any] = {}
+        if scheme is not None:
+            keys["scheme.kind"] = scheme
+        if dt is not None:
+            keys["time.dt"] = dt
+        if t_end is not None:
+            keys["time.t_end"] = t_end
+        if theta is not None:
+            keys["scheme.theta"] = theta
+        keys.update(set or {})
+        return Scene(self._inner.with_overrides(_overrides(keys)))
+
+    def simulation(
+        self,
+        scheme: Optional[str] = None,
+        dt: Optional[float] = None,
+        t_end: Optional[float] = None,
+        theta: Optional[float] = None,
+        set: Optional[Mapping[str, Any]] = None,
+    ) -> "Simulation":
+        """A simulation of this scene, with the parameters of :meth:`with_params`."""
+        return Simulation(self.with_params(scheme, dt, t_end, theta, set))
+
+    def __repr__(self) -> str:
+        kind = "bar" if self.is_bar else "scene"
+        return f"<signorini.Scene ({kind}, {self.steps} steps)>"
+
+
+class Simulation:
+    """One run of a scene: :meth:`run` for the whole run as the CLI makes it (files
+    included), or :meth:`step` for step-by-step control. Not both."""
+
+    __slots__ = ("scene", "_inner")
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self._inner = _Simulation(scene._inner)
+
+    def run(
+        self,
+        out: Optional[PathLike] = None,
+        progress: Optional[Callable[[int, int], None]] = None,
+        fields: Optional[bool] = None,
+        plots: Optional[bool] = None,
+    ) -> "Simulation":
+        """Runs the whole scene with the GIL released. With ``out``, writes what the CLI
+        writes there (``history.csv``, ``summary.json``, fields, plots); without, keeps
+        the history in memory only. ``progress(step, total)`` is called up to 1000
+        times. Ctrl-C stops after the current step, leaves ``out`` readable (the history
+        and the frames so far) and raises ``KeyboardInterrupt``."""
+        self._inner.run(None if out is None else os.fspath(out), progress, fields, plots)
+        return self
+
+    def step(self, n: int = 1) -> Dict[str, Any]:
+        """Takes ``n`` steps (the first call builds the integrator); returns the last
+        step's statistics (iterations, residuals, violation, caps hit)."""
+        return json.loads(self._inner.step(n))
+
+    @property
+    def q(self) -> np.ndarray:
+        """Displacements, one per dof (m; owned ``float64`` copy)."""
+        return self._inner.q
+
+    @property
+    def v(self) -> np.ndarray:
+        """Velocities, one per dof (m/s; owned ``float64`` copy)."""
+        return self._inner.v
+
+    @property
+    def impulses(self) -> np.ndarray:
+        """Normal impulses of the last step, one per contact (N·s; force = P / dt)."""
+        return self._inner.impulses
+
+    @property
+    def gaps(self) -> np.ndarray:
+        """Gaps, one per contact (m; negative is penetration)."""
+        return self._inner.gaps
+
+    @property
+    def contact_velocities(self) -> np.ndarray:
+        """Normal relative velocities, one per contact (m/s)."""
+        return self._inner.contact_velocities
+
+    @property
+    def time(self) -> float:
+        """Time of the current state (s)."""
+        return self._inner.time
+
+    @property
+    def steps_done(self) -> int:
+        """Steps taken."""
+        return self._inner.steps_done
+
+    @property
+    def steps_total(self) -> int:
+        """Steps of the whole run."""
+        return self._inner.steps_total
+
+    @property
+    def stats(self) -> Optional[Dict[str, Any]]:
+        """The last step's statistics (None before a step)."""
+        s = self._inner.stats_json
+        return None if s is None else json.loads(s)
+
+    @property
+    def summary(self) -> Dict[str, Any]:
+        """``summary.json`` of the run, as a dict (after :meth:`run`)."""
+        s = self._inner.summary_json
+        if s is None:
+            raise RuntimeError("no summary: run() writes it (step() does not)")
+        return json.loads(s)
+
+    @property
+    def history(self) -> Dict[str, np.ndarray]:
+        """``history.csv`` of the run as a dict of ``float64`` arrays, one per column in the
+        file's order (after :meth:`run`; the same numbers, bit for bit)."""
+        return dict(self._inner.history_columns())
+
+    @property
+    def out(self) -> Optional[str]:
+        """The output directory of ``run(out=…)``."""
+        o = self._inner.out
+        return None if o is None else os.fspath(o)
+
+    def __repr__(self) -> str:
+        return f"<signorini.Simulation {self.steps_done}/{self.steps_total} steps, t = {self.time:g} s>"

@@ -1,0 +1,592 @@
+//! `signorini._signorini`: the Rust side of the Python package (issue 20). It holds no
+//! solver of its own: scenes are the library's `Scene` / `BarScene`, runs go through
+//! the library's `run_scene` / `run_bar` (the CLI's code path, so a run writes the
+//! CLI's files byte for byte), and stepping goes through the library's integrators.
+//! The pure-Python layer (`signorini/__init__.py`) turns keyword arguments into scene
+//! overrides and JSON into dicts; this module moves arrays and releases the GIL.
+//!
+//! Arrays handed to Python are owned copies, not views: the integrator overwrites its
+//! state buffers at every step and owns them for as long as the simulation lives, so a
+//! view would change under the caller's feet (and outlive its buffer if the simulation
+//! were dropped first). A copy costs one pass over `n` values, negligible next to a step.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use numpy::{IntoPyArray, PyArray1};
+use pyo3::exceptions::{PyException, PyRuntimeError};
+use pyo3::prelude::*;
+
+use signorini::Error;
+use signorini::integrators::{Integrator, State, StepStats};
+use signorini::io::OutputOptions;
+use signorini::run::{self, Output, Progress, RunChecks};
+use signorini::scene::bar::BarScene;
+use signorini::scene::file::Scene as FileScene;
+
+pyo3::create_exception!(
+    _signorini,
+    SignoriniError,
+    PyException,
+    "Base class of signorini's errors."
+);
+pyo3::create_exception!(
+    _signorini,
+    BadInput,
+    SignoriniError,
+    "Bad input (the CLI's exit code 2): the message names the file, the key path or line, the value and what was expected."
+);
+pyo3::create_exception!(
+    _signorini,
+    RunFailed,
+    SignoriniError,
+    "A run that failed (the CLI's exit code 1): a cap hit, a non-finite state, an output that could not be written."
+);
+
+fn py_err(e: Error) -> PyErr {
+    match e.exit_code() {
+        2 => BadInput::new_err(e.to_string()),
+        _ => RunFailed::new_err(e.to_string()),
+    }
+}
+
+/// A scene file's scene, or the built-in impacting bar (its own parameter set).
+#[derive(Clone)]
+enum Kind {
+    File(Box<FileScene>),
+    Bar(Box<BarScene>),
+}
+
+impl Kind {
+    fn steps(&self) -> usize {
+        match self {
+            Kind::File(s) => s.steps(),
+            Kind::Bar(b) => b.steps(),
+        }
+    }
+}
+
+/// A validated scene (`signorini.Scene` wraps it).
+#[pyclass(module = "signorini._signorini", name = "_Scene", frozen)]
+struct PyScene {
+    kind: Kind,
+}
+
+fn file_scene(s: FileScene) -> PyScene {
+    PyScene {
+        kind: Kind::File(Box::new(s)),
+    }
+}
+
+#[pymethods]
+impl PyScene {
+    /// A scene file with `KEY=VALUE` overrides (`signorini run FILE --set …`).
+    #[staticmethod]
+    fn from_file(path: PathBuf, set: Vec<String>) -> PyResult<Self> {
+        FileScene::from_file_with(&path, &set)
+            .map(file_scene)
+            .map_err(py_err)
+    }
+
+    /// Scene TOML text; relative mesh paths start from `base_dir` (default: the
+    /// working directory).
+    #[staticmethod]
+    #[pyo3(signature = (text, set, base_dir=None))]
+    fn from_text(text: &str, set: Vec<String>, base_dir: Option<PathBuf>) -> PyResult<Self> {
+        let mut s = FileScene::from_text_with(text, &set).map_err(py_err)?;
+        if let Some(d) = base_dir {
+            s.base_dir = d;
+        }
+        Ok(file_scene(s))
+    }
+
+    /// A scene given as JSON (the Python dict of the TOML tables): converted to TOML
+    /// and read as a scene file would be, so errors name the same key paths.
+    #[staticmethod]
+    #[pyo3(signature = (json, set, base_dir=None))]
+    fn from_json(json: &str, set: Vec<String>, base_dir: Option<PathBuf>) -> PyResult<Self> {
+        let mut value: serde_json::Value = serde_json::from_str(json)
+            .map_err(|e| BadInput::new_err(format!("scene dict: {e}")))?;
+        strip_nulls(&mut value);
+        let table = toml::Table::try_from(value).map_err(|e| {
+            BadInput::new_err(format!(
+                "scene dict: {e} (expected the tables of a scene file)"
+            ))
+        })?;
+        let text =
+            toml::to_string(&table).map_err(|e| BadInput::new_err(format!("scene dict: {e}")))?;
+        Self::from_text(&text, set, base_dir)
+    }
+
+    /// The built-in impacting bar from its parameters as JSON (the reference bar for
+    /// `{}`); unknown names are refused with the name.
+    #[staticmethod]
+    fn bar(json: &str) -> PyResult<Self> {
+        let mut de = serde_json::Deserializer::from_str(json);
+        let b: BarScene = serde_path_to_error_free(&mut de)?;
+        b.validate().map_err(py_err)?;
+        Ok(PyScene {
+            kind: Kind::Bar(Box::new(b)),
+        })
+    }
+
+    /// One of the paper's academic examples (bouncing-ball, oscillator, rocking-block,
+    /// slider-crank).
+    #[staticmethod]
+    fn example(name: &str) -> PyResult<Self> {
+        signorini::scene::builtin_scene(name)
+            .map(file_scene)
+            .map_err(py_err)
+    }
+
+    /// This scene with overrides (file scenes; the bar takes new parameters instead).
+    fn with_overrides(&self, set: Vec<String>) -> PyResult<Self> {
+        match &self.kind {
+            Kind::File(s) => s.with_overrides(&set).map(file_scene).map_err(py_err),
+            Kind::Bar(_) => Err(BadInput::new_err(
+                "the built-in bar takes parameters, not scene keys",
+            )),
+        }
+    }
+
+    /// Whether this is the built-in bar.
+    fn is_bar(&self) -> bool {
+        matches!(self.kind, Kind::Bar(_))
+    }
+
+    /// The scene as JSON (file scenes: the TOML tables; the bar: its parameters);
+    /// absent optional keys are left out, as in a scene file.
+    fn to_json(&self) -> String {
+        let mut v = match &self.kind {
+            Kind::File(s) => serde_json::to_value(s.as_ref()),
+            Kind::Bar(b) => serde_json::to_value(b),
+        }
+        .expect("scenes serialize");
+        strip_nulls(&mut v);
+        v.to_string()
+    }
+
+    /// The scene as TOML text.
+    fn to_toml(&self) -> PyResult<String> {
+        match &self.kind {
+            Kind::File(s) => toml::to_string(s.as_ref()),
+            Kind::Bar(b) => toml::to_string(b),
+        }
+        .map_err(|e| PyRuntimeError::new_err(format!("the scene does not serialize: {e}")))
+    }
+
+    /// Steps of a run.
+    fn steps(&self) -> usize {
+        self.kind.steps()
+    }
+
+    /// What `signorini check` reports, as JSON.
+    fn check(&self) -> PyResult<String> {
+        let v = match &self.kind {
+            Kind::File(s) => {
+                let c = s.check().map_err(py_err)?;
+                serde_json::to_value(&c).expect("the report serializes")
+            }
+            Kind::Bar(b) => {
+                let model = b.build().map_err(py_err)?;
+                let plan = model.plan(&b.scheme, b.dt).map_err(py_err)?;
+                serde_json::json!({
+                    "bodies": 1,
+                    "cells": b.elements,
+                    "dofs": model.q0.len(),
+                    "fixed_dofs": 0,
+                    "contacts": model.contacts.len(),
+                    "damping": false,
+                    "gravity": false,
+                    "max_friction": 0.0,
+                    "friction_solver": null,
+                    "interfaces": [],
+                    "probes": [],
+                    "steps": b.steps(),
+                    "dt": b.dt,
+                    "scheme": b.scheme.kind.name(),
+                    "theta": b.scheme.theta,
+                    "linear_structure": true,
+                    "linear_contacts": true,
+                    "newton": "not needed for the dynamics (linear structure, constant G): factor once, never refactor",
+                    "path": plan.describe(),
+                    "memory_planned": plan.ledger.total(),
+                    "memory_limit": signorini::limits::memory_limit(),
+                    "memory_parts": plan.ledger.parts().iter().filter(|(_, b)| *b > 0).collect::<Vec<_>>(),
+                    "memory_fits": plan.ledger.check("bar", String::new()).is_ok(),
+                })
+            }
+        };
+        Ok(v.to_string())
+    }
+}
+
+/// Drops `null` values (TOML has none: an absent key means the default; Python's
+/// `None` reads the same way).
+fn strip_nulls(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.retain(|_, x| !x.is_null());
+            m.values_mut().for_each(strip_nulls);
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(strip_nulls),
+        _ => {}
+    }
+}
+
+/// serde_json with the key path in the message (`scheme.kind: unknown variant …`).
+fn serde_path_to_error_free<T: serde::de::DeserializeOwned>(
+    de: &mut serde_json::Deserializer<serde_json::de::StrRead<'_>>,
+) -> PyResult<T> {
+    T::deserialize(de).map_err(|e| BadInput::new_err(format!("bar: {e}")))
+}
+
+/// Calls the Python progress callback and watches for Ctrl-C while the run holds no GIL.
+struct PyProgress {
+    callback: Option<Py<PyAny>>,
+    error: Option<PyErr>,
+}
+
+impl Progress for PyProgress {
+    fn update(&mut self, step: usize, total: usize) {
+        if self.error.is_some() {
+            return;
+        }
+        Python::attach(|py| {
+            if let Some(cb) = &self.callback
+                && let Err(e) = cb.call1(py, (step, total))
+            {
+                self.error = Some(e);
+                return;
+            }
+            if let Err(e) = py.check_signals() {
+                self.error = Some(e);
+            }
+        });
+    }
+    fn cancelled(&mut self) -> bool {
+        self.error.is_some()
+    }
+}
+
+/// A history read back from `history.csv`: column names and values by column.
+type Columns = Vec<(String, Vec<f64>)>;
+
+fn read_history(dir: &Path) -> Result<Columns, Error> {
+    let path = dir.join("history.csv");
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+    let mut lines = text.lines();
+    let mut cols: Columns = lines
+        .next()
+        .unwrap_or_default()
+        .split(',')
+        .map(|h| (h.to_string(), Vec::new()))
+        .collect();
+    for (i, line) in lines.enumerate() {
+        for (c, v) in cols.iter_mut().zip(line.split(',')) {
+            // Rust writes the shortest representation that reads back to the same bits
+            c.1.push(v.parse().map_err(|_| {
+                Error::bad_file(
+                    &path,
+                    format!("line {}", i + 2),
+                    format!("`{v}` is not a number"),
+                )
+            })?);
+        }
+    }
+    Ok(cols)
+}
+
+#[derive(Default)]
+struct SimState {
+    integ: Option<Box<dyn Integrator>>,
+    checks: Option<RunChecks>,
+    last: Option<StepStats>,
+    finished: Option<State>,
+    summary: Option<String>,
+    history: Option<Columns>,
+    out: Option<PathBuf>,
+}
+
+impl SimState {
+    fn state(&self) -> Option<&State> {
+        self.integ
+            .as_ref()
+            .map(|i| i.state())
+            .or(self.finished.as_ref())
+    }
+}
+
+/// A simulation of a scene (`signorini.Simulation` wraps it): `run()` for a whole run
+/// written as the CLI writes it, or `step(n)` for step-by-step control.
+#[pyclass(module = "signorini._signorini", name = "_Simulation", frozen)]
+struct PySimulation {
+    kind: Kind,
+    state: Mutex<SimState>,
+}
+
+fn temp_dir() -> PathBuf {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static COUNT: AtomicUsize = AtomicUsize::new(0);
+    std::env::temp_dir().join(format!(
+        "signorini-py-{}-{}",
+        std::process::id(),
+        COUNT.fetch_add(1, Ordering::Relaxed)
+    ))
+}
+
+impl PySimulation {
+    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, SimState>> {
+        self.state
+            .lock()
+            .map_err(|_| PyRuntimeError::new_err("the simulation failed in another thread"))
+    }
+
+    fn vector(
+        &self,
+        py: Python<'_>,
+        pick: impl Fn(&State) -> &[f64],
+    ) -> PyResult<Py<PyArray1<f64>>> {
+        let g = self.lock()?;
+        let s = g
+            .state()
+            .ok_or_else(|| PyRuntimeError::new_err("no state yet: call run() or step() first"))?;
+        Ok(pick(s).to_vec().into_pyarray(py).unbind())
+    }
+}
+
+#[pymethods]
+impl PySimulation {
+    #[new]
+    fn new(scene: &PyScene) -> Self {
+        PySimulation {
+            kind: scene.kind.clone(),
+            state: Mutex::new(SimState::default()),
+        }
+    }
+
+    /// Runs the whole scene with the GIL released, writing into `out` what the CLI
+    /// writes (a temporary directory, removed afterwards, when `out` is None: then
+    /// only the history is kept, in memory). `fields` / `plots` override the scene's
+    /// output options when given. `progress(step, total)` is called at most 1000
+    /// times; Ctrl-C (or an exception in `progress`) stops the run after the current
+    /// step, leaves `out` readable and raises.
+    #[pyo3(signature = (out=None, progress=None, fields=None, plots=None))]
+    fn run(
+        &self,
+        py: Python<'_>,
+        out: Option<PathBuf>,
+        progress: Option<Py<PyAny>>,
+        fields: Option<bool>,
+        plots: Option<bool>,
+    ) -> PyResult<()> {
+        let mut g = self.lock()?;
+        if g.integ.is_some() || g.finished.is_some() {
+            return Err(PyRuntimeError::new_err(
+                "run() makes a whole run from t = 0: this simulation has already stepped or \
+                 run; make a new one with scene.simulation()",
+            ));
+        }
+        let mut options = match &self.kind {
+            Kind::File(s) => s.output.clone(),
+            Kind::Bar(_) => OutputOptions::default(),
+        };
+        let temporary = out.is_none();
+        let dir = out.unwrap_or_else(temp_dir);
+        if temporary {
+            options.fields = false;
+            options.plots = false;
+            options.hdf5 = Some(false);
+        }
+        if let Some(f) = fields {
+            options.fields = f;
+        }
+        if let Some(p) = plots {
+            options.plots = p;
+        }
+        let mut prog = PyProgress {
+            callback: progress,
+            error: None,
+        };
+        let kind = &self.kind;
+        let result = py.detach(|| {
+            let o = Output {
+                dir: &dir,
+                options: &options,
+            };
+            match kind {
+                Kind::File(s) => run::run_scene(s, Some(o), &mut prog),
+                Kind::Bar(b) => run::run_bar(b, Some(o), &mut prog),
+            }
+        });
+        let r = match result {
+            Ok(r) => r,
+            Err(e) => {
+                if temporary {
+                    let _ = std::fs::remove_dir_all(&dir);
+                }
+                return Err(match (e, prog.error.take()) {
+                    (Error::Interrupted { .. }, Some(pe)) => pe,
+                    (e, _) => py_err(e),
+                });
+            }
+        };
+        let history = read_history(&dir).map_err(py_err)?;
+        if temporary {
+            let _ = std::fs::remove_dir_all(&dir);
+        } else {
+            g.out = Some(dir);
+        }
+        g.summary = Some(serde_json::to_string(&r.summary).expect("summaries serialize"));
+        g.history = Some(history);
+        g.finished = Some(r.state);
+        Ok(())
+    }
+
+    /// Takes `n` steps (building the integrator at the first call) with the GIL
+    /// released; returns the last step's statistics as JSON. Stepping past the
+    /// scene's end is refused.
+    fn step(&self, py: Python<'_>, n: usize) -> PyResult<String> {
+        let mut g = self.lock()?;
+        if g.finished.is_some() {
+            return Err(PyRuntimeError::new_err(
+                "this simulation has run to its end; make a new one with scene.simulation()",
+            ));
+        }
+        if g.integ.is_none() {
+            let kind = &self.kind;
+            let built = py.detach(|| -> Result<_, Error> {
+                let (model, params, dt) = match kind {
+                    Kind::File(s) => (s.build()?.0, &s.scheme, s.time.dt),
+                    Kind::Bar(b) => (b.build()?, &b.scheme, b.dt),
+                };
+                let checks = RunChecks::new(params, model.geometry.size());
+                Ok((model.into_integrator(params, dt)?, checks))
+            });
+            let (integ, checks) = built.map_err(py_err)?;
+            g.integ = Some(integ);
+            g.checks = Some(checks);
+        }
+        let total = self.kind.steps();
+        let SimState {
+            integ,
+            checks,
+            last,
+            ..
+        } = &mut *g;
+        let (integ, checks) = (
+            integ.as_mut().expect("built"),
+            checks.as_ref().expect("built"),
+        );
+        let done = integ.state().step;
+        if n > total - done.min(total) {
+            return Err(BadInput::new_err(format!(
+                "step({n}): the scene makes {total} steps and {done} are done"
+            )));
+        }
+        let mut taken = 0;
+        while taken < n {
+            // the GIL is taken back every 1000 steps for Ctrl-C
+            let chunk = (n - taken).min(1000);
+            let r = py.detach(|| -> Result<Option<StepStats>, Error> {
+                let mut st = None;
+                for _ in 0..chunk {
+                    integ.prepare()?;
+                    let s = integ.step()?;
+                    checks.check(integ.as_ref(), &s)?;
+                    st = Some(s);
+                }
+                Ok(st)
+            });
+            match r {
+                Ok(s) => *last = s.or(*last),
+                Err(e) => return Err(py_err(e)),
+            }
+            taken += chunk;
+            py.check_signals()?;
+        }
+        Ok(serde_json::to_string(last).expect("statistics serialize"))
+    }
+
+    /// Nodal displacements `q` (m), one per dof (owned copy).
+    #[getter]
+    fn q(&self, py: Python<'_>) -> PyResult<Py<PyArray1<f64>>> {
+        self.vector(py, |s| &s.q)
+    }
+    /// Nodal velocities `v` (m/s), one per dof (owned copy).
+    #[getter]
+    fn v(&self, py: Python<'_>) -> PyResult<Py<PyArray1<f64>>> {
+        self.vector(py, |s| &s.v)
+    }
+    /// Normal impulses `P_N` of the last step (N·s), one per contact (owned copy).
+    #[getter]
+    fn impulses(&self, py: Python<'_>) -> PyResult<Py<PyArray1<f64>>> {
+        self.vector(py, |s| &s.impulse)
+    }
+    /// Gaps `g(q)` (m), one per contact (owned copy).
+    #[getter]
+    fn gaps(&self, py: Python<'_>) -> PyResult<Py<PyArray1<f64>>> {
+        self.vector(py, |s| &s.gap)
+    }
+    /// Normal relative velocities `U_N` (m/s), one per contact (owned copy).
+    #[getter]
+    fn contact_velocities(&self, py: Python<'_>) -> PyResult<Py<PyArray1<f64>>> {
+        self.vector(py, |s| &s.local_velocity)
+    }
+    /// Time of the state (s).
+    #[getter]
+    fn time(&self) -> PyResult<f64> {
+        Ok(self.lock()?.state().map_or(0.0, |s| s.time))
+    }
+    /// Steps done.
+    #[getter]
+    fn steps_done(&self) -> PyResult<usize> {
+        Ok(self.lock()?.state().map_or(0, |s| s.step))
+    }
+    /// Steps of the whole run.
+    #[getter]
+    fn steps_total(&self) -> usize {
+        self.kind.steps()
+    }
+    /// The last step's statistics as JSON (`None` before a step).
+    #[getter]
+    fn stats_json(&self) -> PyResult<Option<String>> {
+        Ok(self
+            .lock()?
+            .last
+            .map(|s| serde_json::to_string(&s).expect("statistics serialize")))
+    }
+    /// The summary as JSON (after `run()`).
+    #[getter]
+    fn summary_json(&self) -> PyResult<Option<String>> {
+        Ok(self.lock()?.summary.clone())
+    }
+    /// The output directory of `run(out=…)`.
+    #[getter]
+    fn out(&self) -> PyResult<Option<PathBuf>> {
+        Ok(self.lock()?.out.clone())
+    }
+    /// The history after `run()`: `[(column, array)]` in the CSV's order.
+    fn history_columns(&self, py: Python<'_>) -> PyResult<Vec<(String, Py<PyArray1<f64>>)>> {
+        let g = self.lock()?;
+        let h = g.history.as_ref().ok_or_else(|| {
+            PyRuntimeError::new_err("no history: run() records it (step() does not)")
+        })?;
+        Ok(h.iter()
+            .map(|(name, v)| (name.clone(), v.clone().into_pyarray(py).unbind()))
+            .collect())
+    }
+}
+
+/// The extension module.
+#[pymodule]
+fn _signorini(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add_class::<PyScene>()?;
+    m.add_class::<PySimulation>()?;
+    m.add("SignoriniError", py.get_type::<SignoriniError>())?;
+    m.add("BadInput", py.get_type::<BadInput>())?;
+    m.add("RunFailed", py.get_type::<RunFailed>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
