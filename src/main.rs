@@ -135,7 +135,7 @@ struct FclibArgs {
     #[arg(long, value_enum, default_value = "auto")]
     solver: signorini::solvers::friction::FrictionSolverKind,
     /// Residual to reach (relative; see --residual).
-    #[arg(long, default_value_t = 1e-8)]
+    #[arg(long, default_value_t = signorini::io::fclib::DEFAULT_TOL)]
     tol: f64,
     /// Which residual: `siconos` (Siconos' natural-map error on De Saxcé's velocity,
     /// comparable with Siconos' figures) or `velocity` (Alart–Curnier's map, each contact
@@ -143,7 +143,7 @@ struct FclibArgs {
     #[arg(long, default_value = "siconos", value_parser = ["siconos", "velocity"])]
     residual: String,
     /// Cap on NSGS sweeps (over all proximal iterations for prox).
-    #[arg(long, default_value_t = 20000)]
+    #[arg(long, default_value_t = signorini::io::fclib::DEFAULT_MAX_ITERATIONS)]
     max_iter: usize,
     /// Start from the file's /guesses/1/r instead of r = 0.
     #[arg(long)]

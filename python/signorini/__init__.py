@@ -25,6 +25,7 @@ from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Union
 
 import numpy as np
 
+from . import fclib
 from ._signorini import BadInput, RunFailed, SignoriniError, _Scene, _Simulation
 from ._signorini import __version__
 
@@ -34,6 +35,7 @@ __all__ = [
     "SignoriniError",
     "BadInput",
     "RunFailed",
+    "fclib",
     "__version__",
 ]
 

@@ -32,6 +32,12 @@ pub const MAX_ROWS: usize = 16384;
 pub const MAX_MU: f64 = 1e6;
 /// Largest magnitude of an entry of `W` or `q`.
 pub const MAX_ENTRY: f64 = 1e150;
+/// Tolerance of `signorini fclib` (and of the Python `fclib.solve`) when none is given:
+/// Siconos' relative residual at 1e-8, as FCLIB's results are compared.
+pub const DEFAULT_TOL: f64 = 1e-8;
+/// Cap on NSGS sweeps of `signorini fclib` when none is given.
+pub const DEFAULT_MAX_ITERATIONS: usize = 20000;
+
 /// Largest global problem (rows of `M`) condensed: `M` is read sparse, factored by a
 /// sparse LU, and only `M⁻¹ H` is dense.
 pub const MAX_GLOBAL_DOFS: usize = 1 << 22;
@@ -65,6 +71,29 @@ impl FrictionContactProblem {
     /// Rows `n`.
     pub fn rows(&self) -> usize {
         self.q.len()
+    }
+
+    /// A local problem from arrays (`W` column-major `n × n`, `q`, `μ` per contact, `n =
+    /// dim × contacts`), checked as a file's would be; `what` names the source in errors
+    /// (the Python package's `fclib.solve`).
+    pub fn from_arrays(
+        dim: usize,
+        w: Vec<f64>,
+        q: Vec<f64>,
+        mu: Vec<f64>,
+        guess: Option<Vec<f64>>,
+        what: &str,
+    ) -> Result<Self, Error> {
+        FrictionContactProblem {
+            dim,
+            w,
+            q,
+            mu,
+            guess,
+            form: "local",
+            asymmetry: 0.0,
+        }
+        .finish(Path::new(what))
     }
 
     fn finish(mut self, path: &Path) -> Result<Self, Error> {
