@@ -224,10 +224,10 @@ class Simulation:
         self._inner.run(None if out is None else os.fspath(out), progress, fields, plots)
         return self
 
-    def step(self, n: int = 1) -> Dict[str, Any]:
-        """Takes ``n`` steps (the first call builds the integrator); returns the last
-        step's statistics (iterations, residuals, violation, caps hit)."""
-        return json.loads(self._inner.step(n))
+    def step(self, n: int = 1) -> int:
+        """Takes ``n`` steps (the first call builds the integrator) and returns the steps
+        done; :attr:`stats` has the last step's statistics."""
+        return self._inner.step(n)
 
     @property
     def q(self) -> np.ndarray:

@@ -297,8 +297,16 @@ fn read_history(dir: &Path) -> Result<Columns, Error> {
     Ok(cols)
 }
 
+/// `step(n)` holds the GIL for work expected to take less than this (s): a Python loop of
+/// `step(1)` on a small model then pays no release and re-acquisition per call; anything
+/// longer (a mesh's step, a long chunk) runs with the GIL released.
+const GIL_RELEASE_AFTER: f64 = 50e-6;
+
 #[derive(Default)]
 struct SimState {
+    /// The last chunk's seconds per step (0 before the first: the first chunk of a
+    /// new simulation runs with the GIL released).
+    step_seconds: f64,
     integ: Option<Box<dyn Integrator>>,
     checks: Option<RunChecks>,
     last: Option<StepStats>,
@@ -444,9 +452,10 @@ impl PySimulation {
     }
 
     /// Takes `n` steps (building the integrator at the first call) with the GIL
-    /// released; returns the last step's statistics as JSON. Stepping past the
-    /// scene's end is refused.
-    fn step(&self, py: Python<'_>, n: usize) -> PyResult<String> {
+    /// released; returns the steps done. Stepping past the scene's end is refused.
+    /// The statistics stay in Rust until asked for (`stats_json`): a Python loop of
+    /// `step(1)` pays no conversion per step.
+    fn step(&self, py: Python<'_>, n: usize) -> PyResult<usize> {
         let mut g = self.lock()?;
         if g.finished.is_some() {
             return Err(PyRuntimeError::new_err(
@@ -472,6 +481,7 @@ impl PySimulation {
             integ,
             checks,
             last,
+            step_seconds,
             ..
         } = &mut *g;
         let (integ, checks) = (
@@ -488,7 +498,7 @@ impl PySimulation {
         while taken < n {
             // the GIL is taken back every 1000 steps for Ctrl-C
             let chunk = (n - taken).min(1000);
-            let r = py.detach(|| -> Result<Option<StepStats>, Error> {
+            let mut work = || -> Result<Option<StepStats>, Error> {
                 let mut st = None;
                 for _ in 0..chunk {
                     integ.prepare()?;
@@ -497,7 +507,16 @@ impl PySimulation {
                     st = Some(s);
                 }
                 Ok(st)
-            });
+            };
+            // releasing and taking back the GIL costs about a microsecond: worth it when
+            // the chunk is expected to take longer than GIL_RELEASE_AFTER
+            let t0 = std::time::Instant::now();
+            let r = if *step_seconds == 0.0 || chunk as f64 * *step_seconds > GIL_RELEASE_AFTER {
+                py.detach(work)
+            } else {
+                work()
+            };
+            *step_seconds = t0.elapsed().as_secs_f64() / chunk as f64;
             match r {
                 Ok(s) => *last = s.or(*last),
                 Err(e) => return Err(py_err(e)),
@@ -505,7 +524,7 @@ impl PySimulation {
             taken += chunk;
             py.check_signals()?;
         }
-        Ok(serde_json::to_string(last).expect("statistics serialize"))
+        Ok(integ.state().step)
     }
 
     /// Nodal displacements `q` (m), one per dof (owned copy).

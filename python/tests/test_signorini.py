@@ -74,9 +74,11 @@ def test_a_scene_from_a_dict_equals_the_same_scene_from_toml():
 
 def test_arrays_have_the_documented_shapes_and_dtypes():
     sim = signorini.Scene.bar(elements=50, dt=2e-6, t_end=2e-4).simulation()
-    stats = sim.step(10)
+    assert sim.stats is None
+    assert sim.step(10) == 10
     assert sim.steps_done == 10 and abs(sim.time - 2e-5) < 1e-18
-    assert stats["newton_iterations"] >= 1
+    stats = sim.stats
+    assert stats["newton_iterations"] >= 1 and stats["max_violation"] == 0.0
     for arr, n in ((sim.q, 51), (sim.v, 51), (sim.impulses, 1), (sim.gaps, 1), (sim.contact_velocities, 1)):
         assert arr.dtype == np.float64 and arr.shape == (n,)
         assert arr.flags["OWNDATA"] or arr.base is not None
