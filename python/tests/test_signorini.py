@@ -189,3 +189,19 @@ def test_examples_run():
     # velocity (to the projection's round-off)
     assert abs(sim.gaps[0]) < 1e-9 and abs(sim.v[0]) < 1e-9
     assert h["time"][-1] == pytest.approx(3.5)
+
+
+def test_the_type_stubs_name_what_the_extension_has():
+    import ast
+
+    from signorini import _signorini
+
+    stub = pathlib.Path(signorini.__file__).with_name("_signorini.pyi")
+    tree = ast.parse(stub.read_text())
+    for node in tree.body:
+        if isinstance(node, (ast.ClassDef, ast.FunctionDef)):
+            obj = getattr(_signorini, node.name)
+            if isinstance(node, ast.ClassDef):
+                for item in node.body:
+                    if isinstance(item, ast.FunctionDef) and item.name != "__init__":
+                        assert hasattr(obj, item.name), f"{node.name}.{item.name}"
