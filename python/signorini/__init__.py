@@ -85,10 +85,14 @@ class Scene:
 
     @classmethod
     def from_toml(cls, source: Union[PathLike, str], set: Optional[Mapping[str, Any]] = None) -> "Scene":
-        """A scene from a ``.toml`` file (a path) or from TOML text. ``set`` overrides
-        keys as ``signorini run --set`` does: ``{"time.dt": 1e-6}``."""
+        """A scene from a file (a path object, or a string naming an existing file or
+        ending in ``.toml``) or from TOML text (any other string; relative mesh paths
+        then start from the working directory). ``set`` overrides keys as ``signorini
+        run --set`` does: ``{"time.dt": 1e-6}``."""
         if isinstance(source, os.PathLike) or (
-            isinstance(source, str) and "\n" not in source and "=" not in source
+            isinstance(source, str)
+            and "\n" not in source
+            and (source.endswith(".toml") or os.path.exists(source))
         ):
             return cls(_Scene.from_file(os.fspath(source), _overrides(set)))
         return cls(_Scene.from_text(source, _overrides(set)))

@@ -205,3 +205,28 @@ def test_the_type_stubs_name_what_the_extension_has():
                 for item in node.body:
                     if isinstance(item, ast.FunctionDef) and item.name != "__init__":
                         assert hasattr(obj, item.name), f"{node.name}.{item.name}"
+
+
+def test_progress_is_called_and_its_exception_stops_the_run(tmp_path):
+    seen = []
+    sim = signorini.Scene.bar(elements=50, dt=2e-6, t_end=2e-4).simulation()
+    sim.run(progress=lambda k, n: seen.append((k, n)))
+    assert seen[-1] == (100, 100) and all(n == 100 for _, n in seen)
+    assert [k for k, _ in seen] == sorted(k for k, _ in seen)
+
+    def fail(k, n):
+        if k >= 30:
+            raise ValueError("enough")
+
+    sim = signorini.Scene.bar(elements=50, dt=2e-6, t_end=2e-4).simulation()
+    with pytest.raises(ValueError, match="enough"):
+        sim.run(out=tmp_path / "cut", progress=fail)
+    rows = (tmp_path / "cut" / "history.csv").read_text().splitlines()
+    assert len(rows) == 1 + 30
+
+
+def test_a_one_line_toml_text_is_text_and_a_missing_toml_path_is_named(tmp_path):
+    with pytest.raises(signorini.BadInput, match="time"):
+        signorini.Scene.from_toml("[time]")
+    with pytest.raises(signorini.BadInput, match="absent.toml"):
+        signorini.Scene.from_toml(str(tmp_path / "absent.toml"))
