@@ -5,7 +5,7 @@
 //! `mpirun -np N signorini run SCENE --mumps` starts N copies of the program. Rank 0 (the
 //! *host*) runs the whole driver: it assembles `M̂`, forms the Delassus operator, solves
 //! the contact problems and writes every output, exactly as a run on one process. The
-//! other ranks ([`serve`]) hold no model: they wait for the host's commands and join
+//! other ranks (`serve`, within [`start`]) hold no model: they wait for the host's commands and join
 //! MUMPS' collective phases: analysis (ordering, symbolic factor), numeric factor and
 //! solve, each spread over all N ranks (MUMPS' tree and node parallelism, ScaLAPACK on the
 //! root front). The matrix is given centrally on the host (MUMPS' `ICNTL(18) = 0`), which
