@@ -344,10 +344,18 @@ fn temp_dir() -> PathBuf {
 }
 
 impl PySimulation {
+    /// The state, or an error while another thread runs or steps this simulation:
+    /// waiting for it while holding the GIL would deadlock with the run's progress
+    /// callback, which needs the GIL.
     fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, SimState>> {
-        self.state
-            .lock()
-            .map_err(|_| PyRuntimeError::new_err("the simulation failed in another thread"))
+        self.state.try_lock().map_err(|e| match e {
+            std::sync::TryLockError::WouldBlock => PyRuntimeError::new_err(
+                "the simulation is running or stepping in another thread: read it when that ends",
+            ),
+            std::sync::TryLockError::Poisoned(_) => {
+                PyRuntimeError::new_err("the simulation failed in another thread")
+            }
+        })
     }
 
     fn vector(

@@ -230,3 +230,24 @@ def test_a_one_line_toml_text_is_text_and_a_missing_toml_path_is_named(tmp_path)
         signorini.Scene.from_toml("[time]")
     with pytest.raises(signorini.BadInput, match="absent.toml"):
         signorini.Scene.from_toml(str(tmp_path / "absent.toml"))
+
+
+def test_reading_a_running_simulation_from_another_thread_raises_instead_of_blocking():
+    sim = signorini.Scene.bar(elements=2000, t_end=2e-3).simulation()
+    started = threading.Event()
+    errors = []
+
+    def progress(k, n):
+        started.set()
+
+    t = threading.Thread(target=lambda: sim.run(progress=progress))
+    t.start()
+    assert started.wait(30)
+    try:
+        sim.time
+    except RuntimeError as e:
+        errors.append(str(e))
+    t.join()
+    # either the run was still going (the read is refused, no deadlock) or it had ended
+    assert not errors or "another thread" in errors[0]
+    assert sim.steps_done == 10000
