@@ -182,42 +182,12 @@ impl PyScene {
 
     /// What `signorini check` reports, as JSON.
     fn check(&self) -> PyResult<String> {
-        let v = match &self.kind {
-            Kind::File(s) => {
-                let c = s.check().map_err(py_err)?;
-                serde_json::to_value(&c).expect("the report serializes")
-            }
-            Kind::Bar(b) => {
-                let model = b.build().map_err(py_err)?;
-                let plan = model.plan(&b.scheme, b.dt).map_err(py_err)?;
-                serde_json::json!({
-                    "bodies": 1,
-                    "cells": b.elements,
-                    "dofs": model.q0.len(),
-                    "fixed_dofs": 0,
-                    "contacts": model.contacts.len(),
-                    "damping": false,
-                    "gravity": false,
-                    "max_friction": 0.0,
-                    "friction_solver": null,
-                    "interfaces": [],
-                    "probes": [],
-                    "steps": b.steps(),
-                    "dt": b.dt,
-                    "scheme": b.scheme.kind.name(),
-                    "theta": b.scheme.theta,
-                    "linear_structure": true,
-                    "linear_contacts": true,
-                    "newton": "not needed for the dynamics (linear structure, constant G): factor once, never refactor",
-                    "path": plan.describe(),
-                    "memory_planned": plan.ledger.total(),
-                    "memory_limit": signorini::limits::memory_limit(),
-                    "memory_parts": plan.ledger.parts().iter().filter(|(_, b)| *b > 0).collect::<Vec<_>>(),
-                    "memory_fits": plan.ledger.check("bar", String::new()).is_ok(),
-                })
-            }
-        };
-        Ok(v.to_string())
+        let c = match &self.kind {
+            Kind::File(s) => s.check(),
+            Kind::Bar(b) => b.check(),
+        }
+        .map_err(py_err)?;
+        Ok(serde_json::to_string(&c).expect("the report serializes"))
     }
 }
 

@@ -382,19 +382,20 @@ impl Mumps {
     }
 
     fn factor(&mut self, what: &str) -> Result<(), Error> {
-        for attempt in 0..=WORKSPACE_RETRIES {
+        let mut retries = 0;
+        loop {
             self.inst.s.icntl[13] = self.relax;
             broadcast([cmd::FACTOR, self.id, self.relax as i64]);
             self.inst.call(job::FACTOR);
             let i1 = self.inst.infog(1);
-            if matches!(i1, -8 | -9 | -14 | -15 | -17 | -20) && attempt < WORKSPACE_RETRIES {
+            if matches!(i1, -8 | -9 | -14 | -15 | -17 | -20) && retries < WORKSPACE_RETRIES {
+                retries += 1;
                 self.relax = (self.relax.max(10)).saturating_mul(2);
                 continue;
             }
             self.memory_mb = (self.inst.infog(21), self.inst.infog(22));
             return self.check(what, "factor");
         }
-        unreachable!("the last attempt returns")
     }
 
     /// Ranks the factor is spread over.

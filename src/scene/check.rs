@@ -5,8 +5,11 @@
 
 use serde::Serialize;
 
-use super::file::Scene;
+use super::Model;
+use super::bar::BarScene;
+use super::file::{ModelReport, Scene};
 use crate::error::Error;
+use crate::integrators::SchemeParams;
 
 /// One `[[probes]]` entry as built.
 #[derive(Clone, Debug, Serialize)]
@@ -84,9 +87,62 @@ impl Scene {
     /// memory limit is reported in the result (`memory_fits`, `memory_error`).
     pub fn check(&self) -> Result<CheckReport, Error> {
         let (model, report) = self.build()?;
-        let mut plan = model.plan(&self.scheme, self.time.dt)?;
+        CheckReport::new(
+            &model,
+            &report,
+            self.bodies.len(),
+            &self.scheme,
+            self.time.dt,
+            self.steps(),
+            self.output.hdf5(),
+        )
+    }
+}
+
+impl BarScene {
+    /// [`Scene::check`] for the built-in bar: one rod, one contact, linear (history in
+    /// CSV only, as the bar writes it).
+    pub fn check(&self) -> Result<CheckReport, Error> {
+        let model = self.build()?;
+        let report = ModelReport {
+            dofs: model.q0.len(),
+            cells: self.elements,
+            contacts: model.contacts.len(),
+            linear_contacts: true,
+            max_friction: 0.0,
+            damping: false,
+            gravity: false,
+            fixed_dofs: 0,
+            linear_structure: true,
+            interfaces: Vec::new(),
+        };
+        CheckReport::new(
+            &model,
+            &report,
+            1,
+            &self.scheme,
+            self.dt,
+            self.steps(),
+            false,
+        )
+    }
+}
+
+impl CheckReport {
+    /// The report of a built `model` (its build `report`) run with `params` at `dt` for
+    /// `steps` steps; `hdf5`: whether the history is also written to HDF5 (the ledger).
+    fn new(
+        model: &Model,
+        report: &ModelReport,
+        bodies: usize,
+        params: &SchemeParams,
+        dt: f64,
+        steps: usize,
+        hdf5: bool,
+    ) -> Result<CheckReport, Error> {
+        let mut plan = model.plan(params, dt)?;
         let (m, rows) = (model.contacts.len(), model.contacts.rows());
-        plan.add_history(report.dofs, m, (rows - m) / m.max(1), self.output.hdf5());
+        plan.add_history(report.dofs, m, (rows - m) / m.max(1), hdf5);
         let newton = match (report.linear_structure, report.linear_contacts) {
             (true, true) => {
                 "not needed for the dynamics (linear structure, constant G): factor once, never refactor"
@@ -95,7 +151,7 @@ impl Scene {
                 "needed: G(q) changes with q (curved obstacle or contact between bodies), \
                  re-linearized every iteration (M̂ still factored once)"
             }
-            (false, _) if self.scheme.newton.modified => {
+            (false, _) if params.newton.modified => {
                 "nonlinear structure: modified Newton (M̂ⁿ formed at each step's first iterate, \
                  re-formed when the iterates stop contracting)"
             }
@@ -105,9 +161,9 @@ impl Scene {
             format!(
                 "{} on the velocity problem of each step: De Saxcé's cone complementarity, \
                  eq. 15; tol {:e}, cap {} sweeps",
-                self.scheme.friction.solver.describe(),
-                self.scheme.friction.tol,
-                self.scheme.friction.max_iterations
+                params.friction.solver.describe(),
+                params.friction.tol,
+                params.friction.max_iterations
             )
         });
         let fits = plan.ledger.check(
@@ -115,7 +171,7 @@ impl Scene {
             format!("{} dofs, {} contacts", report.dofs, report.contacts),
         );
         Ok(CheckReport {
-            bodies: self.bodies.len(),
+            bodies,
             cells: report.cells,
             dofs: report.dofs,
             fixed_dofs: report.fixed_dofs,
@@ -136,10 +192,10 @@ impl Scene {
                     times: p.times.clone(),
                 })
                 .collect(),
-            steps: self.steps(),
-            dt: self.time.dt,
-            scheme: self.scheme.kind.name().to_string(),
-            theta: self.scheme.theta,
+            steps,
+            dt,
+            scheme: params.kind.name().to_string(),
+            theta: params.theta,
             linear_structure: report.linear_structure,
             linear_contacts: report.linear_contacts,
             newton: newton.to_string(),
