@@ -9,7 +9,7 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use signorini::delassus::DelassusKind;
-use signorini::integrators::{Forecast, Metric, SchemeKind};
+use signorini::integrators::{Forecast, Metric, ProjectionRule, SchemeKind};
 use signorini::io::OutputOptions;
 use signorini::io::frames::Encoding;
 use signorini::model::MassKind;
@@ -387,9 +387,19 @@ struct BarArgs {
     /// Position projection metric for the projection schemes (eq. 58 / 60).
     #[arg(long, value_enum, default_value = "mass")]
     metric: Metric,
-    /// Algorithm 2: project every active contact (Siconos' rule) instead of P > 0 only.
+    /// Moreau–Jean: the forecast's active set alone (eq. 61/62), not closed on the
+    /// step's solution.
     #[arg(long)]
-    project_all_active: bool,
+    no_activation_closure: bool,
+    /// Algorithm 2's position rule on the active set: persistent (g = 0 where P > 0 in
+    /// this step and the last, the default), paper (where P > 0, eq. 68),
+    /// complementarity (τ ≥ 0 only) or all-active (Siconos' code).
+    #[arg(long, value_enum, default_value = "persistent")]
+    projection_rule: ProjectionRule,
+    /// Newton's law with e on contacts separating at the step's start too (eq. 18d as
+    /// written), instead of max(e, (1 − θ)/θ), which keeps impulses from adding energy.
+    #[arg(long)]
+    newton_restitution: bool,
     /// Projection schemes: update only q with τ (Siconos' practice), not v through the
     /// −hθK N G τ term of eq. 56a.
     #[arg(long)]
@@ -478,7 +488,9 @@ impl BarArgs {
             ForecastArg::Free => Forecast::Free,
         };
         p.metric = self.metric;
-        p.project_all_active = self.project_all_active;
+        p.projection_rule = self.projection_rule;
+        p.activation_closure = !self.no_activation_closure;
+        p.energy_consistent_restitution = !self.newton_restitution;
         p.projection_feedback = !self.no_projection_feedback;
         p.projection_tolerance = self.projection_tolerance;
         p.lcp = match self.lcp {

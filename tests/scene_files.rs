@@ -241,8 +241,10 @@ fn meshio_plate_and_gmsh_ball_on_a_cylinder_run_without_penetration() {
     }
 }
 
-/// The academic examples as scene files: the ball's impulses fall in the steps of the
-/// closed-form impacts (1, 2, 2.5, 2.75) and it rests after t = 4.05 (the e-per-step
+/// The academic examples as scene files: the ball's impulses fall within five steps of
+/// the closed-form impacts (1, 2, 2.5, 2.75; the default rules start each bounce up to
+/// h|v| above the ground, so later impacts come a few steps late:
+/// `paper_bouncing_ball::default_rules_follow_ballard_and_rest_on_the_ground`) and it rests after t = 4.05 (the e-per-step
 /// tail of `paper_bouncing_ball`); the oscillator's first four impacts are those of
 /// its closed form, impact i within i + 1 steps; the block ends flat at rest with energy m g l/2. Bad example
 /// scenes name the key.
@@ -256,7 +258,7 @@ fn academic_examples_run_from_scene_files() {
     for t in closed.impact_times(2.8, 4) {
         let k = (t / h).ceil() as usize - 1;
         assert!(
-            (k.saturating_sub(1)..=k + 1).any(|j| r.force[j] > 0.0),
+            (k.saturating_sub(1)..=k + 5).any(|j| r.force[j] > 0.0),
             "no impulse near t = {t}"
         );
     }

@@ -15,11 +15,13 @@
 //! exact at position level with `τ ≥ 0` wherever `P = 0` (README, "Algorithm 2 with
 //! friction on undamped elastic bodies").
 //!
-//! `project_all_active = true` projects every active contact, as Siconos does (its
-//! `P > 0` test is commented out), so the two rules can be compared.
+//! Which rows are held at `g = 0` is [`ProjectionRule`]: by default none (`τ ≥ 0` on
+//! every row of `Iᵛ`, the projection only pushes out); `paper` holds the rows with
+//! `P > 0` (eq. 68–70), `all-active` every active row, as Siconos does (its `P > 0` test
+//! is commented out), so the rules can be compared.
 
 use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};
-use super::{Integrator, SchemeParams, StepStats};
+use super::{Integrator, ProjectionRule, SchemeParams, StepStats};
 use crate::contact::ContactSet;
 use crate::error::Error;
 use crate::model::LinearSystem;
@@ -27,7 +29,7 @@ use crate::model::LinearSystem;
 /// Algorithm 2.
 pub struct CombinedProjection {
     core: ThetaCore,
-    project_all: bool,
+    rule: ProjectionRule,
 }
 
 impl CombinedProjection {
@@ -42,7 +44,7 @@ impl CombinedProjection {
     ) -> Result<Self, Error> {
         Ok(CombinedProjection {
             core: ThetaCore::new(params, system, contacts, q0, v0, h, true)?,
-            project_all: params.project_all_active,
+            rule: params.projection_rule,
         })
     }
 }
@@ -56,9 +58,7 @@ impl Integrator for CombinedProjection {
         let c = &mut self.core;
         c.begin_step(&mut st)?;
         c.vel_mask.iter_mut().for_each(|x| *x = false);
-        let rule = PositionRule::Combined {
-            project_all: self.project_all,
-        };
+        let rule = PositionRule::Combined { rule: self.rule };
         loop {
             st.index_set_iterations += 1;
             c.pos_mask.copy_from_slice(&c.vel_mask);
@@ -76,14 +76,7 @@ impl Integrator for CombinedProjection {
                 )?;
             }
             // activation (eq. 66)
-            let mut grew = false;
-            for a in 0..c.m {
-                if !c.vel_mask[a] && c.g_lin[c.off[a]] <= 0.0 {
-                    c.vel_mask[a] = true;
-                    grew = true;
-                }
-            }
-            if !grew {
+            if !c.activate_violated() {
                 break;
             }
             if st.index_set_iterations > c.m {

@@ -85,7 +85,7 @@
 //!   the index set are counted in `StepStats::held_rows` (position problem below).
 
 use super::structure::Structure;
-use super::{Forecast, NewtonParams, SchemeParams, State, StepStats};
+use super::{Forecast, NewtonParams, ProjectionRule, SchemeParams, State, StepStats};
 use crate::assembly::linear_combination;
 use crate::contact::{ContactJacobian, ContactSet, ContactStatus};
 use crate::delassus::{Delassus, Op};
@@ -109,11 +109,11 @@ pub enum PositionRule {
     None,
     /// `0 ≤ g ⊥ τ ≥ 0` over every contact (Algorithm 1, eq. 28 and 58).
     AllComplementarity,
-    /// Over the contacts of `pos_mask`: `g = 0` with free `τ` where `P > 0`
-    /// (or everywhere when `project_all`), `0 ≤ g ⊥ τ ≥ 0` elsewhere (eq. 68–70).
+    /// Over the contacts of `pos_mask`: `g = 0` with free `τ` on the rows `rule` holds
+    /// (none, those with `P > 0` as in eq. 68–70, or all), `0 ≤ g ⊥ τ ≥ 0` elsewhere.
     Combined {
-        /// Project every active contact (Siconos' behaviour) instead of `P > 0` only.
-        project_all: bool,
+        /// Which active rows are held at `g = 0`.
+        rule: ProjectionRule,
     },
 }
 
@@ -699,6 +699,9 @@ pub struct ThetaCore {
     pub(crate) e: Vec<f64>,
     with_projection: bool,
     feedback: bool,
+    /// [`SchemeParams::energy_consistent_restitution`]: the restitution of a normal row
+    /// separating at the step's start is at least `(1 − θ)/θ`.
+    restitution_floor: Option<f64>,
     /// `G` does not depend on `q` (every contact set is linear).
     pub(crate) g_constant: bool,
     /// `G` constant and the structure linear: `M̂`, `W` are condensed once and the
@@ -902,6 +905,9 @@ impl ThetaCore {
             e,
             with_projection,
             feedback: params.projection_feedback,
+            restitution_floor: params
+                .energy_consistent_restitution
+                .then(|| (1.0 - params.theta) / params.theta),
             g_constant,
             operators_constant,
             structure,
@@ -1358,9 +1364,17 @@ impl ThetaCore {
             self.coupling.iter_mut().for_each(|x| *x = 0.0);
             if self.feedback && self.structure.is_none() && self.tau_prev.iter().any(|&t| t != 0.0)
             {
-                self.del
-                    .ensure_support(&self.tau_prev, &self.sys.stiffness)
-                    .map_err(|e| fail(&self.state, "Delassus columns", e))?;
+                // with a constant G the columns stay and serve every later step; with a
+                // nonlinear G they are forgotten at the next linearization, and the
+                // product through the factor (two solves) is cheaper than |supp τ|
+                // column solves, which would also take pool slots the position problem
+                // of this iteration needs (81 contacts of two cubes: τ on 42 rows, then
+                // 33 other rows violated, past the 64-column pool)
+                if self.g_constant {
+                    self.del
+                        .ensure_support(&self.tau_prev, &self.sys.stiffness)
+                        .map_err(|e| fail(&self.state, "Delassus columns", e))?;
+                }
                 self.del.mul_add(
                     Op::Wd,
                     h * th,
@@ -1370,7 +1384,7 @@ impl ThetaCore {
                 );
             }
             for a in 0..rows {
-                self.a[a] = self.u_free[a] - self.coupling[a] + self.e[a] * self.u_k[a];
+                self.a[a] = self.u_free[a] - self.coupling[a] + self.restitution(a) * self.u_k[a];
             }
             // linearized gaps without contact impulse or projection (eq. 51), normal rows
             for c in 0..m {
@@ -1671,8 +1685,8 @@ impl ThetaCore {
         for k in (0..m).filter(|&k| self.pos_mask[k] || rule == PositionRule::AllComplementarity) {
             let a = self.off[k];
             let eq = match rule {
-                PositionRule::Combined { project_all } => {
-                    self.pos_mask[k] && (project_all || self.eq_rows[a])
+                PositionRule::Combined { rule } => {
+                    self.pos_mask[k] && (rule == ProjectionRule::AllActive || self.eq_rows[a])
                 }
                 _ => false,
             };
@@ -1734,7 +1748,10 @@ impl ThetaCore {
                         + h * (1.0 - th) * self.u_k[i]
                         + c * self.u_free[i])
                 } else {
-                    -(self.u_free[i] + self.e[i] * self.u_k[i])
+                    let separating =
+                        self.normal[i] && self.u_k[i] > 0.0 && self.state.impulse_rows[i] <= 0.0;
+                    let e = restitution(self.restitution_floor, self.e[i], separating);
+                    -(self.u_free[i] + e * self.u_k[i])
                 };
             }
             if !cp.lu.solve(&mut cp.mat[..n * n], n, &mut cp.rhs[..n]) {
@@ -1823,6 +1840,40 @@ impl ThetaCore {
         Ok(rv.max(rg))
     }
 
+    /// The restitution coefficient of row `a` in this step's impact law
+    /// `0 ≤ U_{k+1} + e U_k ⊥ P ≥ 0` (eq. 18d, 57).
+    ///
+    /// The impulse of a row does the work `P((1 − θ)U_k + θU_{k+1})` in the θ-method's
+    /// energy balance (the step moves `q` by `h v_{k+θ}`); with `U_{k+1} = −eU_k` that is
+    /// `P U_k ((1 − θ) − θe)`, never positive for a row that closes (`U_k ≤ 0`), but
+    /// positive for a row that separates at the step's start (`U_k > 0`) and is caught by
+    /// an impulse, unless `e ≥ (1 − θ)/θ`. Such catches happen where the position
+    /// projection leaves a node on the obstacle while moving away (the edge of a growing
+    /// contact patch, issue 33: +3 % and +22 % of the energy on `meshes/hertz_ball.toml` at
+    /// 2× and 4× its step), and in Moreau–Jean's closed active set. With
+    /// [`SchemeParams::energy_consistent_restitution`] (the default) a separating normal
+    /// row takes `max(e, (1 − θ)/θ)` (1 at θ = 1/2: the catch reverses `U` and does no
+    /// work; `e` itself at θ = 1), so no impulse adds energy; a closing row keeps `e`.
+    #[inline]
+    fn restitution(&self, a: usize) -> f64 {
+        let separating = self.normal[a] && self.u_k[a] > 0.0 && self.state.impulse_rows[a] <= 0.0;
+        restitution(self.restitution_floor, self.e[a], separating)
+    }
+
+    /// The activation of eq. 66: adds to `vel_mask` every contact whose gap at the end
+    /// of the last [`ThetaCore::newton`] (`g_lin`, eq. 51 at the solved iterate) is
+    /// `≤ 0`; returns whether the set grew.
+    pub fn activate_violated(&mut self) -> bool {
+        let mut grew = false;
+        for a in 0..self.m {
+            if !self.vel_mask[a] && self.g_lin[self.off[a]] <= 0.0 {
+                self.vel_mask[a] = true;
+                grew = true;
+            }
+        }
+        grew
+    }
+
     /// Solves the position problem for `rule`; returns whether any `τ ≠ 0`.
     fn solve_position(&mut self, rule: PositionRule, stats: &mut StepStats) -> Result<bool, Error> {
         let m = self.m;
@@ -1854,7 +1905,7 @@ impl ThetaCore {
                 )
                 .map_err(|e| fail(&self.state, "position LCP", e))?;
             }
-            PositionRule::Combined { project_all } => {
+            PositionRule::Combined { rule } => {
                 // eq. 68: equality where P > 0 (eq. 69/70), complementarity elsewhere
                 // in the active set; rows already within the tolerance are dropped.
                 // A row stays an equality for the rest of the loop once its P was > 0:
@@ -1865,14 +1916,19 @@ impl ThetaCore {
                 // their τ is 0 and their P > 0 again, every other iteration until the cap.
                 // Keeping them equalities ends the loop; a final P = 0 with τ < 0 is
                 // counted in `StepStats::held_rows`.
-                for c in 0..m {
-                    let a = self.off[c];
-                    if self.pos_mask[c] && self.p[a] > 0.0 {
-                        self.eq_rows[a] = true;
+                if matches!(rule, ProjectionRule::Paper | ProjectionRule::Persistent) {
+                    for c in 0..m {
+                        let a = self.off[c];
+                        if self.pos_mask[c]
+                            && self.p[a] > 0.0
+                            && rule.holds(self.state.impulse_rows[a] > 0.0)
+                        {
+                            self.eq_rows[a] = true;
+                        }
                     }
                 }
                 let (b, eq_rows) = (&self.b, &self.eq_rows);
-                let eq = |a: usize| project_all || eq_rows[a];
+                let eq = |a: usize| rule == ProjectionRule::AllActive || eq_rows[a];
                 self.ws.idx.clear();
                 self.ws
                     .idx
@@ -2128,6 +2184,16 @@ fn add_step_loads(
 
 /// A structural failure in the step after `state` (an inverted element, a singular
 /// iteration matrix) as the run's error, naming the step and the time it reached.
+/// [`ThetaCore::restitution`] on the row's data: `max(e, floor)` for a separating normal
+/// row when a floor is set, `e` otherwise.
+#[inline]
+fn restitution(floor: Option<f64>, e: f64, separating: bool) -> f64 {
+    match floor {
+        Some(f) if separating => e.max(f),
+        _ => e,
+    }
+}
+
 pub(crate) fn step_error(state: &State, h: f64, e: Error) -> Error {
     Error::RunFailed {
         step: state.step + 1,

@@ -54,6 +54,14 @@ pub struct RunChecks {
     pub max_energy_excess: f64,
 }
 
+/// How each command spells `scheme.allow_caps = true`, for the messages.
+pub(crate) const ALLOW_CAPS_SPELLINGS: &str =
+    "`signorini run`: --set scheme.allow_caps=true; `signorini bar`: --allow-caps";
+
+/// How each command spells `scheme.max_energy_excess = X`, for the messages.
+pub(crate) const MAX_ENERGY_EXCESS_SPELLINGS: &str = "`signorini run`: --set \
+     scheme.max_energy_excess=X; `signorini bar`: --max-energy-excess X";
+
 impl RunChecks {
     /// The checks of a run with `params`, on a model whose bounding box has diagonal
     /// `size` (m; 0 or non-finite when the model has no geometry: no violation limit).
@@ -138,7 +146,8 @@ impl RunChecks {
                 format!(
                     "the {} friction solver stopped at its cap of {} sweeps with residual \
                      {:.3e} (raise scheme.friction.max_iterations{switch}, lower the time \
-                     step, or set scheme.allow_caps = true to count caps instead)",
+                     step, or set scheme.allow_caps = true to count caps instead: \
+                     {ALLOW_CAPS_SPELLINGS})",
                     self.friction_solver.name(),
                     self.friction_cap,
                     st.friction_residual
@@ -147,8 +156,8 @@ impl RunChecks {
                 format!(
                     "an iteration loop stopped at its cap (Newton/projection cap {}, residual \
                      {:.3e}; LCP residual {:.3e}): raise scheme.newton.max_iterations or lower \
-                     the time step, or set scheme.allow_caps = true (--allow-caps) to count caps \
-                     instead",
+                     the time step, or set scheme.allow_caps = true to count caps instead \
+                     ({ALLOW_CAPS_SPELLINGS})",
                     self.newton_cap, st.newton_residual, st.lcp_residual
                 )
             };

@@ -281,7 +281,7 @@ impl EnergyCheck {
                      the {:.3e} J supplied by loads and prescribed motion, more than \
                      scheme.max_energy_excess = {}: the solution is not the scheme's (lower \
                      the time step or the tolerances{}, or raise scheme.max_energy_excess \
-                     (--max-energy-excess) to accept it)",
+                     to accept it: {})",
                     100.0 * rel,
                     self.audit.work(),
                     self.max,
@@ -289,7 +289,8 @@ impl EnergyCheck {
                         ", do not allow caps (capped steps are not the scheme's solution)"
                     } else {
                         ""
-                    }
+                    },
+                    super::driver::MAX_ENERGY_EXCESS_SPELLINGS
                 ),
             });
         }

@@ -193,12 +193,14 @@ fn norms(e: &[f64], h: f64) -> [f64; 3] {
     [max, l1, l2]
 }
 
+/// The paper's rules ([`SchemeParams::paper_rules`]): these studies reproduce its figures.
 fn params(kind: SchemeKind, forecast: Forecast) -> SchemeParams {
     SchemeParams {
         kind,
         forecast,
         ..SchemeParams::default()
     }
+    .paper_rules()
 }
 
 /// Steps of the convergence study: h₀ = 0.0137 s times 0.7^j, j = 0 … 11 (down to

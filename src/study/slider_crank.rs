@@ -92,13 +92,15 @@ const fn row(
     }
 }
 
-/// The scheme parameters of the study (module doc).
+/// The scheme parameters of the study (module doc), with the paper's rules
+/// ([`SchemeParams::paper_rules`]): Table 3 is the paper's.
 pub fn params(kind: SchemeKind) -> SchemeParams {
     let mut p = SchemeParams {
         kind,
         theta: 0.5,
         ..SchemeParams::default()
-    };
+    }
+    .paper_rules();
     if kind == SchemeKind::MoreauJean {
         p.forecast = Forecast::Explicit { gamma: 0.0 };
     }
