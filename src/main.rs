@@ -436,7 +436,7 @@ struct BarArgs {
     allow_caps: bool,
     /// Largest energy growth beyond the work supplied, relative to the run's energy
     /// scale, before the run fails (exit code 1); `inf` accepts any.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = signorini::integrators::DEFAULT_MAX_ENERGY_EXCESS)]
     max_energy_excess: f64,
     /// Output directory.
     #[arg(long, default_value = "out/bar")]
@@ -507,7 +507,7 @@ impl BarArgs {
         p.newton.tol = self.newton_tol;
         p.newton.max_iterations = self.newton_max_iterations;
         p.allow_caps = self.allow_caps;
-        p.max_energy_excess = self.max_energy_excess;
+        p.max_energy_excess = Some(self.max_energy_excess);
         s
     }
 }

@@ -41,7 +41,7 @@ fn euclidean_projection_excites_the_highest_modes() {
     let siconos = plateau_std(SchemeKind::CombinedProjection, 5e-6, |s| {
         s.scheme.metric = Metric::Euclidean;
         s.scheme.projection_feedback = false;
-        s.scheme.max_energy_excess = f64::INFINITY;
+        s.scheme.max_energy_excess = Some(f64::INFINITY);
     });
     let mut refused = BarScene {
         dt: 5e-6,

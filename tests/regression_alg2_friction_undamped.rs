@@ -124,19 +124,21 @@ fn fine_steps_finish_without_caps_and_stop_at_v0_over_mu_g() {
     }
 }
 
-/// h = 1e-4, the issue's case: every scheme finishes with no cap. Moreau–Jean stops
-/// within 0.14 % (1 % asserted); Algorithm 1, which chatters (the paper's sec. 4.4),
-/// within 0.8–1.1 % depending on its iterates' path (2 % asserted). Algorithm 2 slides
-/// 1.2 % too far (2 % asserted; 1.7 % with the roundings of another 3×3 solve; 38
-/// complementarity rounds in the run): undamped, it leaves 6 times more vibration energy in the
-/// block than Moreau–Jean (3.9e-5 J against 6.3e-6 J at 0.4 s), and the rocking lowers
-/// the mean friction; with θ = 0.6, whose dissipation damps that vibration, it stops at
-/// the closed form within 0.01 % (0.1 % asserted).
+/// h = 1e-4, the issue's case: every scheme finishes with no cap. Algorithm 2 (default
+/// rules, issue 33) slides 0.77 % too far (1 % asserted; under the paper's rules 1.2 %,
+/// 38 complementarity rounds: undamped, it left 6 times more vibration energy in the
+/// block than Moreau–Jean, and the rocking lowers the mean friction). Moreau–Jean slides
+/// 0.76 % too far (1 % asserted; 0.15 % under the paper's rules: a base node caught
+/// while lifting off now takes e = 1 instead of 0, which adds no energy but keeps the
+/// vibration the e = 0 catch dissipated). Algorithm 1, which chatters (the paper's
+/// sec. 4.4), within 0.8–1.2 % depending on its iterates' path (2 % asserted). With
+/// θ = 0.6, whose dissipation damps the vibration, Algorithm 2 stops at the closed form
+/// within 0.01 % (0.1 % asserted).
 #[test]
 fn issue_step_finishes_without_caps_under_every_scheme() {
     check(SchemeKind::MoreauJean, 1e-4, 0.5, 0.01);
     check(SchemeKind::DirectProjection, 1e-4, 0.5, 0.02);
-    check(SchemeKind::CombinedProjection, 1e-4, 0.5, 0.02);
+    check(SchemeKind::CombinedProjection, 1e-4, 0.5, 0.01);
     check(SchemeKind::CombinedProjection, 1e-4, 0.6, 0.001);
 }
 

@@ -1,10 +1,17 @@
 //! Combined activation/projection, Algorithm 2 (eq. 65–70).
 //!
 //! Start from `I⁰ = ∅` (the free step), solve the projection step (65) for the current
-//! set — impact law on `Iᵛ`, `g^α = 0` with free `τ^α` where `P^α > 0` (eq. 67–70),
-//! `0 ≤ g ⊥ τ ≥ 0` on the rest of `Iᵛ` — then add every contact with `g_{k+1} ≤ 0`
+//! set — impact law on `Iᵛ`, `g^α = 0` with free `τ^α` on the rows [`ProjectionRule`]
+//! holds, `0 ≤ g ⊥ τ ≥ 0` on the rest of `Iᵛ` — then add every contact with `g_{k+1} ≤ 0`
 //! (eq. 66) and repeat until the set is stable. The set only grows, so at most `m + 1`
 //! rounds run; the count is reported in [`StepStats::index_set_iterations`].
+//!
+//! Which rows are held: by default those whose impulse is positive in this step and in
+//! the last ([`ProjectionRule::Persistent`]); the paper's eq. 67–70 hold every row with
+//! `P > 0` ([`ProjectionRule::Paper`]), which pulls a node that carries its first impulse
+//! onto the obstacle and, on elastic bodies, throws it off through the feedback of eq.
+//! 56a (issue 33; README, "Algorithm 2's position rule"); `AllActive` holds every active
+//! row, as Siconos does (its `P > 0` test is commented out), and `Complementarity` none.
 //!
 //! Eq. 65 need not have a solution for an index set (rows with `P > 0` held at `g = 0`
 //! may need `τ < 0`, which makes their `P` vanish; as complementarity rows their `P` is
@@ -14,11 +21,6 @@
 //! [`StepStats::complementarity_fallbacks`]: the step is then a direct-projection step,
 //! exact at position level with `τ ≥ 0` wherever `P = 0` (README, "Algorithm 2 with
 //! friction on undamped elastic bodies").
-//!
-//! Which rows are held at `g = 0` is [`ProjectionRule`]: by default none (`τ ≥ 0` on
-//! every row of `Iᵛ`, the projection only pushes out); `paper` holds the rows with
-//! `P > 0` (eq. 68–70), `all-active` every active row, as Siconos does (its `P > 0` test
-//! is commented out), so the rules can be compared.
 
 use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};
 use super::{Integrator, ProjectionRule, SchemeParams, StepStats};

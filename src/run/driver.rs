@@ -50,8 +50,11 @@ pub struct RunChecks {
     /// The friction solver (`scheme.friction.solver`), for the message: it advises
     /// only what the run has not tried.
     pub friction_solver: crate::solvers::friction::FrictionSolverKind,
-    /// Largest relative energy excess (`scheme.max_energy_excess`).
-    pub max_energy_excess: f64,
+    /// Largest relative energy excess (`scheme.max_energy_excess`; `None`: the default
+    /// for the structure, [`crate::integrators::SchemeParams::energy_excess_limit`]).
+    pub max_energy_excess: Option<f64>,
+    /// `scheme.energy_momentum` (the default limit of large-deformation bodies).
+    pub energy_momentum: bool,
 }
 
 /// How each command spells `scheme.allow_caps = true`, for the messages.
@@ -63,6 +66,16 @@ pub(crate) const MAX_ENERGY_EXCESS_SPELLINGS: &str = "`signorini run`: --set \
      scheme.max_energy_excess=X; `signorini bar`: --max-energy-excess X";
 
 impl RunChecks {
+    /// The energy check's limit on a structure that is `linear` or not.
+    pub fn energy_excess_limit(&self, linear: bool) -> f64 {
+        crate::integrators::SchemeParams {
+            max_energy_excess: self.max_energy_excess,
+            energy_momentum: self.energy_momentum,
+            ..Default::default()
+        }
+        .energy_excess_limit(linear)
+    }
+
     /// The checks of a run with `params`, on a model whose bounding box has diagonal
     /// `size` (m; 0 or non-finite when the model has no geometry: no violation limit).
     pub fn new(params: &crate::integrators::SchemeParams, size: f64) -> Self {
@@ -77,6 +90,7 @@ impl RunChecks {
             friction_cap: params.friction.max_iterations,
             friction_solver: params.friction.solver,
             max_energy_excess: params.max_energy_excess,
+            energy_momentum: params.energy_momentum,
         }
     }
 

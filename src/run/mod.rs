@@ -431,7 +431,9 @@ pub fn run_checkpointed(
             EnergyCheck {
                 audit: crate::model::energy::EnergyAudit::new(integ.system(), s.time, &s.q, &s.v),
                 theta,
-                max: checks.max_energy_excess,
+                max: checks.energy_excess_limit(
+                    integ.system().linearity() == crate::model::system::Linearity::Linear,
+                ),
                 caps_allowed: checks.allow_caps,
             }
         }),

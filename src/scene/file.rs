@@ -913,11 +913,13 @@ impl Scene {
         // the master surface of each contact between bodies (facets over its body's
         // node numbers, outward)
         let mut facets_of: Vec<Vec<Vec<usize>>> = vec![Vec::new(); self.contacts.len()];
+        let mut axis_facets = vec![0; self.contacts.len()];
         for (ci, c) in self.contacts.iter().enumerate() {
             if let Some(t) = &c.target {
                 let ti = self.body_index(&t.body);
-                facets_of[ci] = target_facets(&all_meshes[ti], &self.bodies[ti], t)
-                    .map_err(|e| prefix(&format!("contacts[{ci}].target"), e))?;
+                (facets_of[ci], axis_facets[ci]) =
+                    target_facets(&all_meshes[ti], &self.bodies[ti], t)
+                        .map_err(|e| prefix(&format!("contacts[{ci}].target"), e))?;
             }
         }
         for (bi, b) in self.bodies.iter().enumerate() {
@@ -1190,10 +1192,18 @@ impl Scene {
                 )
                 .map_err(at)?;
                 interfaces.push(format!(
-                    "contacts[{ci}]: {} nodes of \"{}\" against {}",
+                    "contacts[{ci}]: {} nodes of \"{}\" against {}{}",
                     set.0.len(),
                     c.body,
-                    set.1
+                    set.1,
+                    match axis_facets[ci] {
+                        0 => String::new(),
+                        k => format!(
+                            " ({k} facet(s) of \"{}\" on the axis r = 0 left out: not \
+                             surfaces of the revolved solid)",
+                            t.body
+                        ),
+                    }
                 ));
                 sets.push(set.0);
                 continue;
@@ -1717,10 +1727,21 @@ fn node_set(mesh: &crate::model::solid::Mesh, name: &str) -> Result<Vec<usize>, 
 }
 
 /// The master surface of a contact between bodies: the boundary facets of `target`'s
-/// surface set on `mesh` (a rod's ends in the set, each with its outward direction).
-fn target_facets(mesh: &Mesh, body: &BodySpec, t: &TargetSpec) -> Result<Vec<Vec<usize>>, Error> {
+/// surface set on `mesh` (a rod's ends in the set, each with its outward direction),
+/// and how many facets on the axis were left out.
+///
+/// An axisymmetric body's mesh is its half section `x = r ≥ 0`: its edges on the axis
+/// `r = 0` bound the section, not the revolved solid, and are never contact facets
+/// (issue 33: a `surface = "boundary"` that kept them paired a pole with an axis edge
+/// at gap 0 while 2 µm apart). An edge whose nodes both lie within 1e-9 of the
+/// section's width from the axis is left out; `check` reports the count.
+fn target_facets(
+    mesh: &Mesh,
+    body: &BodySpec,
+    t: &TargetSpec,
+) -> Result<(Vec<Vec<usize>>, usize), Error> {
     let set = node_set(mesh, &t.surface).map_err(|e| prefix("surface", e))?;
-    let facets = if let MeshSpec::Rod { .. } = body.mesh {
+    let mut facets = if let MeshSpec::Rod { .. } = body.mesh {
         // a rod's facets are its end nodes; the direction is recovered by `bodies::build`
         // from the neighbouring node
         let last = mesh.points.len() - 1;
@@ -1731,18 +1752,33 @@ fn target_facets(mesh: &Mesh, body: &BodySpec, t: &TargetSpec) -> Result<Vec<Vec
     } else {
         mesh.boundary_facets(&set)
     };
+    let mut on_axis = 0;
+    if matches!(body.formulation, Formulation::Axisymmetric) {
+        let width = mesh.points.iter().fold(0.0f64, |w, p| w.max(p[0].abs()));
+        let tol = 1e-9 * width;
+        let before = facets.len();
+        facets.retain(|f| !f.iter().all(|&v| mesh.points[v][0].abs() <= tol));
+        on_axis = before - facets.len();
+    }
     if facets.is_empty() {
         return Err(Error::invalid(
             "surface",
             &t.surface,
             &format!(
                 "holds no boundary facet of body \"{}\" (a facet counts when all its nodes \
-                 are in the set)",
-                t.body
+                 are in the set{})",
+                t.body,
+                if on_axis > 0 {
+                    format!(
+                        "; its {on_axis} facet(s) on the axis r = 0 are not surfaces of the revolved solid"
+                    )
+                } else {
+                    String::new()
+                }
             ),
         ));
     }
-    Ok(facets)
+    Ok((facets, on_axis))
 }
 
 /// The first line of a parser's message (toml's messages carry a source excerpt after it).
