@@ -74,8 +74,12 @@ def verdict(r):
     """`ok`, or what failed: `+X %` (exit 1, the energy check), `exit N`, `N caps`, or
     `gain X` (exit 0 with an energy excess above round-off)."""
     if r["exit"] != 0:
-        m = re.search(r"\(([\d.]+) % of the run's energy scale\)", r.get("error", ""))
-        return f"+{m.group(1)} %" if m else f"exit {r['exit']}"
+        e = r.get("error", "")
+        m = re.search(r"\(([\d.]+) % of the run's energy scale\)", e)
+        if m:
+            return f"+{m.group(1)} %"
+        m = re.search(r"\(([\d.e+-]+) of the run's energy scale\)", e)
+        return f"+{100 * float(m.group(1)):.1f} %" if m else f"exit {r['exit']}"
     if (r.get("caps") or 0) > 0:
         return f"{r['caps']} caps"
     if (r.get("excess") or 0.0) > ROUND_OFF:

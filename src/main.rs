@@ -97,9 +97,19 @@ enum Command {
     Study {
         /// The study.
         name: String,
-        /// Output directory (default out/study-NAME).
+        /// `extremes` only: a scene file to run at the extremes (every scheme at its step
+        /// ×1/8 … ×8, e = 0 and 1, θ = 1/2 and 1, stiffness ×1e-3 and ×1e3) instead of
+        /// the bar's cases.
+        scene: Option<PathBuf>,
+        /// Output directory (default out/study-NAME, or out/study-NAME-SCENE).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// With a scene: set KEY=VALUE in it first (as `run --set`); repeatable.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// With a scene: only this scheme (repeatable; default every scheme).
+        #[arg(long = "scheme", value_enum)]
+        schemes: Vec<SchemeKind>,
     },
     /// Measure the speed–accuracy trade of a scene (a file, or `bar` for the reference
     /// bar) over a grid of schemes, time steps, mesh refinements, θ, metrics, friction
@@ -1140,9 +1150,36 @@ fn main() -> ExitCode {
         Some(Command::Run(a)) => run_scene(&a),
         Some(Command::Check(a)) => check_scene(&a),
         Some(Command::Example { name, out, quiet }) => run_example(&name, out, quiet),
-        Some(Command::Study { name, out }) => {
-            let dir = out.unwrap_or_else(|| PathBuf::from(format!("out/study-{name}")));
-            signorini::study::run(&name, &dir).map(|v| {
+        Some(Command::Study {
+            name,
+            scene,
+            out,
+            set,
+            schemes,
+        }) => {
+            let dir = out.unwrap_or_else(|| match &scene {
+                Some(p) => PathBuf::from(format!(
+                    "out/study-{name}-{}",
+                    p.file_stem()
+                        .map_or("scene".into(), |s| s.to_string_lossy())
+                )),
+                None => PathBuf::from(format!("out/study-{name}")),
+            });
+            let result = match &scene {
+                Some(p) => signorini::study::run_on_scene(&name, p, &set, &schemes, &dir),
+                None if !schemes.is_empty() => Err(signorini::Error::invalid(
+                    "--scheme",
+                    schemes[0].name(),
+                    "needs a scene file (`signorini study extremes SCENE --scheme NAME`)",
+                )),
+                None if !set.is_empty() => Err(signorini::Error::invalid(
+                    "--set",
+                    &set[0],
+                    "needs a scene file (`signorini study extremes SCENE --set KEY=VALUE`)",
+                )),
+                None => signorini::study::run(&name, &dir),
+            };
+            result.map(|v| {
                 for line in v {
                     out!("{line}");
                 }

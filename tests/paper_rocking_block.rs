@@ -71,6 +71,20 @@ fn run_with(p: &SchemeParams, t_end: f64) -> Run {
     r
 }
 
+/// After `t0`: velocities and spin below 1e-10, the block flat (θ = 0 to 1e-12) with
+/// its centre at l/2 = 0.75 (1e-12).
+fn assert_at_rest_after(r: &Run, t0: f64) {
+    for k in (0..r.t.len()).filter(|&k| r.t[k] > t0) {
+        assert!(
+            r.v[k].iter().all(|x| x.abs() <= 1e-10),
+            "t = {}: {:?}",
+            r.t[k],
+            r.v[k]
+        );
+        assert!(r.q[k][2].abs() <= 1e-12 && (r.q[k][1] - 0.75).abs() <= 1e-12);
+    }
+}
+
 fn switches_after(r: &Run, t0: f64) -> usize {
     (1..r.t.len())
         .filter(|&k| r.t[k] > t0 && r.closed[k] != r.closed[k - 1])
@@ -98,17 +112,7 @@ fn algorithm_2_brings_the_block_to_rest_where_algorithm_1_chatters() {
     );
     let a2 = run(SchemeKind::CombinedProjection, Forecast::Free, 2.0);
     assert_eq!(switches_after(&a2, 1.0), 0);
-    for k in 0..a2.t.len() {
-        if a2.t[k] > 1.1 {
-            assert!(
-                a2.v[k].iter().all(|x| x.abs() <= 1e-10),
-                "t = {}: {:?}",
-                a2.t[k],
-                a2.v[k]
-            );
-            assert!(a2.q[k][2].abs() <= 1e-12 && (a2.q[k][1] - 0.75).abs() <= 1e-12);
-        }
-    }
+    assert_at_rest_after(&a2, 1.1);
     for r in [&a1, &a2] {
         assert!(r.violation <= 1e-12, "violation {}", r.violation);
         assert!(r.newton_max >= 2, "Newton must iterate on the curved gaps");
@@ -178,25 +182,11 @@ fn corner_gaps_and_jacobians_are_consistent() {
 fn default_rules_bring_the_block_to_rest() {
     let a2 = run_with(&SchemeParams::default(), 2.0);
     assert_eq!(switches_after(&a2, 1.0), 0);
-    let mut first = f64::INFINITY;
-    for k in 0..a2.t.len() {
-        if a2.v[k].iter().all(|x| x.abs() <= 1e-10)
-            && a2.t[k] > 1.0
-            && first.is_infinite()
-            && (k..a2.t.len()).all(|j| a2.v[j].iter().all(|x| x.abs() <= 1e-10))
-        {
-            first = a2.t[k];
-        }
-        if a2.t[k] > 1.2 {
-            assert!(
-                a2.v[k].iter().all(|x| x.abs() <= 1e-10),
-                "t = {}: {:?}",
-                a2.t[k],
-                a2.v[k]
-            );
-            assert!(a2.q[k][2].abs() <= 1e-12 && (a2.q[k][1] - 0.75).abs() <= 1e-12);
-        }
-    }
+    let at_rest = |k: usize| a2.v[k].iter().all(|x| x.abs() <= 1e-10);
+    let first = (0..a2.t.len())
+        .find(|&k| a2.t[k] > 1.0 && (k..a2.t.len()).all(at_rest))
+        .map_or(f64::INFINITY, |k| a2.t[k]);
+    assert_at_rest_after(&a2, 1.2);
     eprintln!("default rules: at rest from t = {first}");
     let rest = G * 0.75;
     let e = *a2.energy.last().unwrap();

@@ -277,12 +277,12 @@ impl EnergyCheck {
                 time: s.time,
                 contact: None,
                 detail: format!(
-                    "the energy grew by {abs:.3e} J ({:.1} % of the run's energy scale) beyond \
+                    "the energy grew by {abs:.3e} J ({:.3e} of the run's energy scale) beyond \
                      the {:.3e} J supplied by loads and prescribed motion, more than \
                      scheme.max_energy_excess = {}: the solution is not the scheme's (lower \
                      the time step or the tolerances{}, or raise scheme.max_energy_excess \
                      to accept it: {})",
-                    100.0 * rel,
+                    rel,
                     self.audit.work(),
                     self.max,
                     if self.caps_allowed {

@@ -26,9 +26,12 @@
 //! The impacting bar has its own studies in [`bar`]: `speed-accuracy` (error against
 //! cost for every scheme, size and Courant number) and `extremes` (stability at the
 //! brief's extremes, 10⁶ elements included). The slider–crank of sec. 6.3.1 has
-//! `slider-crank` in [`slider_crank`] (Table 3, Figs. 21–24).
+//! `slider-crank` in [`slider_crank`] (Table 3, Figs. 21–24). `extremes` on a scene file
+//! (`signorini study extremes SCENE`) is [`extremes`]: every scheme at the scene's
+//! step ×1/8 … ×8, e = 0 and 1, θ = 1/2 and 1, stiffness ×1e-3 and ×1e3.
 
 pub mod bar;
+pub mod extremes;
 pub mod slider_crank;
 pub mod sweep;
 
@@ -674,6 +677,31 @@ pub fn run(name: &str, dir: &Path) -> Result<Vec<String>, Error> {
             ));
         }
     };
+    write_atomic(
+        &dir.join("verdict.txt"),
+        (verdicts.join("\n") + "\n").as_bytes(),
+    )?;
+    Ok(verdicts)
+}
+
+/// `signorini study extremes SCENE`: [`extremes::scene_extremes`] on a scene file under
+/// `schemes` (all when empty), with its verdicts also in `dir/verdict.txt`.
+pub fn run_on_scene(
+    name: &str,
+    scene: &Path,
+    overrides: &[String],
+    schemes: &[SchemeKind],
+    dir: &Path,
+) -> Result<Vec<String>, Error> {
+    if name != "extremes" {
+        return Err(Error::invalid(
+            "study",
+            name,
+            "takes no scene file; only `extremes` runs on a scene (`signorini study extremes \
+             SCENE`)",
+        ));
+    }
+    let verdicts = extremes::scene_extremes(scene, overrides, schemes, dir)?;
     write_atomic(
         &dir.join("verdict.txt"),
         (verdicts.join("\n") + "\n").as_bytes(),
