@@ -17,7 +17,9 @@
 //! analysis; with the free forecast it settles too, as for the bouncing ball) keeps the
 //! slider bouncing, and every flight lets the roller slip: it never stops. Above the
 //! limit (Γ = 1.5 μ m g R) the roller slips under the resting slider with angular
-//! acceleration (Γ − μ m g R)/J, within 1 %.
+//! acceleration (Γ − μ m g R)/J, within 1 %. The runs take the paper's rules
+//! (`SchemeParams::paper_rules`): with the default closure of its active set Algorithm 1
+//! no longer bounces here.
 
 use signorini::contact::linear::{LinearContact, LinearContacts};
 use signorini::contact::{ContactLaw, ContactStatus};
@@ -45,7 +47,8 @@ fn build(kind: SchemeKind, forecast: Forecast, torque: f64, h: f64) -> Box<dyn I
         kind,
         forecast,
         ..SchemeParams::default()
-    };
+    }
+    .paper_rules();
     integrators::build(&p, sys, Box::new(c), &[1.05, 0.0], &[0.0, 0.0], h).unwrap()
 }
 

@@ -1840,6 +1840,20 @@ impl ThetaCore {
         Ok(rv.max(rg))
     }
 
+    /// Algorithm 1's closure of its active set: adds to `vel_mask` every contact whose
+    /// gap at the end of the last [`ThetaCore::newton`] *before* the position projection
+    /// (`b = g_lin + hθU`, eq. 51) is `≤ 0`; returns whether the set grew.
+    pub fn activate_penetrating(&mut self) -> bool {
+        let mut grew = false;
+        for a in 0..self.m {
+            if !self.vel_mask[a] && self.b[self.off[a]] <= 0.0 {
+                self.vel_mask[a] = true;
+                grew = true;
+            }
+        }
+        grew
+    }
+
     /// The restitution coefficient of row `a` in this step's impact law
     /// `0 ≤ U_{k+1} + e U_k ⊥ P ≥ 0` (eq. 18d, 57).
     ///

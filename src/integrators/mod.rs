@@ -452,12 +452,13 @@ pub struct SchemeParams {
     pub theta: f64,
     /// Activation forecast for Moreau–Jean and Algorithm 1 (default: free, eq. 62).
     pub forecast: Forecast,
-    /// Moreau–Jean: close the forecast's active set on the step's solution (default
-    /// true): a contact whose end-of-step gap `g_k + h((1−θ)U_k + θU_{k+1})` is `≤ 0`
-    /// joins the set and the step is solved again (module doc of
-    /// [`moreau_jean`]). `false`: the forecast alone
-    /// (eq. 61/62), which lets nodes at the edge of a growing patch between curved
-    /// bodies penetrate several times `|U|(1−θ)h`.
+    /// Moreau–Jean and Algorithm 1: close the forecast's active set on the step's solution
+    /// (default true): a contact whose end-of-step gap `g_k + h((1−θ)U_k + θU_{k+1})`
+    /// (before any projection) is `≤ 0` joins the set and the step is solved again
+    /// (module docs of [`moreau_jean`] and [`direct_projection`]). `false`: the forecast
+    /// alone (eq. 61/62), which lets nodes at the edge of a growing patch between curved
+    /// bodies penetrate several times `|U|(1−θ)h` under Moreau–Jean, and lets Algorithm
+    /// 1's projection chatter between stacked bodies.
     pub activation_closure: bool,
     /// Projection metric for Algorithms 1 and 2 (default: `M̂⁻¹`, see DESIGN.md §3).
     pub metric: Metric,
