@@ -78,7 +78,7 @@ impl Integrator for CombinedProjection {
                 )?;
             }
             // activation (eq. 66)
-            if !c.activate_violated() {
+            if !c.activate_violated(false) {
                 break;
             }
             if st.index_set_iterations > c.m {

@@ -1840,20 +1840,6 @@ impl ThetaCore {
         Ok(rv.max(rg))
     }
 
-    /// Algorithm 1's closure of its active set: adds to `vel_mask` every contact whose
-    /// gap at the end of the last [`ThetaCore::newton`] *before* the position projection
-    /// (`b = g_lin + hθU`, eq. 51) is `≤ 0`; returns whether the set grew.
-    pub fn activate_penetrating(&mut self) -> bool {
-        let mut grew = false;
-        for a in 0..self.m {
-            if !self.vel_mask[a] && self.b[self.off[a]] <= 0.0 {
-                self.vel_mask[a] = true;
-                grew = true;
-            }
-        }
-        grew
-    }
-
     /// The restitution coefficient of row `a` in this step's impact law
     /// `0 ≤ U_{k+1} + e U_k ⊥ P ≥ 0` (eq. 18d, 57).
     ///
@@ -1875,17 +1861,49 @@ impl ThetaCore {
     }
 
     /// The activation of eq. 66: adds to `vel_mask` every contact whose gap at the end
-    /// of the last [`ThetaCore::newton`] (`g_lin`, eq. 51 at the solved iterate) is
-    /// `≤ 0`; returns whether the set grew.
-    pub fn activate_violated(&mut self) -> bool {
+    /// of the last [`ThetaCore::newton`] (eq. 51 at the solved iterate) is `≤ 0`: after
+    /// the position projection (`g_lin`, Algorithm 2) or before it (`b = g_lin − W_N τ`,
+    /// the closure of Moreau–Jean's and Algorithm 1's forecast set). Returns whether the
+    /// set grew.
+    pub fn activate_violated(&mut self, before_projection: bool) -> bool {
+        let gaps = if before_projection {
+            &self.b
+        } else {
+            &self.g_lin
+        };
         let mut grew = false;
         for a in 0..self.m {
-            if !self.vel_mask[a] && self.g_lin[self.off[a]] <= 0.0 {
+            if !self.vel_mask[a] && gaps[self.off[a]] <= 0.0 {
                 self.vel_mask[a] = true;
                 grew = true;
             }
         }
         grew
+    }
+
+    /// The forecast set's Newton loop, closed on the solution when `closure`
+    /// ([`SchemeParams::activation_closure`]): after each loop, every contact whose gap
+    /// before the projection ends `≤ 0` joins `vel_mask` and the loop runs again. The set
+    /// only grows, so at most `m` more rounds run; they are counted in
+    /// [`StepStats::index_set_iterations`] (0 when the forecast was right).
+    pub fn closed_newton(
+        &mut self,
+        rule: PositionRule,
+        closure: bool,
+        st: &mut StepStats,
+    ) -> Result<(), Error> {
+        loop {
+            self.newton(VelocityLaw::Impact, rule, st)?;
+            if !closure || !self.activate_violated(true) {
+                return Ok(());
+            }
+            st.index_set_iterations += 1;
+            if st.index_set_iterations > self.m {
+                // unreachable while the set only grows; kept as a reported cap
+                st.caps_hit += 1;
+                return Ok(());
+            }
+        }
     }
 
     /// Solves the position problem for `rule`; returns whether any `τ ≠ 0`.

@@ -17,7 +17,7 @@
 //! its step, 1.7e-6–2.8e-6 of the energy on the Hertz ball at ⅛–½ of its step, 1.1e-3 on
 //! the ball drop with e = 1; none with the closure).
 
-use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};
+use super::core::{PositionRule, ThetaCore, delegate_to_core};
 use super::{Forecast, Integrator, SchemeParams, StepStats};
 use crate::contact::ContactSet;
 use crate::error::Error;
@@ -57,22 +57,7 @@ impl Integrator for DirectProjection {
         let c = &mut self.core;
         c.begin_step(&mut st)?;
         c.forecast(self.forecast);
-        loop {
-            c.newton(
-                VelocityLaw::Impact,
-                PositionRule::AllComplementarity,
-                &mut st,
-            )?;
-            if !self.closure || !c.activate_penetrating() {
-                break;
-            }
-            // counted: the rounds the closure added (0 when the forecast was right)
-            st.index_set_iterations += 1;
-            if st.index_set_iterations > c.m {
-                st.caps_hit += 1;
-                break;
-            }
-        }
+        c.closed_newton(PositionRule::AllComplementarity, self.closure, &mut st)?;
         c.commit(&mut st);
         Ok(st)
     }

@@ -18,7 +18,7 @@
 //! a contact left out then ends the step open (linear `G`), and an active one within
 //! `|U_k|(1−θ)h` below where it started. `activation_closure = false` is eq. 61/62 alone.
 
-use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};
+use super::core::{PositionRule, ThetaCore, delegate_to_core};
 use super::{Forecast, Integrator, SchemeParams, StepStats};
 use crate::contact::ContactSet;
 use crate::error::Error;
@@ -58,19 +58,7 @@ impl Integrator for MoreauJean {
         let c = &mut self.core;
         c.begin_step(&mut st)?;
         c.forecast(self.forecast);
-        loop {
-            c.newton(VelocityLaw::Impact, PositionRule::None, &mut st)?;
-            if !self.closure || !c.activate_violated() {
-                break;
-            }
-            // counted: the rounds the closure added (0 when the forecast was right)
-            st.index_set_iterations += 1;
-            if st.index_set_iterations > c.m {
-                // unreachable while the set only grows; kept as a reported cap
-                st.caps_hit += 1;
-                break;
-            }
-        }
+        c.closed_newton(PositionRule::None, self.closure, &mut st)?;
         c.commit(&mut st);
         Ok(st)
     }
