@@ -1748,10 +1748,10 @@ impl ThetaCore {
                         + h * (1.0 - th) * self.u_k[i]
                         + c * self.u_free[i])
                 } else {
-                    let separating =
-                        self.normal[i] && self.u_k[i] > 0.0 && self.state.impulse_rows[i] <= 0.0;
-                    let e = restitution(self.restitution_floor, self.e[i], separating);
-                    -(self.u_free[i] + e * self.u_k[i])
+                    let (e, u_k) = (self.e[i], self.u_k[i]);
+                    let p_k = self.state.impulse_rows[i];
+                    -(self.u_free[i]
+                        + restitution(self.restitution_floor, e, self.normal[i], u_k, p_k) * u_k)
                 };
             }
             if !cp.lu.solve(&mut cp.mat[..n * n], n, &mut cp.rhs[..n]) {
@@ -1856,8 +1856,14 @@ impl ThetaCore {
     /// work; `e` itself at θ = 1), so no impulse adds energy; a closing row keeps `e`.
     #[inline]
     fn restitution(&self, a: usize) -> f64 {
-        let separating = self.normal[a] && self.u_k[a] > 0.0 && self.state.impulse_rows[a] <= 0.0;
-        restitution(self.restitution_floor, self.e[a], separating)
+        let s = &self.state;
+        restitution(
+            self.restitution_floor,
+            self.e[a],
+            self.normal[a],
+            self.u_k[a],
+            s.impulse_rows[a],
+        )
     }
 
     /// The activation of eq. 66: adds to `vel_mask` every contact whose gap at the end
@@ -1948,15 +1954,13 @@ impl ThetaCore {
                 // their τ is 0 and their P > 0 again, every other iteration until the cap.
                 // Keeping them equalities ends the loop; a final P = 0 with τ < 0 is
                 // counted in `StepStats::held_rows`.
-                if matches!(rule, ProjectionRule::Paper | ProjectionRule::Persistent) {
-                    for c in 0..m {
-                        let a = self.off[c];
-                        if self.pos_mask[c]
-                            && self.p[a] > 0.0
-                            && rule.holds(self.state.impulse_rows[a] > 0.0)
-                        {
-                            self.eq_rows[a] = true;
-                        }
+                for c in 0..m {
+                    let a = self.off[c];
+                    if self.pos_mask[c]
+                        && self.p[a] > 0.0
+                        && rule.holds(self.state.impulse_rows[a] > 0.0)
+                    {
+                        self.eq_rows[a] = true;
                     }
                 }
                 let (b, eq_rows) = (&self.b, &self.eq_rows);
@@ -2214,18 +2218,19 @@ fn add_step_loads(
     }
 }
 
-/// A structural failure in the step after `state` (an inverted element, a singular
-/// iteration matrix) as the run's error, naming the step and the time it reached.
-/// [`ThetaCore::restitution`] on the row's data: `max(e, floor)` for a separating normal
-/// row when a floor is set, `e` otherwise.
+/// [`ThetaCore::restitution`] on row data: `max(e, floor)` for a normal row separating at
+/// the step's start (`u_k > 0`) that carried no impulse in the last step (`p_k ≤ 0`), when
+/// a floor is set; `e` otherwise.
 #[inline]
-fn restitution(floor: Option<f64>, e: f64, separating: bool) -> f64 {
+fn restitution(floor: Option<f64>, e: f64, normal: bool, u_k: f64, p_k: f64) -> f64 {
     match floor {
-        Some(f) if separating => e.max(f),
+        Some(f) if normal && u_k > 0.0 && p_k <= 0.0 => e.max(f),
         _ => e,
     }
 }
 
+/// A structural failure in the step after `state` (an inverted element, a singular
+/// iteration matrix) as the run's error, naming the step and the time it reached.
 pub(crate) fn step_error(state: &State, h: f64, e: Error) -> Error {
     Error::RunFailed {
         step: state.step + 1,

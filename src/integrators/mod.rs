@@ -566,16 +566,22 @@ pub const DEFAULT_MAX_ENERGY_EXCESS: f64 = 1e-6;
 /// with e = 1).
 pub const THETA_METHOD_MAX_ENERGY_EXCESS: f64 = 1e-2;
 
+/// The energy check's limit: `max` when set, else [`DEFAULT_MAX_ENERGY_EXCESS`] where
+/// the discrete energy is exact (a `linear` structure, or `energy_momentum`) and
+/// [`THETA_METHOD_MAX_ENERGY_EXCESS`] otherwise.
+pub fn energy_excess_limit(max: Option<f64>, energy_momentum: bool, linear: bool) -> f64 {
+    max.unwrap_or(if linear || energy_momentum {
+        DEFAULT_MAX_ENERGY_EXCESS
+    } else {
+        THETA_METHOD_MAX_ENERGY_EXCESS
+    })
+}
+
 impl SchemeParams {
     /// The energy check's limit on a structure that is `linear` or not
     /// ([`SchemeParams::max_energy_excess`]).
     pub fn energy_excess_limit(&self, linear: bool) -> f64 {
-        self.max_energy_excess
-            .unwrap_or(if linear || self.energy_momentum {
-                DEFAULT_MAX_ENERGY_EXCESS
-            } else {
-                THETA_METHOD_MAX_ENERGY_EXCESS
-            })
+        energy_excess_limit(self.max_energy_excess, self.energy_momentum, linear)
     }
 
     /// These parameters with the paper's rules where the defaults depart from them

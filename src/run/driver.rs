@@ -68,12 +68,11 @@ pub(crate) const MAX_ENERGY_EXCESS_SPELLINGS: &str = "`signorini run`: --set \
 impl RunChecks {
     /// The energy check's limit on a structure that is `linear` or not.
     pub fn energy_excess_limit(&self, linear: bool) -> f64 {
-        crate::integrators::SchemeParams {
-            max_energy_excess: self.max_energy_excess,
-            energy_momentum: self.energy_momentum,
-            ..Default::default()
-        }
-        .energy_excess_limit(linear)
+        crate::integrators::energy_excess_limit(
+            self.max_energy_excess,
+            self.energy_momentum,
+            linear,
+        )
     }
 
     /// The checks of a run with `params`, on a model whose bounding box has diagonal
