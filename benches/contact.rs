@@ -52,6 +52,7 @@ fn search(c: &mut Criterion) {
                 facets: &facets,
                 master_points: &master,
                 master_dofs: &master_dofs,
+                names: None,
             },
             false,
             (0.0, 0.3),

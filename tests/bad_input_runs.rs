@@ -94,16 +94,20 @@ total = [0.0, 0.0, 1e308]
 /// A hyperelastic body crushed until a cell turns inside out stops the run (exit 1) with
 /// the step, the time, the body and the cell's tag: a soft neo-Hookean cube hitting the
 /// floor at 100 m/s, 30 times its wave speed.
+/// A soft cube hitting the floor at 100 m/s inverts, under both large-deformation laws:
+/// St. Venant–Kirchhoff's energy is defined at det F ≤ 0 and before issue 34 its runs
+/// went on (a cube at 50 m/s ended 1.1 cm below the floor, exit 0).
 #[test]
 fn an_inverted_element_stops_the_run_naming_the_cell() {
     let dir = tmp("inverted");
-    let scene = r#"[time]
+    for model in ["neo-hookean", "svk"] {
+        let scene = r#"[time]
 dt = 1e-4
 t_end = 1e-2
 [[bodies]]
 name = "soft"
 mesh = { generator = "box", cell = "hex8", cells = [2, 2, 2], size = [0.1, 0.1, 0.1] }
-material = { young = 1e4, poisson = 0.3, density = 1000.0, model = "neo-hookean" }
+material = { young = 1e4, poisson = 0.3, density = 1000.0, model = "MODEL" }
 velocity = [0.0, 0.0, -100.0]
 [[obstacles]]
 name = "floor"
@@ -114,6 +118,48 @@ normal = [0.0, 0.0, 1.0]
 body = "soft"
 nodes = "z0"
 obstacle = "floor"
+"#
+        .replace("MODEL", model);
+        std::fs::write(dir.join("s.toml"), scene).unwrap();
+        let r = cli(
+            &dir,
+            &["run", "s.toml", "--quiet", "--out", "o", "--no-plots"],
+            &[],
+        );
+        expect(
+            model,
+            r,
+            1,
+            &[
+                "run failed at step",
+                "body \"soft\"",
+                "cell",
+                "is inverted",
+                "det F",
+            ],
+        );
+    }
+}
+
+/// Issue 34: an SVK cube held at its base and pushed on its top with 5 E A (a load past
+/// the law's limit point in compression, where its stress turns back) ended with its top
+/// 0.39 m below its base at exit 0; it now stops on the first inverted cell.
+#[test]
+fn an_svk_cube_crushed_through_its_base_stops_the_run() {
+    let dir = tmp("svk-crushed");
+    let scene = r#"[time]
+dt = 1e-3
+t_end = 0.5
+[[bodies]]
+name = "cube"
+mesh = { generator = "box", cell = "hex8", cells = [2, 2, 2], size = [0.1, 0.1, 0.1] }
+material = { young = 1e4, poisson = 0.3, density = 1000.0, model = "svk" }
+damping = { alpha = 0.0, beta = 1e-2 }
+fixed = ["z0"]
+[[forces]]
+body = "cube"
+nodes = "z1"
+total = [0.0, 0.0, -500.0]
 "#;
     std::fs::write(dir.join("s.toml"), scene).unwrap();
     let r = cli(
@@ -122,13 +168,12 @@ obstacle = "floor"
         &[],
     );
     expect(
-        "inverted element",
+        "svk crushed",
         r,
         1,
         &[
             "run failed at step",
-            "body \"soft\"",
-            "cell",
+            "body \"cube\"",
             "is inverted",
             "det F",
         ],

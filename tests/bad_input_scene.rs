@@ -623,7 +623,12 @@ fn set_overrides_are_applied_and_checked() {
     assert!(stdout.contains("modified Newton"), "{stdout}");
     for (set, needles) in [
         ("scheme.newton.modified", &["--set", "KEY=VALUE"][..]),
-        ("scheme.theta=half", &["--set", "not a TOML value"][..]),
+        ("scheme.theta=half", &["--set", "not one TOML value"][..]),
+        // issue 34: the rest of the value was dropped and the run went on
+        (
+            "time.dt=2e-6\n[evil]\nx = 1",
+            &["--set", "not one TOML value", "no line breaks"][..],
+        ),
         (
             "bodies[2].velocity=[0.0, 0.0, 1.0]",
             &["--set", "no [2]"][..],

@@ -229,6 +229,16 @@ pub struct NodesOnSurface {
     rest_normal: Vec<[f64; 3]>,
     t_ref: Vec<[f64; 3]>,
     builds: usize,
+    /// How errors name the bodies and the slave nodes.
+    names: Option<Box<Names>>,
+}
+
+/// The names a [`NodesOnSurface`] gives in its errors.
+#[derive(Clone, Debug)]
+struct Names {
+    slave: String,
+    master: String,
+    labels: Vec<String>,
 }
 
 impl NodesOnSurface {
@@ -312,6 +322,7 @@ impl NodesOnSurface {
             rest_normal: vec![[0.0; 3]; m],
             t_ref: vec![[0.0; 3]; m],
             builds: 0,
+            names: None,
             slave,
             master,
             facets,
@@ -327,7 +338,7 @@ impl NodesOnSurface {
             set.t_ref[s] = super::frame::tangents(&p.normal)[0];
         }
         set.build(&q0, 2.0 * search)?;
-        set.pair_at(&q0);
+        set.pair_at(&q0, false)?;
         Ok(set)
     }
 
@@ -452,8 +463,11 @@ impl NodesOnSurface {
     }
 
     /// Pairs each slave with its nearest candidate facet at `q` (none beyond the search
-    /// distance); `true` when a pairing changed.
-    fn pair_at(&mut self, q: &[f64]) -> bool {
+    /// distance); `true` when a pairing changed. With `check`, a slave that loses its
+    /// facet while behind it (inside the other body, deeper than the search distance)
+    /// is a run failure naming the bodies and the node: the contact law no longer sees
+    /// it, and it would pass through silently (issue 34).
+    fn pair_at(&mut self, q: &[f64], check: bool) -> Result<bool, Error> {
         let mut changed = false;
         for s in 0..self.len() {
             let x = self.slave.position(s, q, self.dim);
@@ -464,10 +478,29 @@ impl NodesOnSurface {
                     .filter(|(_, p)| p.dist <= self.search)
                     .map_or(NO_FACET, |(f, _)| f as u32)
             };
-            changed |= f != self.pair[s];
+            let old = self.pair[s];
+            if check && f == NO_FACET && old != NO_FACET {
+                let p = self
+                    .master
+                    .project(self.dim, &self.facets[old as usize], &x, q);
+                if p.gap < 0.0 && p.gap.abs() >= (1.0 - 1e-9) * p.dist {
+                    let (a, b, node) = match &self.names {
+                        Some(n) => (n.slave.as_str(), n.master.as_str(), n.labels[s].clone()),
+                        None => ("slave", "master", format!("slave node {s}")),
+                    };
+                    return Err(Error::Numerical(format!(
+                        "{node} of body \"{a}\" is {:.3e} m inside body \"{b}\", deeper than \
+                         the search distance {:.3e} m: the contact no longer holds it \
+                         (lower the time step, or give target.search more than the \
+                         deepest penetration)",
+                        -p.gap, self.search
+                    )));
+                }
+            }
+            changed |= f != old;
             self.pair[s] = f;
         }
-        changed
+        Ok(changed)
     }
 
     /// The nearest candidate facet of slave `s` at `x` and its projection.
@@ -579,6 +612,14 @@ impl ContactSet for NodesOnSurface {
     fn len(&self) -> usize {
         self.slave.dofs.len()
     }
+    fn coordinate_scale(&self) -> f64 {
+        self.slave
+            .reference
+            .iter()
+            .chain(&self.master.reference)
+            .flatten()
+            .fold(0.0, |a: f64, x| a.max(x.abs()))
+    }
     fn is_linear(&self) -> bool {
         self.dim == 1 && self.trivial()
     }
@@ -606,6 +647,35 @@ impl ContactSet for NodesOnSurface {
                 )
             });
             self.write(s, s * self.block, hit, &mut gap[s], jac);
+        }
+    }
+    fn starting_gaps(&self, q: &[f64], gap: &mut [f64]) {
+        // the nearest facet of the whole surface (boxes in order of distance, stopped
+        // once a box is farther than the best facet); the signed gap where the closest
+        // point is inside the facet (`x − x*` along the normal: behind it means inside
+        // the body), the distance where it is clamped to an edge (beside the surface)
+        let tree = self.tree(q, 0.0);
+        for (s, g) in gap.iter_mut().enumerate().take(self.len()) {
+            let x = self.slave.position(s, q, self.dim);
+            let mut best: Option<Projection> = None;
+            for (hit, d2) in tree.nearest_neighbor_iter_with_distance_2(x) {
+                if best.is_some_and(|b| d2 > b.dist * b.dist) {
+                    break;
+                }
+                let p = self
+                    .master
+                    .project(self.dim, &self.facets[hit.data as usize], &x, q);
+                if best.is_none_or(|b| p.dist < b.dist) {
+                    best = Some(p);
+                }
+            }
+            *g = best.map_or(f64::INFINITY, |p| {
+                if p.gap.abs() >= (1.0 - 1e-9) * p.dist {
+                    p.gap
+                } else {
+                    p.dist
+                }
+            });
         }
     }
     fn condensed(&self) -> bool {
@@ -661,7 +731,7 @@ impl ContactSet for NodesOnSurface {
             // pairs
             return Ok(false);
         }
-        Ok(self.pair_at(q))
+        self.pair_at(q, true)
     }
     fn laws(&self) -> &[ContactLaw] {
         &self.laws
@@ -811,7 +881,14 @@ pub struct Interface<'a> {
     pub master_points: &'a [[f64; 3]],
     /// Dofs of a master body node.
     pub master_dofs: &'a dyn Fn(usize) -> [Option<usize>; 3],
+    /// The slave and master bodies' names and how errors name a slave body node (its
+    /// file tag), for a node found inside the other body during a run; `None`: by
+    /// index.
+    pub names: Option<NodeNames<'a>>,
 }
+
+/// The slave body's name, the master body's name, and how a slave body node is named.
+pub type NodeNames<'a> = (&'a str, &'a str, &'a dyn Fn(usize) -> String);
 
 impl Interface<'_> {
     /// The master nodes the facets use (sorted) and the facets over their positions in
@@ -924,7 +1001,14 @@ pub fn build(
             .collect(),
     };
     if !node_to_node {
-        let set = NodesOnSurface::new(dim, slave, master, facets, (e, mu), search, capacity)?;
+        let mut set = NodesOnSurface::new(dim, slave, master, facets, (e, mu), search, capacity)?;
+        if let Some((a, b, label)) = side.names {
+            set.names = Some(Box::new(Names {
+                slave: a.to_string(),
+                master: b.to_string(),
+                labels: side.slave.iter().map(|&v| label(v)).collect(),
+            }));
+        }
         let line = format!(
             "{} facets (node-to-surface{}; search {search:.3e} m, {})",
             set.facets(),
@@ -1180,6 +1264,7 @@ mod tests {
                 facets: &faces,
                 master_points: &mesh.points,
                 master_dofs: &|v| [Some(3 + 3 * v), Some(4 + 3 * v), Some(5 + 3 * v)],
+                names: None,
             },
             false,
             (0.0, 0.0),
@@ -1194,5 +1279,91 @@ mod tests {
         assert!((gap[0] - 0.1).abs() < 1e-15, "{}", gap[0]);
         let (_, vals) = jac.col(0);
         assert_eq!(&vals[..3], &[0.0, 0.0, 1.0]);
+    }
+
+    /// A slave node against the top face (z = 1) of a 2 × 2 × 2 unit cube, search 0.1.
+    fn node_over_the_top(x: [f64; 3]) -> Box<dyn ContactSet> {
+        let mesh = box_mesh(CellKind::Hex8, [2, 2, 2], [1.0, 1.0, 1.0]);
+        let top: Vec<usize> = (0..mesh.points.len())
+            .filter(|&v| mesh.points[v][2] == 1.0)
+            .collect();
+        let faces = mesh.boundary_facets(&top);
+        build(
+            Interface {
+                dim: 3,
+                slave: &[0],
+                slave_points: &[x],
+                slave_dofs: &|_| [Some(0), Some(1), Some(2)],
+                facets: &faces,
+                master_points: &mesh.points,
+                master_dofs: &|v| [Some(3 + 3 * v), Some(4 + 3 * v), Some(5 + 3 * v)],
+                names: Some(("upper", "cube", &|_| "node 7 (tag in a.msh)".to_string())),
+            },
+            false,
+            (0.0, 0.0),
+            Some(0.1),
+            DEFAULT_CAPACITY,
+        )
+        .unwrap()
+        .0
+    }
+
+    /// Issue 34: a node 0.3 m under the top face (3× the search distance) reads −0.3 as
+    /// its starting gap, where the step's gap reads the search distance; a node beside
+    /// the face and below its level (the closest point clamped to an edge) reads its
+    /// distance, not a depth; a node above reads its height.
+    #[test]
+    fn starting_gaps_see_nodes_inside_beyond_the_search_distance() {
+        let n = 3 + 3 * 27;
+        for (x, want) in [
+            ([0.4, 0.6, 0.7], -0.3),
+            ([1.3, 0.5, 0.6], 0.5),
+            ([0.5, 0.5, 1.25], 0.25),
+        ] {
+            let set = node_over_the_top(x);
+            let mut g = [0.0];
+            set.starting_gaps(&vec![0.0; n], &mut g);
+            assert!(
+                (g[0] - want).abs() < 1e-12,
+                "{x:?}: {} against {want}",
+                g[0]
+            );
+        }
+        let set = node_over_the_top([0.4, 0.6, 0.7]);
+        let mut jac = ContactJacobian::for_set(set.as_ref());
+        let mut g = [0.0];
+        set.evaluate(&vec![0.0; n], &mut g, &mut jac);
+        assert_eq!(g[0], 0.1, "the step's gap of an unpaired node");
+    }
+
+    /// Issue 34: a node pushed through the top face 0.04 m per step (under half the
+    /// search distance, so the motion check lets it) is lost by its facet once deeper
+    /// than the search distance: a run failure naming the bodies and the node.
+    #[test]
+    fn a_node_lost_inside_the_other_body_fails_the_run() {
+        let mut set = node_over_the_top([0.4, 0.6, 1.02]);
+        let mut q = vec![0.0; 3 + 3 * 27];
+        let mut err = None;
+        for _ in 0..10 {
+            q[2] -= 0.04;
+            if let Err(e) = set.update(&q) {
+                err = Some(e);
+                break;
+            }
+        }
+        let e = err.expect("the lost node is reported").to_string();
+        assert!(
+            q[2] < -0.1 && q[2] > -0.2,
+            "found at depth {}",
+            -q[2] - 0.02
+        );
+        for needle in [
+            "node 7 (tag in a.msh)",
+            "\"upper\"",
+            "\"cube\"",
+            "target.search",
+        ] {
+            assert!(e.contains(needle), "{needle}: {e}");
+        }
     }
 }

@@ -129,6 +129,23 @@ pub trait ContactSet: Send {
     fn condensed(&self) -> bool {
         false
     }
+    /// The gap of each contact at `q` for the check of a starting state (a node may not
+    /// start inside an obstacle or another body, issue 34): by default `g(q)`. A set that
+    /// caps the gaps of far nodes (contacts between bodies read the search distance where
+    /// no facet is near) measures them against the whole target surface instead, so a
+    /// node deep inside the other body reads its depth. Called once, before the run; it
+    /// may allocate.
+    fn starting_gaps(&self, q: &[f64], gap: &mut [f64]) {
+        let mut jac = ContactJacobian::for_set(self);
+        self.evaluate(q, gap, &mut jac);
+    }
+    /// The largest reference coordinate `|X|` the gap functions add to `q` (`x = X + u`):
+    /// a gap cannot resolve a change of `u` below the ulps of `X`, so the Newton loop
+    /// counts such changes as round-off ([`crate::integrators`]' convergence measure).
+    /// 0 for sets whose gaps read `q` alone (rigid bodies, the bar).
+    fn coordinate_scale(&self) -> f64 {
+        0.0
+    }
     /// Rows over all blocks.
     fn rows(&self) -> usize {
         (0..self.len()).map(|a| self.dim(a)).sum()
@@ -201,7 +218,7 @@ pub struct ContactJacobian {
 
 impl ContactJacobian {
     /// Allocates a Jacobian with the pattern of `set` (values zero).
-    pub fn for_set(set: &dyn ContactSet) -> Self {
+    pub fn for_set<S: ContactSet + ?Sized>(set: &S) -> Self {
         let pattern = set.pattern();
         let mut col_ptr = Vec::with_capacity(pattern.len() + 1);
         col_ptr.push(0);
@@ -382,6 +399,18 @@ impl ContactSet for Composite {
     }
     fn restart(&mut self, q: &[f64]) {
         self.sets.iter_mut().for_each(|s| s.restart(q));
+    }
+    fn starting_gaps(&self, q: &[f64], gap: &mut [f64]) {
+        let mut off = 0;
+        for s in &self.sets {
+            s.starting_gaps(q, &mut gap[off..off + s.len()]);
+            off += s.len();
+        }
+    }
+    fn coordinate_scale(&self) -> f64 {
+        self.sets
+            .iter()
+            .fold(0.0, |a, s| a.max(s.coordinate_scale()))
     }
     fn update(&mut self, q: &[f64]) -> Result<bool, crate::error::Error> {
         let mut any = false;

@@ -119,6 +119,13 @@ impl ContactSet for RoundObstacle {
     fn len(&self) -> usize {
         self.node_dofs.len()
     }
+    fn coordinate_scale(&self) -> f64 {
+        self.reference
+            .iter()
+            .flatten()
+            .chain(&self.center)
+            .fold(0.0, |a: f64, x| a.max(x.abs()))
+    }
     fn is_linear(&self) -> bool {
         false
     }

@@ -234,7 +234,12 @@ impl Integrator for SchatzmanPaoli {
                 st.newton_residual = 0.0;
                 break;
             }
-            let r = newton_change(&self.q_new, &self.q_lin, &self.state.q);
+            let r = newton_change(
+                &self.q_new,
+                &self.q_lin,
+                &self.state.q,
+                self.contacts.coordinate_scale(),
+            );
             st.newton_residual = r;
             self.q_lin.copy_from_slice(&self.q_new);
             if r <= self.newton.tol {

@@ -19,6 +19,10 @@
 //!   `ℂ = λ C⁻¹ ⊗ C⁻¹ + 2 (μ − λ ln J) 𝕀_{C⁻¹}` with
 //!   `𝕀_{C⁻¹,ijkl} = ½ (C⁻¹_ik C⁻¹_jl + C⁻¹_il C⁻¹_jk)`.
 //!
+//! Both refuse a deformation with `det F ≤ 0` ([`Inverted`]): neo-Hookean's energy is
+//! undefined there, St. Venant–Kirchhoff's is defined but describes a cell turned inside
+//! out, which its energy's second minimum lets a run reach and keep (issue 34).
+//!
 //! Tangents are hand-derived and checked against central finite differences of the
 //! stress and of the internal force on random deformations (tests below, relative error
 //! ≤ 1e-6). Written here rather than taken from a crate: no maintained Rust crate offers
@@ -77,6 +81,10 @@ impl Hyperelastic {
         let c = f.transpose() * f;
         match *self {
             Hyperelastic::Svk { lambda, mu } => {
+                // defined for any F, but a cell with det F ≤ 0 is turned inside out: the
+                // law's energy has a spurious minimum there (issue 34: an SVK cube
+                // pushed with 5 E A ran on with its top 0.39 m below its base)
+                positive_det(f)?;
                 let e = 0.5 * (c - Matrix3::identity());
                 Ok(0.5 * lambda * e.trace().powi(2) + mu * e.component_mul(&e).sum())
             }
@@ -93,6 +101,7 @@ impl Hyperelastic {
         let c = f.transpose() * f;
         Ok(match *self {
             Hyperelastic::Svk { lambda, mu } => {
+                positive_det(f)?;
                 let e = 0.5 * (c - Matrix3::identity());
                 voigt(&(lambda * e.trace() * Matrix3::identity() + 2.0 * mu * e))
             }
@@ -155,6 +164,7 @@ impl Hyperelastic {
         let mut d = SMatrix::<f64, 6, 6>::zeros();
         match *self {
             Hyperelastic::Svk { lambda, mu } => {
+                positive_det(f)?;
                 let e = 0.5 * (c - Matrix3::identity());
                 let tr = e.trace();
                 let sm = lambda * tr * Matrix3::identity() + 2.0 * mu * e;

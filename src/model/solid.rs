@@ -213,6 +213,22 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// How errors name node `v`: its file tag and file for a mesh read from a file,
+    /// its index for a generated one.
+    pub fn node_label(&self, v: usize) -> String {
+        match (self.node_ids.get(v), &self.source) {
+            (Some(tag), Some(file)) => {
+                let f = file.file_name().map_or_else(
+                    || file.display().to_string(),
+                    |f| f.to_string_lossy().into_owned(),
+                );
+                format!("node {tag} (tag in {f})")
+            }
+            (Some(tag), None) => format!("node {tag} (file tag)"),
+            _ => format!("node {v} (index in the generated mesh)"),
+        }
+    }
+
     /// Nodes on the boundary: those of the faces (edges in 2-D) that belong to exactly
     /// one cell.
     pub fn boundary_nodes(&self) -> Vec<usize> {

@@ -348,12 +348,77 @@ pub struct ContactSpec {
     /// surface) is at most this (m).
     #[serde(default)]
     pub within: Option<f64>,
+    /// The deepest a node may start inside the obstacle or the target body (m; default
+    /// 1e-9 of the contact body's size, the round-off of coincident meshes). A scene
+    /// whose nodes start deeper is refused (issue 34): the scheme would push them out in
+    /// one step, or, past the search distance of a contact between bodies, never see
+    /// them. Raise it for curved non-matching meshes whose chords cut into each other.
+    #[serde(default)]
+    pub overlap_tolerance: Option<f64>,
     /// Newton restitution coefficient.
     #[serde(default)]
     pub restitution: f64,
     /// Coulomb friction coefficient μ (default 0: frictionless, no friction solver).
     #[serde(default)]
     pub friction: f64,
+}
+
+/// Refuses contact `c` when one of its nodes starts inside `against` deeper than its
+/// `overlap_tolerance` ([`ContactSpec::overlap_tolerance`]), naming the deepest node by
+/// its file tag, its depth and how many start inside.
+fn check_starting_gaps(
+    set: &dyn ContactSet,
+    ndof: usize,
+    c: &ContactSpec,
+    mesh: &Mesh,
+    nodes: &[usize],
+    against: &str,
+) -> Result<(), Error> {
+    let size = mesh_size(mesh);
+    let tol = match c.overlap_tolerance {
+        Some(t) => crate::error::require_in("overlap_tolerance", t, 0.0, f64::MAX)?,
+        None => 1e-9 * size,
+    };
+    let mut gap = vec![0.0; set.len()];
+    set.starting_gaps(&vec![0.0; ndof], &mut gap);
+    let inside = gap.iter().filter(|&&g| g < -tol).count();
+    let Some((k, &g)) = gap
+        .iter()
+        .enumerate()
+        .filter(|(_, g)| **g < -tol)
+        .min_by(|a, b| a.1.total_cmp(b.1))
+    else {
+        return Ok(());
+    };
+    let node = nodes
+        .get(k)
+        .map_or_else(|| format!("contact {k}"), |&v| mesh.node_label(v));
+    Err(Error::invalid(
+        "nodes",
+        &c.nodes,
+        &format!(
+            "{node} of body \"{}\" starts {:.3e} m inside {against} ({inside} node(s) start \
+             inside; the deepest is named), expected at most overlap_tolerance = {tol:.3e} m: \
+             move the bodies apart, or raise overlap_tolerance where curved non-matching \
+             meshes cut into each other",
+            c.body, -g
+        ),
+    ))
+}
+
+/// The diagonal of a mesh's bounding box (m).
+fn mesh_size(mesh: &Mesh) -> f64 {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in &mesh.points {
+        for j in 0..3 {
+            lo[j] = lo[j].min(p[j]);
+            hi[j] = hi[j].max(p[j]);
+        }
+    }
+    (0..3)
+        .map(|j| (hi[j] - lo[j]).max(0.0).powi(2))
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// `target = { body, surface, … }` of a contact between bodies.
@@ -1183,12 +1248,22 @@ impl Scene {
                         facets: &facets_of[ci],
                         master_points: &meshes[ti].points,
                         master_dofs: &|v| node_dofs(ti, v),
+                        names: Some((&c.body, &t.body, &|v| mesh.node_label(v))),
                     },
                     t.pairing == Pairing::NodeToNode,
                     (c.restitution, c.friction),
                     t.search,
                     t.capacity
                         .unwrap_or(crate::contact::bodies::DEFAULT_CAPACITY),
+                )
+                .map_err(at)?;
+                check_starting_gaps(
+                    set.0.as_ref(),
+                    system.ndof(),
+                    c,
+                    mesh,
+                    &nodes,
+                    &format!("body \"{}\" (surface `{}`)", t.body, t.surface),
                 )
                 .map_err(at)?;
                 interfaces.push(format!(
@@ -1217,7 +1292,7 @@ impl Scene {
                 let Some(d) = d else {
                     return Err(at(Error::invalid(
                         "nodes",
-                        format!("node {v}"),
+                        mesh.node_label(v),
                         "is fixed and cannot be a contact node",
                     )));
                 };
@@ -1227,6 +1302,15 @@ impl Scene {
             let set = self
                 .obstacle_set(obstacle, dofs, refs, (c.restitution, c.friction))
                 .map_err(at)?;
+            check_starting_gaps(
+                set.as_ref(),
+                system.ndof(),
+                c,
+                mesh,
+                &nodes,
+                &format!("obstacle \"{}\"", obstacle.name()),
+            )
+            .map_err(at)?;
             sets.push(set);
         }
         geometry.outlines = self
@@ -1788,10 +1872,15 @@ fn apply_override(table: &mut toml::Table, o: &str) -> Result<(), Error> {
     let (key, value) = o
         .split_once('=')
         .ok_or_else(|| bad("expected KEY=VALUE, e.g. scheme.newton.modified=true"))?;
+    // exactly one value: `2e-6\n[evil]\nx = 1` parses as a document with more in it,
+    // which was dropped (issue 34)
     let value: toml::Value = toml::from_str::<toml::Table>(&format!("v = {}", value.trim()))
         .ok()
+        .filter(|t| t.len() == 1)
         .and_then(|mut t| t.remove("v"))
-        .ok_or_else(|| bad("VALUE is not a TOML value (quote strings: model=\"svk\")"))?;
+        .ok_or_else(|| {
+            bad("VALUE is not one TOML value (quote strings: model=\"svk\"; no line breaks)")
+        })?;
     // segments: names, each with optional [index]
     let mut path: Vec<(&str, Option<usize>)> = Vec::new();
     for seg in key.trim().split('.') {
