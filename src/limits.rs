@@ -172,6 +172,7 @@ impl MemoryEstimate {
     /// Refuses when the total exceeds [`memory_limit`], listing the parts; `field` names
     /// what the user can change.
     pub fn check(&self, field: &str, value: impl std::fmt::Display) -> Result<(), Error> {
+        memory_limit_setting()?;
         let limit = memory_limit();
         let total = self.total();
         if total <= limit {
@@ -232,12 +233,11 @@ pub fn bytes(b: u64) -> String {
     }
 }
 
-/// The memory a run may use (bytes): `SIGNORINI_MEMORY_LIMIT` when set and valid, else
-/// the machine's total memory, else 16 GiB.
+/// The memory a run may use (bytes): `SIGNORINI_MEMORY_LIMIT` when set (refused when
+/// not valid: [`memory_limit_setting`], which every command checks first), else the
+/// machine's total memory, else 16 GiB.
 pub fn memory_limit() -> u64 {
-    if let Ok(s) = std::env::var("SIGNORINI_MEMORY_LIMIT")
-        && let Some(v) = parse_bytes(&s)
-    {
+    if let Ok(Some(v)) = memory_limit_setting() {
         return v;
     }
     std::fs::read_to_string("/proc/meminfo")
@@ -252,16 +252,51 @@ pub fn memory_limit() -> u64 {
         .unwrap_or(16 << 30)
 }
 
-/// `123`, `64K`, `512M`, `2G` (powers of 1024).
+/// `SIGNORINI_MEMORY_LIMIT`, parsed strictly: `None` when unset; an error naming the
+/// variable, its value and the accepted forms when it is not a positive whole number
+/// of bytes, optionally with a `K`, `M`, `G` or `T` suffix (powers of 1024, also written
+/// `KiB` … `TiB`), or when it overflows. Before issue 34, `lots`, `-1G`, `2GB` and
+/// overflowing values were ignored silently.
+pub fn memory_limit_setting() -> Result<Option<u64>, Error> {
+    match std::env::var("SIGNORINI_MEMORY_LIMIT") {
+        Err(std::env::VarError::NotPresent) => Ok(None),
+        Err(std::env::VarError::NotUnicode(v)) => Err(bad_limit(&v.to_string_lossy())),
+        Ok(s) => parse_bytes(&s).map(Some).ok_or_else(|| bad_limit(&s)),
+    }
+}
+
+fn bad_limit(value: &str) -> Error {
+    Error::invalid(
+        "SIGNORINI_MEMORY_LIMIT",
+        format!("{value:?}"),
+        "must be a whole number of bytes > 0, optionally with a suffix K, M, G or T \
+         (powers of 1024; also KiB, MiB, GiB, TiB), below 16 EiB: e.g. 512M or 2G \
+         (`GB`, decimal or binary, is not taken)",
+    )
+}
+
+/// `123`, `64K`, `512M`, `2G`, `1T`, `2GiB` (powers of 1024); `None` for anything else,
+/// zero, or a value past `u64`.
 fn parse_bytes(s: &str) -> Option<u64> {
     let s = s.trim();
-    let (digits, mult) = match s.chars().last()?.to_ascii_uppercase() {
-        'K' => (&s[..s.len() - 1], 1u64 << 10),
-        'M' => (&s[..s.len() - 1], 1 << 20),
-        'G' => (&s[..s.len() - 1], 1 << 30),
-        _ => (s, 1),
+    let split = s.find(|c: char| !c.is_ascii_digit()).unwrap_or(s.len());
+    let (digits, unit) = s.split_at(split);
+    if digits.is_empty() {
+        return None;
+    }
+    let mult: u64 = match unit.trim() {
+        "" => 1,
+        "K" | "k" | "KiB" => 1 << 10,
+        "M" | "m" | "MiB" => 1 << 20,
+        "G" | "g" | "GiB" => 1 << 30,
+        "T" | "t" | "TiB" => 1 << 40,
+        _ => return None,
     };
-    digits.trim().parse::<u64>().ok()?.checked_mul(mult)
+    digits
+        .parse::<u64>()
+        .ok()?
+        .checked_mul(mult)
+        .filter(|&v| v > 0)
 }
 
 /// Bytes per degree of freedom of the assembled sparse matrices and the vectors of a
@@ -324,6 +359,23 @@ mod tests {
         assert_eq!(parse_bytes("2G"), Some(2 << 30));
         assert_eq!(parse_bytes("512m"), Some(512 << 20));
         assert_eq!(parse_bytes("x"), None);
+        assert_eq!(parse_bytes("2GiB"), Some(2 << 30));
+        assert_eq!(parse_bytes(" 1T "), Some(1 << 40));
+        assert_eq!(parse_bytes("123"), Some(123));
+        // issue 34: each of these was ignored silently
+        for bad in [
+            "lots",
+            "-1G",
+            "2GB",
+            "99999999999999999999",
+            "16777216T",
+            "0",
+            "",
+            "1.5G",
+            "G",
+        ] {
+            assert_eq!(parse_bytes(bad), None, "{bad:?}");
+        }
         assert_eq!(bytes(3 << 30), "3.0 GiB");
         let mut m = MemoryEstimate::default();
         m.add("dofs", u64::MAX, 8);

@@ -1135,6 +1135,11 @@ fn start_mumps(cli: &Cli) -> Result<Option<()>, signorini::Error> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     signorini::linalg::set_portable_arithmetic(cli.portable_arithmetic);
+    // every command refuses a limit it cannot read (issue 34: ignored silently before)
+    if let Err(e) = signorini::limits::memory_limit_setting() {
+        err!("error: {e}");
+        return ExitCode::from(e.exit_code());
+    }
     // kept to the end of main: dropping it releases the other ranks and finalizes MPI
     let _mumps_host = match start_mumps(&cli) {
         Ok(Some(host)) => Some(host),

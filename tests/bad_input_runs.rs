@@ -303,6 +303,74 @@ fn flags_are_checked_even_when_unused_and_sizes_before_allocating() {
     );
 }
 
+/// Issue 34: `SIGNORINI_MEMORY_LIMIT` is parsed strictly by every command (`lots`, `-1G`,
+/// `2GB` and an overflowing number were ignored silently), `bar` counts the process in
+/// its ledger (a 1 MiB limit let the default bar run), and a mesh file is measured
+/// against the limit after it is read, before it is assembled.
+#[test]
+fn memory_limits_are_parsed_strictly_and_applied_to_every_command() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tmp("memory-limit");
+    let out = dir.join("o");
+    let out = out.to_str().unwrap();
+    for value in ["lots", "-1G", "2GB", "99999999999999999999", "0"] {
+        for args in [
+            &["bar", "--quiet", "--no-plots", "--out", out][..],
+            &["check", "meshes/bar.toml"][..],
+            &["run", "meshes/bar.toml", "--quiet", "--out", out][..],
+            &["example", "bouncing-ball", "--quiet", "--out", out][..],
+        ] {
+            expect(
+                &format!("{value} / {}", args[0]),
+                cli(root, args, &[("SIGNORINI_MEMORY_LIMIT", value)]),
+                2,
+                &[
+                    "SIGNORINI_MEMORY_LIMIT",
+                    &format!("{value:?}"),
+                    "512M or 2G",
+                ],
+            );
+        }
+    }
+    expect(
+        "1M on the default bar",
+        cli(
+            root,
+            &["bar", "--quiet", "--no-plots", "--out", out],
+            &[("SIGNORINI_MEMORY_LIMIT", "1M")],
+        ),
+        2,
+        &[
+            "the process (binary, libraries, threads) 8.0 MiB",
+            "memory limit 1.0 MiB",
+        ],
+    );
+    expect(
+        "a mesh file past the limit",
+        cli(
+            root,
+            &["check", "meshes/ball_drop.toml"],
+            &[("SIGNORINI_MEMORY_LIMIT", "2M")],
+        ),
+        2,
+        &[
+            "mesh.path",
+            "ball.msh",
+            "assembled dofs",
+            "memory limit 2.0 MiB",
+        ],
+    );
+    // the accepted spellings
+    for value in ["2G", "2GiB", "2048M", "2147483648"] {
+        let (code, err) = cli(
+            root,
+            &["check", "meshes/bar.toml"],
+            &[("SIGNORINI_MEMORY_LIMIT", value)],
+        );
+        assert_eq!(code, 0, "{value}: {err}");
+    }
+}
+
 #[test]
 fn a_new_run_leaves_nothing_of_an_older_one() {
     let dir = tmp("older");

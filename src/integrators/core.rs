@@ -817,14 +817,14 @@ impl ThetaCore {
             params
         };
         let theta = params.theta;
-        let structure = (sys.linearity() != Linearity::Linear).then(|| {
+        let mut structure = (sys.linearity() != Linearity::Linear).then(|| {
             Box::new(Structure::new(
                 &sys,
                 params.newton.modified,
                 params.energy_momentum,
             ))
         });
-        let factor = match &structure {
+        let factor = match &mut structure {
             None => factor_step_matrix(
                 params,
                 &sys,
@@ -836,7 +836,10 @@ impl ThetaCore {
             )?,
             Some(st) => {
                 check_step_inputs(params, sys.ndof(), q0, v0, h)?;
-                // the pattern's symbolic analysis; the values come with the first step
+                // the pattern's symbolic analysis, on M̂ⁿ at the initial state (the mass
+                // alone is singular where `mass = "redistributed"` leaves contact nodes
+                // none, issue 34); the first step forms its own values
+                st.evaluate(&sys, (h, theta), (q0, v0), (q0, v0), true)?;
                 st.factor()?
             }
         };

@@ -106,7 +106,7 @@ fn run_bar_from(
         probes::ProbeSet::default(),
     )
     .and_then(|r| {
-        let planned = scene.memory().total() + crate::limits::PROCESS_BYTES;
+        let planned = scene.memory().total();
         finish(r, setup, planned, out)
     })
 }

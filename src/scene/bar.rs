@@ -84,10 +84,17 @@ impl BarScene {
         crate::limits::step_count(self.t_end, self.dt, "t-end", "dt").unwrap_or(0)
     }
 
-    /// The memory the run needs at least: the rod's dofs (tridiagonal matrices, two
-    /// neighbours a node) and their frame geometry.
+    /// The memory the run needs at least: the process itself, the rod's dofs
+    /// (tridiagonal matrices, two neighbours a node) and their frame geometry.
     pub fn memory(&self) -> crate::limits::MemoryEstimate {
         let mut m = crate::limits::MemoryEstimate::default();
+        // the process itself, as every run's ledger counts it (issue 34: `bar` let a
+        // 1 MiB limit pass, its model alone being 0.5 MiB)
+        m.add(
+            "the process (binary, libraries, threads)",
+            1,
+            crate::limits::PROCESS_BYTES,
+        );
         let n = self.elements as u64 + 1;
         m.add("dofs", n, crate::limits::bytes_per_dof(3, 1));
         m.add("frame geometry", n, 64);

@@ -1552,7 +1552,21 @@ impl BodySpec {
 
     fn mesh(&self, base: &Path) -> Result<Mesh, Error> {
         match &self.mesh {
-            MeshSpec::File { path } => crate::io::mesh::read_mesh(&base.join(path)),
+            MeshSpec::File { path } => {
+                let m = crate::io::mesh::read_mesh(&base.join(path))?;
+                // measured against the memory limit before it is assembled (issue 34: a
+                // 40³ hex8 file under a 96 MiB limit was refused only after its assembly,
+                // at a peak of 1.1 GiB)
+                let per_cell = m.cells.iter().map(|(_, c)| c.len()).max().unwrap_or(1);
+                crate::limits::mesh_memory(
+                    m.points.len() as u64,
+                    m.cells.len() as u64,
+                    per_cell as u64,
+                    self.dim() as u64,
+                )
+                .check("mesh.path", path.display())?;
+                Ok(m)
+            }
             MeshSpec::Box {
                 cell,
                 cells,
