@@ -894,7 +894,13 @@ fn sweep(a: &SweepArgs) -> Result<(), signorini::Error> {
         if vals.is_empty() {
             return Err(bad("lists no value"));
         }
-        axes.insert(k.trim().to_string(), vals.clone());
+        // issue 34: a second --axis on a key replaced the first silently
+        if axes.insert(k.trim().to_string(), vals.clone()).is_some() {
+            return Err(bad(&format!(
+                "`{}` has an --axis already: give all its values in one",
+                k.trim()
+            )));
+        }
     }
     let flags = SweepSpec {
         scheme: r.scheme.clone(),
@@ -1132,8 +1138,29 @@ fn start_mumps(cli: &Cli) -> Result<Option<()>, signorini::Error> {
     Ok(None)
 }
 
+/// The global flags written before a subcommand (`signorini --mumps run SCENE`) moved
+/// after it: the bar's flags are accepted without a subcommand, so clap refuses any
+/// flag before one ("the subcommand 'run' cannot be used with '--mumps'", issue 34).
+fn globals_after_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    const GLOBALS: [&str; 2] = ["--mumps", "--portable-arithmetic"];
+    const SUBCOMMANDS: [&str; 10] = [
+        "bar", "run", "check", "example", "study", "sweep", "resume", "plot", "fclib", "help",
+    ];
+    let lead = args
+        .iter()
+        .skip(1)
+        .take_while(|a| a.to_str().is_some_and(|a| GLOBALS.contains(&a)))
+        .count();
+    let next = args.get(1 + lead).and_then(|a| a.to_str());
+    if lead > 0 && next.is_some_and(|n| SUBCOMMANDS.contains(&n)) {
+        let flags: Vec<_> = args.drain(1..1 + lead).collect();
+        args.splice(2..2, flags);
+    }
+    args
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::parse_from(globals_after_subcommand(std::env::args_os().collect()));
     signorini::linalg::set_portable_arithmetic(cli.portable_arithmetic);
     // every command refuses a limit it cannot read (issue 34: ignored silently before)
     if let Err(e) = signorini::limits::memory_limit_setting() {

@@ -849,3 +849,126 @@ target = { body = "b", surface = "z1" }
         "{text}"
     );
 }
+
+/// Issue 34's vague or silent refusals, each in the user's terms: a time point with a
+/// third number, an empty node set, an axisymmetric scene with gravity along r or a
+/// plane-strain neighbour, a 3-D mesh given a 2-D formulation, `max_active_rows`
+/// below one frictional block, and the examples' starting states.
+#[test]
+fn issue_34_refusals_name_what_the_user_wrote() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tmp("issue34");
+    let check = |file: &str, sets: &[&str]| {
+        let mut a = vec!["check", file];
+        for s in sets {
+            a.extend(["--set", s]);
+        }
+        cli(root, &a, &[])
+    };
+    // forces[].time with three numbers: the third was dropped
+    let text = BOX_ON_FLOOR.replace("MESH", BOX_MESH)
+        + "[[forces]]\nbody = \"b\"\nnodes = \"z1\"\ntotal = [0.0, 0.0, -1.0]\n\
+           time = [[0.0, 0.0, 5.0], [1.0, 1.0]]\n";
+    std::fs::write(dir.join("force.toml"), &text).unwrap();
+    expect(
+        "time point of three",
+        cli(&dir, &["check", "force.toml"], &[]),
+        2,
+        &["forces[0].time", "time point 0 has 3 number(s), expected 2"],
+    );
+    // a node set that is empty: a VTK point-data flag that is 0 on every node
+    std::fs::write(
+        dir.join("m.vtk"),
+        "# vtk DataFile Version 5.1\nm\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n\
+         0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 2 4\nOFFSETS vtktypeint64\n0 4\nCONNECTIVITY \
+         vtktypeint64\n0 1 2 3\nCELL_TYPES 1\n10\nPOINT_DATA 4\nSCALARS empty int 1\n\
+         LOOKUP_TABLE default\n0 0 0 0\nSCALARS base int 1\nLOOKUP_TABLE default\n1 1 1 0\n",
+    )
+    .unwrap();
+    let text = "[time]\ndt = 1e-4\nt_end = 1e-3\n[[bodies]]\nname = \"b\"\n\
+                mesh = { generator = \"file\", path = \"m.vtk\" }\n\
+                material = { young = 1e6, poisson = 0.3, density = 1000.0 }\n\
+                fixed = [\"empty\"]\n";
+    std::fs::write(dir.join("empty.toml"), text).unwrap();
+    expect(
+        "empty fixed set",
+        cli(&dir, &["check", "empty.toml"], &[]),
+        2,
+        &["fixed.nodes", "value empty", "the node set is empty"],
+    );
+    // axisymmetric: gravity along r, a plane-strain neighbour, a 3-D mesh
+    expect(
+        "gravity along r",
+        check("meshes/hertz_ball.toml", &["loads.gravity=[-9.81, 0.0]"]),
+        2,
+        &["loads.gravity", "axis of revolution"],
+    );
+    expect(
+        "plane-strain beside axisymmetric",
+        check(
+            "meshes/hertz_ball_on_plate.toml",
+            &["bodies[1].formulation=\"plane-strain\""],
+        ),
+        2,
+        &[
+            "bodies[1].formulation",
+            "plane-strain",
+            "must be axisymmetric",
+        ],
+    );
+    let text = "[time]\ndt = 1e-4\nt_end = 1e-3\n[[bodies]]\nname = \"b\"\n\
+                mesh = { generator = \"box\", cell = \"tet4\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }\n\
+                formulation = \"axisymmetric\"\n\
+                material = { young = 1e6, poisson = 0.3, density = 1000.0 }\n";
+    std::fs::write(dir.join("axi.toml"), text).unwrap();
+    expect(
+        "tet4 given axisymmetric",
+        cli(&dir, &["check", "axi.toml"], &[]),
+        2,
+        &[
+            "formulation",
+            "axisymmetric",
+            "has tet4 cells",
+            "formulation = \"solid\"",
+        ],
+    );
+    expect(
+        "3-D obstacle in a 2-D scene",
+        check(
+            "meshes/ball_drop.toml",
+            &["bodies[0].formulation=\"axisymmetric\""],
+        ),
+        2,
+        &[
+            "obstacles[0].point",
+            "the scene is 2-D (bodies[0] has formulation = \"axisymmetric\")",
+        ],
+    );
+    // one frictional 3-D block is 3 rows
+    expect(
+        "max_active_rows 2",
+        check("meshes/sliding_block.toml", &["scheme.max_active_rows=2"]),
+        2,
+        &[
+            "scheme.max_active_rows",
+            "2",
+            "at least one contact block (3 rows",
+        ],
+    );
+    // the examples' starting states
+    expect(
+        "v0 = 1e308",
+        check("meshes/bouncing_ball.toml", &["example.v0=1e308"]),
+        2,
+        &["example.v0", "initial kinetic energy of inf J"],
+    );
+    expect(
+        "slider inside its guides",
+        check(
+            "meshes/slider_crank.toml",
+            &["example.q0=[0.0, 0.0, -0.05]"],
+        ),
+        2,
+        &["example.q0", "contact 0 starts 1.468e-3 m inside"],
+    );
+}

@@ -798,6 +798,7 @@ impl ThetaCore {
         h: f64,
         with_projection: bool,
     ) -> Result<Self, Error> {
+        check_block_rows(params, contacts.as_ref())?;
         // A nonsymmetric M̂ⁿ (gyroscopic terms) makes W nonsymmetric: `N = M̂⁻¹` is then
         // no metric (eq. 59 needs N positive definite) and block pivoting's Cholesky
         // does not apply, so the projection takes eq. 58's Euclidean metric and the
@@ -2314,6 +2315,30 @@ pub(crate) fn newton_change(
     } else {
         dq / (inc + 8.0 * f64::EPSILON * qn).max(f64::MIN_POSITIVE)
     }
+}
+
+/// Refuses a `max_active_rows` that cannot hold one contact block (the dense one-step
+/// workspaces gather whole blocks).
+pub(crate) fn check_block_rows(
+    params: &SchemeParams,
+    contacts: &dyn ContactSet,
+) -> Result<(), Error> {
+    let block = (0..contacts.len())
+        .map(|a| contacts.dim(a))
+        .max()
+        .unwrap_or(1);
+    if params.max_active_rows != 0 && params.max_active_rows < block {
+        // issue 34: accepted before
+        return Err(Error::invalid(
+            "scheme.max_active_rows",
+            params.max_active_rows,
+            &format!(
+                "must hold at least one contact block ({block} rows: the normal and the \
+                 tangents of a frictional contact), or be 0 for the default"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// An error for a one-step solve that failed in the step after `state`.

@@ -83,6 +83,7 @@ pub fn plan(
     contacts: &dyn ContactSet,
     h: f64,
 ) -> Result<Plan, Error> {
+    super::core::check_block_rows(params, contacts)?;
     let n = system.ndof();
     let m = contacts.len();
     let rows = contacts.rows();

@@ -135,6 +135,16 @@ pub enum Formulation {
 }
 
 impl Formulation {
+    /// The scene file's spelling (`solid`, `plane-strain`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Formulation::Solid => "solid",
+            Formulation::PlaneStrain => "plane-strain",
+            Formulation::PlaneStress { .. } => "plane-stress",
+            Formulation::Axisymmetric => "axisymmetric",
+        }
+    }
+
     /// Space dimension (dofs per node).
     pub fn dim(self) -> usize {
         match self {

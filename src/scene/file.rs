@@ -470,8 +470,28 @@ pub struct ForceSpec {
     pub total: Vec<f64>,
     /// `[[t, factor], …]`: the factor multiplying `total` at time `t`, linear between the
     /// points and constant outside them (default: 1 at all times).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "time_points")]
     pub time: Option<Vec<[f64; 2]>>,
+}
+
+/// `[[t, factor], …]` with exactly two numbers a point: serde's fixed-size arrays take
+/// the first two of a longer list and drop the rest silently (issue 34).
+fn time_points<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<Vec<[f64; 2]>>, D::Error> {
+    let v: Option<Vec<Vec<f64>>> = Option::deserialize(d)?;
+    v.map(|points| {
+        points
+            .into_iter()
+            .enumerate()
+            .map(|(i, p)| match p[..] {
+                [t, f] => Ok([t, f]),
+                _ => Err(serde::de::Error::custom(format!(
+                    "time point {i} has {} number(s), expected 2: [t, factor]",
+                    p.len()
+                ))),
+            })
+            .collect()
+    })
+    .transpose()
 }
 
 /// `[[prescribed]]`: node-set dofs moved at a prescribed velocity `velocity · φ(t)`
@@ -489,7 +509,7 @@ pub struct PrescribedSpec {
     #[serde(default)]
     pub components: Option<Vec<usize>>,
     /// `[[t, factor], …]` multiplying `velocity` (default 1 at all times).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "time_points")]
     pub time: Option<Vec<[f64; 2]>>,
 }
 
@@ -730,8 +750,32 @@ impl Scene {
                     &format!("obstacles[{k}] has that name already; names must be unique"),
                 ));
             }
-            o.validate(dim)
-                .map_err(|e| prefix(&format!("obstacles[{j}]"), e))?;
+            o.validate(dim).map_err(|e| {
+                // say where the dimension comes from: a 3-D mesh given a 2-D formulation
+                // reads as an obstacle's fault otherwise (issue 34)
+                let e = match e {
+                    Error::InvalidParameter {
+                        field,
+                        value,
+                        reason,
+                    } => Error::InvalidParameter {
+                        field,
+                        value,
+                        reason: format!(
+                            "{reason}; the scene is {dim}-D ({})",
+                            match self.bodies[0].mesh {
+                                MeshSpec::Rod { .. } => "bodies[0] is a rod".to_string(),
+                                _ => format!(
+                                    "bodies[0] has formulation = \"{}\"",
+                                    self.bodies[0].formulation.name()
+                                ),
+                            }
+                        ),
+                    },
+                    e => e,
+                };
+                prefix(&format!("obstacles[{j}]"), e)
+            })?;
         }
         if let Some(g) = &self.loads.gravity
             && (g.len() != dim || g.iter().any(|x| !x.is_finite()))
@@ -742,6 +786,7 @@ impl Scene {
                 &format!("needs {dim} finite components (m/s²)"),
             ));
         }
+        self.validate_axisymmetric()?;
         for (i, c) in self.contacts.iter().enumerate() {
             if !self.bodies.iter().any(|b| b.name == c.body) {
                 return Err(Error::invalid(
@@ -970,7 +1015,33 @@ impl Scene {
                     "all bodies need one dimension",
                 )));
             }
-            all_meshes.push(b.mesh(&self.base_dir).map_err(at)?);
+            let mesh = b.mesh(&self.base_dir).map_err(at)?;
+            // the cells the formulation takes, named before anything reads them as such
+            // (issue 34: a tet4 mesh given `axisymmetric` was blamed on an obstacle's
+            // point or a negative radius)
+            if !matches!(b.mesh, MeshSpec::Rod { .. })
+                && let Some((kind, _)) = mesh.cells.iter().find(|(k, _)| k.dim() != dim)
+            {
+                return Err(at(Error::invalid(
+                    "formulation",
+                    b.formulation.name(),
+                    &format!(
+                        "takes {dim}-D cells ({}), and the mesh has {} cells: give formulation = {}",
+                        if dim == 3 {
+                            "tet4, hex8"
+                        } else {
+                            "tri3, quad4"
+                        },
+                        kind.name(),
+                        if dim == 3 {
+                            "\"plane-strain\", \"plane-stress\" or \"axisymmetric\" for a 2-D mesh"
+                        } else {
+                            "\"solid\" (the default) for a 3-D mesh"
+                        }
+                    ),
+                )));
+            }
+            all_meshes.push(mesh);
         }
         // the probes' node sets, before any assembly: a misspelt set is refused at once
         let point_base = starts(all_meshes.iter().map(|m| m.points.len()));
@@ -1472,6 +1543,69 @@ impl Scene {
         Ok(kept)
     }
 
+    /// An axisymmetric scene is a solid of revolution about the y axis: every body
+    /// axisymmetric (a plane-strain body beside one is an extrusion, which the revolved
+    /// solid cannot touch), gravity along the axis, planes normal to it and spheres
+    /// centred on it (issue 34: gravity along r and a plane-strain neighbour were
+    /// accepted).
+    fn validate_axisymmetric(&self) -> Result<(), Error> {
+        let axi = |b: &BodySpec| matches!(b.formulation, Formulation::Axisymmetric);
+        let Some(first) = self.bodies.iter().position(axi) else {
+            return Ok(());
+        };
+        if let Some((i, b)) = self.bodies.iter().enumerate().find(|(_, b)| !axi(b)) {
+            return Err(Error::invalid(
+                &format!("bodies[{i}].formulation"),
+                b.formulation.name(),
+                &format!(
+                    "must be axisymmetric like bodies[{first}] (\"{}\"): a scene is one \
+                     solid of revolution, and a {} body is no part of it",
+                    self.bodies[first].name,
+                    b.formulation.name()
+                ),
+            ));
+        }
+        if let Some(g) = &self.loads.gravity
+            && g.first().is_some_and(|&gr| gr != 0.0)
+        {
+            return Err(Error::invalid(
+                "loads.gravity",
+                format!("{g:?}"),
+                "must lie along the axis of revolution (y) in an axisymmetric scene: \
+                 gravity along r would pull every ring outward alike, which no body of \
+                 revolution feels; give [0.0, g]",
+            ));
+        }
+        for (j, o) in self.obstacles.iter().enumerate() {
+            let (key, bad, what) = match o {
+                ObstacleSpec::Plane { normal, .. } => (
+                    "normal",
+                    normal.first().is_some_and(|&n| n != 0.0),
+                    "a plane of revolution is normal to the axis: give [0.0, ±1.0]",
+                ),
+                ObstacleSpec::Sphere { center, .. } => (
+                    "center",
+                    center.first().is_some_and(|&c| c != 0.0),
+                    "a sphere of revolution is centred on the axis: give [0.0, y]",
+                ),
+                ObstacleSpec::Cylinder { .. } => (
+                    "type",
+                    true,
+                    "a cylinder is a 3-D obstacle; an axisymmetric scene takes planes and \
+                     spheres",
+                ),
+            };
+            if bad {
+                return Err(Error::invalid(
+                    &format!("obstacles[{j}].{key}"),
+                    o.name(),
+                    what,
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The index of the body named `name` (validated to exist).
     fn body_index(&self, name: &str) -> usize {
         self.bodies
@@ -1797,6 +1931,22 @@ fn time_function(
 /// The nodes of the set `name` of `mesh`: a named set, `boundary` (computed from the
 /// cells when the mesh has no set of that name) or `all`.
 fn node_set(mesh: &crate::model::solid::Mesh, name: &str) -> Result<Vec<usize>, Error> {
+    // an empty set fixes, drives, loads or probes nothing (issue 34: `fixed` and
+    // `prescribed` accepted one silently)
+    let set = node_set_any(mesh, name)?;
+    if set.is_empty() {
+        return Err(Error::invalid(
+            "nodes",
+            name,
+            "the node set is empty: it names no node of the mesh",
+        ));
+    }
+    Ok(set)
+}
+
+/// The nodes of set `name` of `mesh` (`all`, `boundary` computed when the mesh has no
+/// set of that name), possibly none.
+fn node_set_any(mesh: &crate::model::solid::Mesh, name: &str) -> Result<Vec<usize>, Error> {
     if name == "all" {
         Ok((0..mesh.points.len()).collect())
     } else if name == "boundary" && !mesh.node_sets.contains_key("boundary") {

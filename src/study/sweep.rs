@@ -200,6 +200,23 @@ impl SweepSpec {
         {
             return Err(Error::invalid("sweep.repeat", r, "must be in [1, 100]"));
         }
+        // one axis per scene key: a flag (`--dt`) and an axis (`time.dt`) on the same
+        // key labelled runs by the one that did not apply (issue 34)
+        let mut seen: BTreeMap<String, String> = BTreeMap::new();
+        for (name, key, _) in self.axes_list() {
+            let Some(key) = key else { continue };
+            let k: String = key.chars().filter(|c| !c.is_whitespace()).collect();
+            if let Some(first) = seen.insert(k.clone(), name.clone()) {
+                return Err(Error::invalid(
+                    &format!("sweep.{name}"),
+                    &k,
+                    &format!(
+                        "is the scene key of the axis `{first}` too: give its values on \
+                         one axis"
+                    ),
+                ));
+            }
+        }
         let mut n: usize = 1;
         for (name, _, v) in self.axes_list() {
             n = n
@@ -311,6 +328,14 @@ impl Source {
 /// Multiplies every generated mesh's cell counts by `level`; a mesh file cannot be
 /// refined (list files on an axis instead).
 pub fn refine(s: &mut Scene, level: usize) -> Result<(), Error> {
+    if s.bodies.is_empty() {
+        // issue 34: the levels ran the same point twice
+        return Err(Error::invalid(
+            "sweep.refine",
+            level,
+            "the scene has no mesh to refine (an [example] scene): give no refine axis",
+        ));
+    }
     for (i, b) in s.bodies.iter_mut().enumerate() {
         let grow = |n: usize| {
             n.checked_mul(level)
@@ -455,7 +480,29 @@ pub struct Row {
     pub is_reference: bool,
 }
 
-/// Reads records back (`runs/*.json` under `dir`).
+/// Whether `p` is named as a sweep writes its run records (`NNNNNN.json`, the point's
+/// id): only such files are read back, and only such files a new sweep removes (issue
+/// 34: a sweep deleted every file of `OUT/runs/`, a user's included).
+fn is_record_file(p: &Path) -> bool {
+    p.file_name().and_then(|n| n.to_str()).is_some_and(|n| {
+        n.len() == 11 && n.ends_with(".json") && n[..6].bytes().all(|b| b.is_ascii_digit())
+    })
+}
+
+/// Removes the run records (`NNNNNN.json`) of `runs`, and nothing else.
+fn remove_records(runs: &Path) -> Result<(), Error> {
+    let Ok(rd) = std::fs::read_dir(runs) else {
+        return Ok(());
+    };
+    for p in rd.filter_map(|e| e.ok().map(|e| e.path())) {
+        if is_record_file(&p) && p.is_file() {
+            std::fs::remove_file(&p).map_err(|e| Error::write(&p, e))?;
+        }
+    }
+    Ok(())
+}
+
+/// Reads records back (`runs/NNNNNN.json` under `dir`).
 pub fn read_records(dir: &Path) -> Result<Vec<RunRecord>, Error> {
     let runs = dir.join("runs");
     let mut out = Vec::new();
@@ -464,7 +511,7 @@ pub fn read_records(dir: &Path) -> Result<Vec<RunRecord>, Error> {
     };
     let mut names: Vec<PathBuf> = rd
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .filter(|p| is_record_file(p))
         .collect();
     names.sort();
     for p in names {
@@ -613,6 +660,22 @@ pub fn impulse_trace(force: &[f64], h: f64, t_end: f64) -> Vec<f64> {
     out
 }
 
+/// A cumulative impulse trace (samples at `t_end (i + 1) / n`, 0 at t = 0) at time `t`,
+/// linear between samples (the last sample beyond `t_end`).
+fn trace_at(trace: &[f64], t_end: f64, t: f64) -> f64 {
+    let n = trace.len();
+    let x = t / t_end * n as f64;
+    if n == 0 || x <= 0.0 {
+        return 0.0;
+    }
+    if x >= n as f64 {
+        return trace[n - 1];
+    }
+    let i = x.floor() as usize;
+    let a = if i == 0 { 0.0 } else { trace[i - 1] };
+    a + (trace[i] - a) * (x - i as f64)
+}
+
 /// The finest run: most refined, then smallest step, then the lowest index (the first
 /// value of every other axis); failed runs are never the reference.
 fn reference_run(records: &[RunRecord]) -> Option<usize> {
@@ -660,7 +723,31 @@ pub fn table(mut records: Vec<RunRecord>) -> Vec<Row> {
                     e[2] = a[1].abs();
                     e[3] = a[2].abs();
                 }
-                if let Some(f) = refr.as_ref().filter(|_| Some(i) != reference) {
+                let same_span = refr
+                    .as_ref()
+                    .is_some_and(|f| (r.t_end - f.t_end).abs() <= 1e-12 * f.t_end);
+                if let Some(f) = refr.as_ref().filter(|_| Some(i) != reference && !same_span) {
+                    // runs of different lengths (an axis on time.t_end): the impulse
+                    // compared by time over the shorter span, sample by sample of this
+                    // run; the final energy and the peak force are not comparable (NaN)
+                    // (issue 34: they were compared sample by sample, error 0.63 for
+                    // the same trajectory)
+                    let span = r.t_end.min(f.t_end);
+                    let total = trace_at(&f.impulse, f.t_end, span);
+                    let n = r.impulse.len();
+                    if total > 0.0 && n > 0 && !f.impulse.is_empty() {
+                        e[4] = r
+                            .impulse
+                            .iter()
+                            .enumerate()
+                            .map(|(j, a)| (j, a, r.t_end * (j + 1) as f64 / n as f64))
+                            .filter(|&(_, _, t)| t <= span * (1.0 + 1e-12))
+                            .map(|(_, a, t)| (a - trace_at(&f.impulse, f.t_end, t)).abs())
+                            .fold(0.0, f64::max)
+                            / total;
+                    }
+                }
+                if let Some(f) = refr.as_ref().filter(|_| Some(i) != reference && same_span) {
                     let total = f.impulse.last().copied().unwrap_or(0.0);
                     if total > 0.0 && r.impulse.len() == f.impulse.len() {
                         e[4] = r
@@ -1072,6 +1159,19 @@ impl Shard {
         let index = id.checked_sub(min).ok_or_else(|| {
             Error::invalid("SLURM_ARRAY_TASK_ID", id, "is below SLURM_ARRAY_TASK_MIN")
         })?;
+        if count == 0 || index >= count {
+            // named in the user's terms: they never passed a --shard (issue 34)
+            return Err(Error::invalid(
+                "SLURM_ARRAY_TASK_ID",
+                id,
+                &format!(
+                    "is task {index} of an array of SLURM_ARRAY_TASK_COUNT = {count} tasks \
+                     from SLURM_ARRAY_TASK_MIN = {min}: the sweep expects consecutive task \
+                     ids (sbatch --array=0-{})",
+                    count.saturating_sub(1)
+                ),
+            ));
+        }
         Shard::parse(&format!("{index}/{count}")).map(Some)
     }
 
@@ -1145,6 +1245,27 @@ impl Sweep {
     /// Every point, each scene read and validated (before the first run).
     fn validate_points(&self) -> Result<Vec<Point>, Error> {
         self.spec.validate()?;
+        // a `--set` on an axis' key is overridden at every point
+        for set in &self.set {
+            let key: String = set
+                .split_once('=')
+                .map_or(set.as_str(), |(k, _)| k)
+                .chars()
+                .filter(|c| !c.is_whitespace())
+                .collect();
+            if let Some((name, _, _)) = self.spec.axes_list().into_iter().find(|(_, k, _)| {
+                k.as_deref()
+                    .is_some_and(|k| k.chars().filter(|c| !c.is_whitespace()).eq(key.chars()))
+            }) {
+                return Err(Error::invalid(
+                    "--set",
+                    set,
+                    &format!(
+                        "sets the key of the sweep's axis `{name}`, which every point overrides"
+                    ),
+                ));
+            }
+        }
         let points = points(&self.spec);
         for p in &points {
             self.source
@@ -1189,9 +1310,9 @@ impl Sweep {
                 done.insert(r.point.id, r);
             }
         } else {
-            // a new sweep: records of an earlier one would mix two grids
-            let _ = std::fs::remove_dir_all(dir.join("runs"));
-            std::fs::create_dir_all(dir.join("runs")).map_err(|e| Error::write(dir, e))?;
+            // a new sweep: records of an earlier one would mix two grids (its own
+            // files only: what else the user keeps there stays)
+            remove_records(&dir.join("runs"))?;
         }
         write_atomic(
             &grid_path,
@@ -1431,7 +1552,23 @@ pub fn merge(dir: &Path) -> Result<Vec<String>, Error> {
             }
             Some(_) => {}
         }
+        let g = grid.as_ref().expect("set above");
+        let expected = points(&g.spec);
         for r in read_records(s)? {
+            // a record of another grid (issue 34: it became a third row of a 2-point
+            // grid)
+            if expected.get(r.point.id) != Some(&r.point) {
+                return Err(Error::bad_file(
+                    s.join("runs").join(format!("{:06}.json", r.point.id)),
+                    "",
+                    format!(
+                        "holds run {} ({}), not a point of the grid of {}",
+                        r.point.id,
+                        r.point.key,
+                        gp.display()
+                    ),
+                ));
+            }
             records.insert(r.point.id, r);
         }
     }
@@ -1460,6 +1597,9 @@ pub fn merge(dir: &Path) -> Result<Vec<String>, Error> {
     let _lock = crate::io::RunLock::acquire(dir)?;
     let runs = dir.join("runs");
     std::fs::create_dir_all(&runs).map_err(|e| Error::write(&runs, e))?;
+    // the records of an older sweep or merge in this directory would sit beside a new
+    // grid.json
+    remove_records(&runs)?;
     for r in records.values() {
         write_atomic(
             &runs.join(format!("{:06}.json", r.point.id)),
