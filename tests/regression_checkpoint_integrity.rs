@@ -155,7 +155,10 @@ fn foreign_and_inconsistent_checkpoints_are_refused() {
                 let b = c["run"]["history_bytes"].as_u64().unwrap();
                 c["run"]["history_bytes"] = (b - 3).into();
             }),
-            vec!["history.csv.part", "inside a line"],
+            // an edited checkpoint: its digest refuses it before the history's cursor
+            // check runs (which still guards a history damaged beside an intact
+            // checkpoint)
+            vec!["`digest`", "edited or damaged"],
         ),
         (
             "rows",
@@ -163,7 +166,26 @@ fn foreign_and_inconsistent_checkpoints_are_refused() {
                 let r = c["run"]["history_rows"].as_u64().unwrap();
                 c["run"]["history_rows"] = (r - 1).into();
             }),
-            vec!["history.csv.part", "does not end row"],
+            vec!["`digest`", "edited or damaged"],
+        ),
+        // issue 34: edits that every field check lets through, refused by the digest
+        (
+            "nan-time",
+            Box::new(|c| c["integrator"]["time"] = "7ff8000000000000".into()),
+            vec!["`digest`", "edited or damaged"],
+        ),
+        (
+            "step",
+            Box::new(|c| {
+                let k = c["integrator"]["step"].as_u64().unwrap();
+                c["integrator"]["step"] = (k + 1).into();
+            }),
+            vec!["`digest`", "edited or damaged"],
+        ),
+        (
+            "digest",
+            Box::new(|c| c["digest"] = "0".repeat(64).into()),
+            vec!["`digest`"],
         ),
     ];
     for (name, edit, words) in cases {
@@ -177,6 +199,17 @@ fn foreign_and_inconsistent_checkpoints_are_refused() {
         });
         refused(&dir, &words);
     }
+    // an intact checkpoint beside a damaged history: two rows joined into one
+    let dir = work.join("case-history");
+    copy_dir(&out, &dir);
+    let canon = std::fs::canonicalize(&dir).unwrap();
+    edit_checkpoint(&dir, |c| c["out_dir"] = canon.to_str().unwrap().into());
+    let part = dir.join("history.csv.part");
+    let mut h = std::fs::read(&part).unwrap();
+    let nl = h.iter().position(|&b| b == b'\n').unwrap();
+    h[nl] = b',';
+    std::fs::write(&part, &h).unwrap();
+    refused(&dir, &["history.csv.part", "does not end row"]);
     // the unchanged copy (directory rewritten only) resumes
     let dir = work.join("case-none");
     copy_dir(&out, &dir);

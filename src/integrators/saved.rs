@@ -102,3 +102,30 @@ impl IntegratorState {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A vector of the wrong length or a missing one is named with the model's count
+    /// (what `resume` reports for a checkpoint whose digest matches but whose model
+    /// changed; an edited checkpoint is refused by its digest first).
+    #[test]
+    fn vectors_are_checked_against_the_model() {
+        let s = IntegratorState {
+            scheme: "moreau-jean".into(),
+            step: 3,
+            time: Bits(3e-6),
+            vectors: [("q".to_string(), Floats(vec![0.0]))].into_iter().collect(),
+            status: Vec::new(),
+        };
+        assert_eq!(s.vector("q", 1).unwrap(), &[0.0]);
+        let e = s.vector("q", 51).unwrap_err().to_string();
+        assert!(
+            e.contains("vectors.q") && e.contains("the model has 51"),
+            "{e}"
+        );
+        let e = s.vector("v", 51).unwrap_err().to_string();
+        assert!(e.contains("vectors.v") && e.contains("missing"), "{e}");
+    }
+}

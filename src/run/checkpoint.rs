@@ -17,13 +17,16 @@
 //!   frames, then appended to. Nothing in it grows with the number of steps (version
 //!   3: version 2 held the per-step force trace and every frame's time). Version 4
 //!   adds the friction fallback and complementarity fallback counters and the energy
-//!   balance.
+//!   balance; version 5 the digest.
 //!
 //! What a checkpoint guards (since version 2): the build that wrote it, the output directory it
 //! belongs to, and the size and SHA-256 of every input file (the scene file and its mesh
 //! files); `resume` refuses a checkpoint whose build, directory or inputs differ, whose
 //! `every` is 0, whose history cursor falls inside a row or whose arrays disagree, each
-//! with exit code 2 and a message naming what differs ([`Checkpoint::verify`]).
+//! with exit code 2 and a message naming what differs ([`Checkpoint::verify`]). Since
+//! version 5 it also carries the SHA-256 of its own content (`digest`, all but the
+//! digest and the directory): a checkpoint edited or damaged after it was written is
+//! refused, whatever field changed.
 //!
 //! Floats are stored as the hexadecimal bits of their IEEE-754 representation (arrays as
 //! base64 of their little-endian bytes), so a resumed run starts from bit-identical
@@ -40,7 +43,7 @@ use crate::integrators::saved::{Bits, Floats, IntegratorState};
 /// The format name in every checkpoint.
 pub const FORMAT: &str = "signorini-checkpoint";
 /// The format version this build writes and reads.
-pub const VERSION: u32 = 4;
+pub const VERSION: u32 = 5;
 /// The checkpoint's file name in a run directory.
 pub const FILE: &str = "checkpoint.json";
 
@@ -233,6 +236,11 @@ pub struct Checkpoint {
     /// resumed run takes the same, so that it ends byte for byte as the uninterrupted one.
     #[serde(default = "portable")]
     pub arithmetic: crate::linalg::Arithmetic,
+    /// SHA-256 of the rest of the checkpoint (every field but this one and `out_dir`,
+    /// which `verify` checks itself), set by [`Checkpoint::write`]: `resume` refuses a
+    /// checkpoint edited or damaged after it was written (issue 34: a NaN
+    /// `integrator.time` or an edited `step` was resumed).
+    pub digest: String,
 }
 
 fn portable() -> crate::linalg::Arithmetic {
@@ -240,11 +248,33 @@ fn portable() -> crate::linalg::Arithmetic {
 }
 
 impl Checkpoint {
-    /// Writes `dir/checkpoint.json` atomically (write, fsync, rename).
+    /// Writes `dir/checkpoint.json` atomically (write, fsync, rename), with its digest.
     pub fn write(&self, dir: &Path) -> Result<(), Error> {
-        let json = serde_json::to_vec(self)
+        let sealed = Checkpoint {
+            digest: self.content_digest()?,
+            ..self.clone()
+        };
+        let json = serde_json::to_vec(&sealed)
             .map_err(|e| Error::Numerical(format!("serializing the checkpoint: {e}")))?;
         crate::io::write_atomic(&dir.join(FILE), &json)
+    }
+
+    /// SHA-256 (hex) of the checkpoint's JSON with `digest` and `out_dir` emptied: the
+    /// fields round-trip exactly (floats as their bits, the rest as JSON that serde_json
+    /// reads back bit for bit), so a checkpoint read back digests alike.
+    fn content_digest(&self) -> Result<String, Error> {
+        use sha2::Digest as _;
+        let bare = Checkpoint {
+            digest: String::new(),
+            out_dir: PathBuf::new(),
+            ..self.clone()
+        };
+        let json = serde_json::to_vec(&bare)
+            .map_err(|e| Error::Numerical(format!("serializing the checkpoint: {e}")))?;
+        Ok(sha2::Sha256::digest(&json)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect())
     }
 
     /// Reads `dir/checkpoint.json`; a missing, corrupt, foreign or other-version file
@@ -398,6 +428,16 @@ impl Checkpoint {
                     ),
                 );
             }
+        }
+        // last, so that the checks above name what they find
+        if self.content_digest()? != self.digest {
+            return bad(
+                "`digest`",
+                "does not match the checkpoint's content: it was edited or damaged after \
+                 the run wrote it (a resumed run would not be the run's); start a new run, \
+                 or resume from an intact copy"
+                    .into(),
+            );
         }
         Ok(())
     }
