@@ -21,7 +21,11 @@
 //! obstacle: their projection columns (τ of the impact steps), and through them the
 //! bar's velocity by 3.8e-13 and the ball drop's by 1.4e-2 of the column's scale. Those
 //! four have files of the default rules in `tests/golden/default/`, written by the
-//! binary of issue 33 (portable arithmetic, the same commands).
+//! binary of issue 33 (portable arithmetic, the same commands). Moreau–Jean's bar has
+//! one too since its restitution floor covers every separating row (issue 33: a
+//! lasting contact that separates must not gain energy): the tip's round-off
+//! separations (|U| ≤ 3e-17 m/s) are no longer caught, which moves its velocity by
+//! 1.7e-13 and its violation by 1.1e-13 of their scale; the iteration counts not.
 //!
 //! [`SchemeParams::paper_rules`]: signorini::integrators::SchemeParams::paper_rules
 //!
@@ -88,6 +92,7 @@ fn read(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 /// rows and the new rows.
 /// The cases whose histories the default rules change (Algorithm 2's).
 const DEFAULT_DIFFERS: &[&str] = &[
+    "bar-moreau-jean",
     "bar-combined-projection",
     "hex_bar",
     "ball_drop",

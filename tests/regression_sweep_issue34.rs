@@ -259,3 +259,21 @@ fn sweeps_touch_only_their_own_records() {
         std::fs::remove_dir_all(&d).unwrap();
     }
 }
+
+/// A Slurm task index past the array's count is named in Slurm's terms (it was reported
+/// as a `--shard` the user never passed).
+#[test]
+fn a_slurm_index_past_the_count_is_named_as_such() {
+    let env = |k: &str| match k {
+        "SLURM_ARRAY_TASK_ID" => Some("7".to_string()),
+        "SLURM_ARRAY_TASK_COUNT" => Some("3".to_string()),
+        _ => None,
+    };
+    let e = Shard::from_slurm(env).unwrap_err().to_string();
+    assert!(
+        e.contains("SLURM_ARRAY_TASK_ID")
+            && e.contains("task 7 of an array of SLURM_ARRAY_TASK_COUNT = 3")
+            && !e.contains("--shard"),
+        "{e}"
+    );
+}

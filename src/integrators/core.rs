@@ -700,8 +700,10 @@ pub struct ThetaCore {
     with_projection: bool,
     feedback: bool,
     /// [`SchemeParams::energy_consistent_restitution`]: the restitution of a normal row
-    /// separating at the step's start is at least `(1 − θ)/θ`.
-    restitution_floor: Option<f64>,
+    /// separating at the step's start is at least `(1 − θ)/θ` (the first value); on
+    /// every such row under Moreau–Jean (the second, true), on rows open in the last
+    /// step under the projection schemes ([`ThetaCore::restitution`]).
+    restitution_floor: Option<(f64, bool)>,
     /// `G` does not depend on `q` (every contact set is linear).
     pub(crate) g_constant: bool,
     /// [`ContactSet::coordinate_scale`], for the convergence measure's round-off floor.
@@ -914,7 +916,7 @@ impl ThetaCore {
             feedback: params.projection_feedback,
             restitution_floor: params
                 .energy_consistent_restitution
-                .then(|| (1.0 - params.theta) / params.theta),
+                .then(|| ((1.0 - params.theta) / params.theta, !with_projection)),
             g_constant,
             coordinate_scale,
             operators_constant,
@@ -1876,6 +1878,14 @@ impl ThetaCore {
     /// [`SchemeParams::energy_consistent_restitution`] (the default) a separating normal
     /// row takes `max(e, (1 − θ)/θ)` (1 at θ = 1/2: the catch reverses `U` and does no
     /// work; `e` itself at θ = 1), so no impulse adds energy; a closing row keeps `e`.
+    /// Under the projection schemes the floor applies to rows open in the last step
+    /// (`P_k ≤ 0`): a row in lasting contact is held at `g = 0` by the projection, and
+    /// flooring it kept the rocking block from coming to rest (velocities of 1e-7 at
+    /// t = 1.21 s). Under Moreau–Jean, which holds no position, it applies to every
+    /// separating row: a lasting contact that separates (two aluminium spheres
+    /// released at 2 m/s, h = 6.25e-9) otherwise gained 1.02e-6 of the energy at e = 0.
+    /// At θ = 1/2 the floored law reads `0 ≤ U_{k+1} + U_k ⊥ P ≥ 0`: the impulse does
+    /// no work.
     #[inline]
     fn restitution(&self, a: usize) -> f64 {
         let s = &self.state;
@@ -2244,9 +2254,9 @@ fn add_step_loads(
 /// the step's start (`u_k > 0`) that carried no impulse in the last step (`p_k ≤ 0`), when
 /// a floor is set; `e` otherwise.
 #[inline]
-fn restitution(floor: Option<f64>, e: f64, normal: bool, u_k: f64, p_k: f64) -> f64 {
+fn restitution(floor: Option<(f64, bool)>, e: f64, normal: bool, u_k: f64, p_k: f64) -> f64 {
     match floor {
-        Some(f) if normal && u_k > 0.0 && p_k <= 0.0 => e.max(f),
+        Some((f, every)) if normal && u_k > 0.0 && (p_k <= 0.0 || every) => e.max(f),
         _ => e,
     }
 }
