@@ -944,6 +944,29 @@ fn issue_34_refusals_name_what_the_user_wrote() {
             "the scene is 2-D (bodies[0] has formulation = \"axisymmetric\")",
         ],
     );
+    // a mesh node is named by its file tag and file, not by its internal index
+    let ball = root.join("meshes/ball.msh");
+    let text = format!(
+        "[time]\ndt = 1e-4\nt_end = 1e-3\n[[bodies]]\nname = \"ball\"\n\
+         mesh = {{ generator = \"file\", path = {:?} }}\n\
+         material = {{ young = 1e6, poisson = 0.3, density = 1000.0 }}\n\
+         [[obstacles]]\nname = \"floor\"\ntype = \"plane\"\npoint = [0.0, 0.0, -0.06]\n\
+         normal = [0.0, 0.0, 1.0]\n\
+         [[contacts]]\nbody = \"ball\"\nnodes = \"surface\"\nobstacle = \"floor\"\n\
+         [[contacts]]\nbody = \"ball\"\nnodes = \"surface\"\nobstacle = \"floor\"\n",
+        ball.to_str().unwrap()
+    );
+    std::fs::write(dir.join("twice.toml"), text).unwrap();
+    expect(
+        "a node twice",
+        cli(&dir, &["check", "twice.toml"], &[]),
+        2,
+        &[
+            "contacts[1]",
+            "(tag in ball.msh)",
+            "already meets obstacle \"floor\"",
+        ],
+    );
     // one frictional 3-D block is 3 rows
     expect(
         "max_active_rows 2",

@@ -986,7 +986,10 @@ pub fn build(
     {
         return Err(Error::invalid(
             "nodes",
-            format!("node {}", side.slave[k]),
+            side.names.map_or_else(
+                || format!("node {}", side.slave[k]),
+                |(_, _, label)| label(side.slave[k]),
+            ),
             "is fixed and cannot be a contact node",
         ));
     }

@@ -101,7 +101,10 @@ impl RawMesh {
             if p.iter().any(|x| !x.is_finite()) {
                 return Err(bad(
                     path,
-                    format!("node {i} has non-finite coordinates {p:?}"),
+                    format!(
+                        "node {} has non-finite coordinates {p:?}",
+                        self.ids.get(i).copied().unwrap_or(i as u64)
+                    ),
                 ));
             }
         }

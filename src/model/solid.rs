@@ -744,14 +744,14 @@ pub fn assemble_with_contacts(
     for (i, p) in mesh.points.iter().enumerate() {
         if p.iter().any(|c| !c.is_finite()) {
             return Err(Error::invalid(
-                &format!("node {i}"),
+                &mesh.node_label(i),
                 format!("{p:?}"),
                 "coordinates must be finite",
             ));
         }
         if f == Formulation::Axisymmetric && p[0] < 0.0 {
             return Err(Error::invalid(
-                &format!("node {i}"),
+                &mesh.node_label(i),
                 format!("{p:?}"),
                 "an axisymmetric mesh lies in the half plane x = r ≥ 0 (y is the axis)",
             ));

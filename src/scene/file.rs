@@ -1092,7 +1092,7 @@ impl Scene {
                             &format!("contacts[{ci}]"),
                             Error::invalid(
                                 "nodes",
-                                format!("node {v}"),
+                                mesh.node_label(v),
                                 &format!(
                                     "already meets {other} through contacts[{first}]; \
                                      list each node once per obstacle or body",
@@ -1205,7 +1205,7 @@ impl Scene {
                     if fixed[d] || prescribed[d].is_some() {
                         return Err(at(Error::invalid(
                             "nodes",
-                            format!("node {v} component {c}"),
+                            format!("{} component {c}", meshes[bi].node_label(v)),
                             "is already fixed or prescribed",
                         )));
                     }
