@@ -137,3 +137,36 @@ fn mumps_without_its_feature_names_the_feature() {
         "{err}"
     );
 }
+
+/// Issue 34: a global flag before the subcommand (`signorini --mumps run SCENE`) was
+/// refused by the parser as "the subcommand 'run' cannot be used with '--mumps'"; it
+/// now reaches the command, which names what is missing in this build (the `mumps`
+/// feature), as `signorini run SCENE --mumps` does.
+#[cfg(not(feature = "mumps"))]
+#[test]
+fn a_global_flag_before_the_subcommand_reaches_it() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    for args in [
+        &["--mumps", "check", "meshes/bar.toml"][..],
+        &["check", "meshes/bar.toml", "--mumps"][..],
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_signorini"))
+            .current_dir(root)
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("--mumps") && err.contains("without the `mumps` cargo feature"),
+            "{args:?}: {err}"
+        );
+    }
+    // and --portable-arithmetic before `check` is taken as the flag it is
+    let o = Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .current_dir(root)
+        .args(["--portable-arithmetic", "check", "meshes/bar.toml"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
