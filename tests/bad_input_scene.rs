@@ -941,7 +941,7 @@ fn issue_34_refusals_name_what_the_user_wrote() {
         2,
         &[
             "obstacles[0].point",
-            "the scene is 2-D (bodies[0] has formulation = \"axisymmetric\")",
+            "(in a 2-D scene: bodies[0] has formulation = \"axisymmetric\")",
         ],
     );
     // a mesh node is named by its file tag and file, not by its internal index

@@ -3,31 +3,19 @@
 //! user's file, or read their own numbers back one ulp off. Each is refused (exit 2,
 //! naming what the user wrote) or handled as the README states.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use signorini::study::sweep::{self, RunRecord, Shard, Source, Sweep, SweepProgress, SweepSpec};
+use common::sweeps::{Count, small_bar};
+
+use signorini::study::sweep::{self, RunRecord, Shard, Source, Sweep, SweepSpec};
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("signorini-sweep34-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
-}
-
-struct Count(usize);
-
-impl SweepProgress for Count {
-    fn run(&mut self, _: usize, _: usize, _: &RunRecord, _: f64) {
-        self.0 += 1;
-    }
-}
-
-/// The bar of 40 elements to 4.5e-4 s (a few milliseconds a run).
-fn small_bar() -> Vec<String> {
-    vec![
-        "bodies[0].mesh.elements=40".into(),
-        "time.t_end=4.5e-4".into(),
-    ]
 }
 
 fn sweep(dir: &Path, set: Vec<String>, spec: SweepSpec, source: Source) -> Result<usize, String> {

@@ -1,35 +1,19 @@
 //! `signorini sweep` (issue 19 §1–2): the grid, its records and table, sharding and
 //! merging, resuming, and the errors of bad sweeps.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use signorini::study::sweep::{
-    self, BAR_SCENE, RunRecord, Shard, Source, Sweep, SweepProgress, SweepSpec,
-};
+use common::sweeps::{Count, small_bar};
+
+use signorini::study::sweep::{self, BAR_SCENE, Shard, Source, Sweep, SweepSpec};
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("signorini-sweep-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
-}
-
-/// Counts the runs a sweep makes.
-struct Count(usize);
-
-impl SweepProgress for Count {
-    fn run(&mut self, _: usize, _: usize, _: &RunRecord, _: f64) {
-        self.0 += 1;
-    }
-}
-
-/// A bar of 40 elements to 4e-4 s (the contact lasts 3.85e-4 s): 8 points of a few
-/// milliseconds each.
-fn small_bar() -> Vec<String> {
-    vec![
-        "bodies[0].mesh.elements=40".into(),
-        "time.t_end=4.5e-4".into(),
-    ]
 }
 
 fn spec() -> SweepSpec {

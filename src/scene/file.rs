@@ -750,31 +750,20 @@ impl Scene {
                     &format!("obstacles[{k}] has that name already; names must be unique"),
                 ));
             }
+            // say where the dimension comes from: a 3-D mesh given a 2-D formulation
+            // reads as an obstacle's fault otherwise (issue 34)
+            let origin = match self.bodies[0].mesh {
+                MeshSpec::Rod { .. } => "bodies[0] is a rod".to_string(),
+                _ => format!(
+                    "bodies[0] has formulation = \"{}\"",
+                    self.bodies[0].formulation.name()
+                ),
+            };
             o.validate(dim).map_err(|e| {
-                // say where the dimension comes from: a 3-D mesh given a 2-D formulation
-                // reads as an obstacle's fault otherwise (issue 34)
-                let e = match e {
-                    Error::InvalidParameter {
-                        field,
-                        value,
-                        reason,
-                    } => Error::InvalidParameter {
-                        field,
-                        value,
-                        reason: format!(
-                            "{reason}; the scene is {dim}-D ({})",
-                            match self.bodies[0].mesh {
-                                MeshSpec::Rod { .. } => "bodies[0] is a rod".to_string(),
-                                _ => format!(
-                                    "bodies[0] has formulation = \"{}\"",
-                                    self.bodies[0].formulation.name()
-                                ),
-                            }
-                        ),
-                    },
-                    e => e,
-                };
-                prefix(&format!("obstacles[{j}]"), e)
+                prefix(
+                    &format!("obstacles[{j}]"),
+                    e.context(&format!("a {dim}-D scene: {origin}")),
+                )
             })?;
         }
         if let Some(g) = &self.loads.gravity

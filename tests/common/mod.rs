@@ -6,6 +6,7 @@ pub mod bad;
 pub mod blocks;
 pub mod free;
 pub mod scratch;
+pub mod sweeps;
 
 use std::collections::HashMap;
 use std::path::Path;
