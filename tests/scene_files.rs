@@ -205,7 +205,7 @@ fn bad_scenes_name_the_key() {
         // of G (Algorithm 2 broke down on them: "equality block not positive definite")
         (
             format!("{GOOD}[[contacts]]\nbody = \"b\"\nnodes = \"x0\"\nobstacle = \"wall\"\n"),
-            "contacts[1].nodes`: node 0 (already meets obstacle \"wall\" through contacts[0]",
+            "contacts[1].nodes`: node 0 (index in the generated mesh) (already meets obstacle \"wall\" through contacts[0]",
         ),
     ];
     for (text, needle) in cases {
