@@ -172,8 +172,7 @@ impl MemoryEstimate {
     /// Refuses when the total exceeds [`memory_limit`], listing the parts; `field` names
     /// what the user can change.
     pub fn check(&self, field: &str, value: impl std::fmt::Display) -> Result<(), Error> {
-        memory_limit_setting()?;
-        let limit = memory_limit();
+        let limit = memory_limit_checked()?;
         let total = self.total();
         if total <= limit {
             return Ok(());
@@ -237,9 +236,16 @@ pub fn bytes(b: u64) -> String {
 /// not valid: [`memory_limit_setting`], which every command checks first), else the
 /// machine's total memory, else 16 GiB.
 pub fn memory_limit() -> u64 {
-    if let Ok(Some(v)) = memory_limit_setting() {
-        return v;
-    }
+    memory_limit_checked().unwrap_or_else(|_| machine_memory())
+}
+
+/// [`memory_limit`], or the error of a `SIGNORINI_MEMORY_LIMIT` that is not valid.
+pub fn memory_limit_checked() -> Result<u64, Error> {
+    Ok(memory_limit_setting()?.unwrap_or_else(machine_memory))
+}
+
+/// The machine's total memory (`/proc/meminfo`), else 16 GiB.
+fn machine_memory() -> u64 {
     std::fs::read_to_string("/proc/meminfo")
         .ok()
         .and_then(|t| {

@@ -928,7 +928,7 @@ fn issue_34_refusals_name_what_the_user_wrote() {
         &[
             "formulation",
             "axisymmetric",
-            "has tet4 cells",
+            "cell 0 of the mesh is tet4",
             "formulation = \"solid\"",
         ],
     );

@@ -200,6 +200,15 @@ struct Projection {
     weights: [f64; 4],
 }
 
+impl Projection {
+    /// Whether the node lies behind the facet's interior (`x − x*` along the normal,
+    /// pointing inward): inside the master body, where a clamped closest point (beside
+    /// the surface) says nothing of the side.
+    fn inside(&self) -> bool {
+        self.gap < 0.0 && -self.gap >= (1.0 - 1e-9) * self.dist
+    }
+}
+
 /// Slave nodes against the boundary facets of a master body (see the module doc).
 #[derive(Clone, Debug)]
 pub struct NodesOnSurface {
@@ -483,7 +492,7 @@ impl NodesOnSurface {
                 let p = self
                     .master
                     .project(self.dim, &self.facets[old as usize], &x, q);
-                if p.gap < 0.0 && p.gap.abs() >= (1.0 - 1e-9) * p.dist {
+                if p.inside() {
                     let (a, b, node) = match &self.names {
                         Some(n) => (n.slave.as_str(), n.master.as_str(), n.labels[s].clone()),
                         None => ("slave", "master", format!("slave node {s}")),
@@ -669,13 +678,7 @@ impl ContactSet for NodesOnSurface {
                     best = Some(p);
                 }
             }
-            *g = best.map_or(f64::INFINITY, |p| {
-                if p.gap.abs() >= (1.0 - 1e-9) * p.dist {
-                    p.gap
-                } else {
-                    p.dist
-                }
-            });
+            *g = best.map_or(f64::INFINITY, |p| if p.inside() { p.gap } else { p.dist });
         }
     }
     fn condensed(&self) -> bool {

@@ -2251,8 +2251,9 @@ fn add_step_loads(
 }
 
 /// [`ThetaCore::restitution`] on row data: `max(e, floor)` for a normal row separating at
-/// the step's start (`u_k > 0`) that carried no impulse in the last step (`p_k ≤ 0`), when
-/// a floor is set; `e` otherwise.
+/// the step's start (`u_k > 0`), when a floor `(f, every)` is set: on every such row with
+/// `every` (Moreau–Jean), on those that carried no impulse in the last step (`p_k ≤ 0`)
+/// otherwise; `e` elsewhere.
 #[inline]
 fn restitution(floor: Option<(f64, bool)>, e: f64, normal: bool, u_k: f64, p_k: f64) -> f64 {
     match floor {

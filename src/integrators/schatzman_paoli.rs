@@ -37,6 +37,8 @@ pub struct SchatzmanPaoli {
     e: Vec<f64>,
     /// `G` does not depend on `q` (condensed once).
     g_constant: bool,
+    /// [`ContactSet::coordinate_scale`], read once (the Newton loop's round-off floor).
+    coordinate_scale: f64,
     newton: NewtonParams,
     state: State,
     q_prev: Vec<f64>,
@@ -106,6 +108,7 @@ impl SchatzmanPaoli {
             g_constant,
         );
         let mut sp = SchatzmanPaoli {
+            coordinate_scale: contacts.coordinate_scale(),
             sys: std::sync::Arc::new(sys),
             contacts,
             h,
@@ -238,7 +241,7 @@ impl Integrator for SchatzmanPaoli {
                 &self.q_new,
                 &self.q_lin,
                 &self.state.q,
-                self.contacts.coordinate_scale(),
+                self.coordinate_scale,
             );
             st.newton_residual = r;
             self.q_lin.copy_from_slice(&self.q_new);

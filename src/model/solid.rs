@@ -721,26 +721,12 @@ pub fn assemble(
     assemble_with_contacts(mesh, mat, f, mass, &[])
 }
 
-/// [`assemble`] with the contact nodes named (for the redistributed mass).
-pub fn assemble_with_contacts(
-    mesh: &Mesh,
-    mat: &Material,
-    f: Formulation,
-    mass: MassKind,
-    contact_nodes: &[usize],
-) -> Result<LinearSystem, Error> {
-    let mut is_contact_node = vec![false; mesh.points.len()];
-    for &v in contact_nodes {
-        if v < is_contact_node.len() {
-            is_contact_node[v] = true;
-        }
-    }
-    mat.validate()?;
-    if let Formulation::PlaneStress { thickness } = f {
-        require_positive("thickness", thickness)?;
-    }
+/// Checks `mesh` against formulation `f` before anything reads it: finite coordinates
+/// (`x = r ≥ 0` for an axisymmetric body), cells of the formulation's dimension with
+/// their node counts and node numbers in range. Errors name the node or cell by its file
+/// tag.
+pub fn check_mesh(mesh: &Mesh, f: Formulation) -> Result<(), Error> {
     let dim = f.dim();
-    let n = mesh.points.len() * dim;
     for (i, p) in mesh.points.iter().enumerate() {
         if p.iter().any(|c| !c.is_finite()) {
             return Err(Error::invalid(
@@ -759,10 +745,27 @@ pub fn assemble_with_contacts(
     }
     for (id, (kind, nodes)) in mesh.cells.iter().enumerate() {
         if kind.dim() != dim {
+            // named by the formulation the user chose (issue 34: a tet4 mesh given
+            // `axisymmetric` was blamed on an obstacle's point or a negative radius)
             return Err(Error::invalid(
-                &format!("cell {id}"),
-                kind.name(),
-                &format!("does not fit a {dim}-D formulation"),
+                "formulation",
+                f.name(),
+                &format!(
+                    "takes {dim}-D cells ({}), and cell {} of the mesh is {}: give \
+                     formulation = {}",
+                    if dim == 3 {
+                        "tet4, hex8"
+                    } else {
+                        "tri3, quad4"
+                    },
+                    mesh.cell_ids.get(id).map_or(id as u64, |&t| t),
+                    kind.name(),
+                    if dim == 3 {
+                        "\"plane-strain\", \"plane-stress\" or \"axisymmetric\" for a 2-D mesh"
+                    } else {
+                        "\"solid\" (the default) for a 3-D mesh"
+                    }
+                ),
             ));
         }
         if nodes.len() != kind.nodes() {
@@ -780,6 +783,30 @@ pub fn assemble_with_contacts(
             ));
         }
     }
+    Ok(())
+}
+
+/// [`assemble`] with the contact nodes named (for the redistributed mass).
+pub fn assemble_with_contacts(
+    mesh: &Mesh,
+    mat: &Material,
+    f: Formulation,
+    mass: MassKind,
+    contact_nodes: &[usize],
+) -> Result<LinearSystem, Error> {
+    let mut is_contact_node = vec![false; mesh.points.len()];
+    for &v in contact_nodes {
+        if v < is_contact_node.len() {
+            is_contact_node[v] = true;
+        }
+    }
+    mat.validate()?;
+    if let Formulation::PlaneStress { thickness } = f {
+        require_positive("thickness", thickness)?;
+    }
+    check_mesh(mesh, f)?;
+    let dim = f.dim();
+    let n = mesh.points.len() * dim;
     let cell_nodes: Vec<&[usize]> = mesh.cells.iter().map(|(_, c)| c.as_slice()).collect();
     let mut ak = PatternAssembler::new(mesh.points.len(), dim, &cell_nodes);
     let mut am = ak.zeroed_like();

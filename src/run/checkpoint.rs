@@ -159,17 +159,18 @@ impl InputFile {
             hasher.update(&buf[..n]);
             bytes += n as u64;
         }
-        let sha256 = hasher
-            .finalize()
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect();
+        let sha256 = hex(&hasher.finalize());
         Ok(InputFile {
             path,
             bytes,
             sha256,
         })
     }
+}
+
+/// Lower-case hexadecimal of a digest.
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 /// The build that writes checkpoints: package version and, when it was built from a
@@ -249,32 +250,28 @@ fn portable() -> crate::linalg::Arithmetic {
 
 impl Checkpoint {
     /// Writes `dir/checkpoint.json` atomically (write, fsync, rename), with its digest.
-    pub fn write(&self, dir: &Path) -> Result<(), Error> {
-        let sealed = Checkpoint {
-            digest: self.content_digest()?,
-            ..self.clone()
-        };
-        let json = serde_json::to_vec(&sealed)
+    pub fn write(mut self, dir: &Path) -> Result<(), Error> {
+        self.digest = self.content_digest()?;
+        let json = serde_json::to_vec(&self)
             .map_err(|e| Error::Numerical(format!("serializing the checkpoint: {e}")))?;
         crate::io::write_atomic(&dir.join(FILE), &json)
     }
 
-    /// SHA-256 (hex) of the checkpoint's JSON with `digest` and `out_dir` emptied: the
-    /// fields round-trip exactly (floats as their bits, the rest as JSON that serde_json
-    /// reads back bit for bit), so a checkpoint read back digests alike.
-    fn content_digest(&self) -> Result<String, Error> {
+    /// SHA-256 (hex) of the checkpoint's JSON with `digest` and `out_dir` emptied (taken
+    /// out and put back: no copy of the state); the fields round-trip exactly (floats as
+    /// their bits, the rest as JSON that serde_json reads back bit for bit), so a
+    /// checkpoint read back digests alike.
+    fn content_digest(&mut self) -> Result<String, Error> {
         use sha2::Digest as _;
-        let bare = Checkpoint {
-            digest: String::new(),
-            out_dir: PathBuf::new(),
-            ..self.clone()
-        };
-        let json = serde_json::to_vec(&bare)
-            .map_err(|e| Error::Numerical(format!("serializing the checkpoint: {e}")))?;
-        Ok(sha2::Sha256::digest(&json)
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect())
+        let (digest, out_dir) = (
+            std::mem::take(&mut self.digest),
+            std::mem::take(&mut self.out_dir),
+        );
+        let json = serde_json::to_vec(&*self);
+        (self.digest, self.out_dir) = (digest, out_dir);
+        let json =
+            json.map_err(|e| Error::Numerical(format!("serializing the checkpoint: {e}")))?;
+        Ok(hex(&sha2::Sha256::digest(&json)))
     }
 
     /// Reads `dir/checkpoint.json`; a missing, corrupt, foreign or other-version file
@@ -430,7 +427,7 @@ impl Checkpoint {
             }
         }
         // last, so that the checks above name what they find
-        if self.content_digest()? != self.digest {
+        if self.clone().content_digest()? != self.digest {
             return bad(
                 "`digest`",
                 "does not match the checkpoint's content: it was edited or damaged after \

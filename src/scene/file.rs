@@ -1005,30 +1005,9 @@ impl Scene {
                 )));
             }
             let mesh = b.mesh(&self.base_dir).map_err(at)?;
-            // the cells the formulation takes, named before anything reads them as such
-            // (issue 34: a tet4 mesh given `axisymmetric` was blamed on an obstacle's
-            // point or a negative radius)
-            if !matches!(b.mesh, MeshSpec::Rod { .. })
-                && let Some((kind, _)) = mesh.cells.iter().find(|(k, _)| k.dim() != dim)
-            {
-                return Err(at(Error::invalid(
-                    "formulation",
-                    b.formulation.name(),
-                    &format!(
-                        "takes {dim}-D cells ({}), and the mesh has {} cells: give formulation = {}",
-                        if dim == 3 {
-                            "tet4, hex8"
-                        } else {
-                            "tri3, quad4"
-                        },
-                        kind.name(),
-                        if dim == 3 {
-                            "\"plane-strain\", \"plane-stress\" or \"axisymmetric\" for a 2-D mesh"
-                        } else {
-                            "\"solid\" (the default) for a 3-D mesh"
-                        }
-                    ),
-                )));
+            // the mesh against the formulation before anything reads its cells as such
+            if !matches!(b.mesh, MeshSpec::Rod { .. }) {
+                crate::model::solid::check_mesh(&mesh, b.formulation).map_err(at)?;
             }
             all_meshes.push(mesh);
         }
@@ -1462,9 +1441,6 @@ impl Scene {
         meshes: &[Mesh],
     ) -> Result<Vec<usize>, Error> {
         let nodes = node_set(mesh, &c.nodes)?;
-        if nodes.is_empty() {
-            return Err(Error::invalid("nodes", &c.nodes, "the node set is empty"));
-        }
         let Some(d) = c.within else {
             return Ok(nodes);
         };

@@ -205,7 +205,7 @@ impl SweepSpec {
         let mut seen: BTreeMap<String, String> = BTreeMap::new();
         for (name, key, _) in self.axes_list() {
             let Some(key) = key else { continue };
-            let k: String = key.chars().filter(|c| !c.is_whitespace()).collect();
+            let k = scene_key(&key);
             if let Some(first) = seen.insert(k.clone(), name.clone()) {
                 return Err(Error::invalid(
                     &format!("sweep.{name}"),
@@ -232,6 +232,12 @@ impl SweepSpec {
         }
         Ok(())
     }
+}
+
+/// A scene key as written on an axis or in `--set`, without its blanks
+/// (`bodies[0] .x` and `bodies[0].x` are one key).
+fn scene_key(key: &str) -> String {
+    key.chars().filter(|c| !c.is_whitespace()).collect()
 }
 
 /// One point of the grid.
@@ -1246,17 +1252,13 @@ impl Sweep {
     fn validate_points(&self) -> Result<Vec<Point>, Error> {
         self.spec.validate()?;
         // a `--set` on an axis' key is overridden at every point
+        let axes = self.spec.axes_list();
         for set in &self.set {
-            let key: String = set
-                .split_once('=')
-                .map_or(set.as_str(), |(k, _)| k)
-                .chars()
-                .filter(|c| !c.is_whitespace())
-                .collect();
-            if let Some((name, _, _)) = self.spec.axes_list().into_iter().find(|(_, k, _)| {
-                k.as_deref()
-                    .is_some_and(|k| k.chars().filter(|c| !c.is_whitespace()).eq(key.chars()))
-            }) {
+            let key = scene_key(set.split_once('=').map_or(set.as_str(), |(k, _)| k));
+            if let Some((name, _, _)) = axes
+                .iter()
+                .find(|(_, k, _)| k.as_deref().is_some_and(|k| scene_key(k) == key))
+            {
                 return Err(Error::invalid(
                     "--set",
                     set,
@@ -1531,8 +1533,8 @@ pub fn merge(dir: &Path) -> Result<Vec<String>, Error> {
             "holds no shard-i-of-N directory to merge",
         ));
     }
+    // every shard's grid first: one grid, whose points the records must be
     let mut grid: Option<Grid> = None;
-    let mut records: BTreeMap<usize, RunRecord> = BTreeMap::new();
     for s in &shards {
         let gp = s.join("grid.json");
         let text = crate::limits::read_text(&gp, "sweep grid", crate::limits::MAX_TEXT_BYTES)?;
@@ -1552,8 +1554,11 @@ pub fn merge(dir: &Path) -> Result<Vec<String>, Error> {
             }
             Some(_) => {}
         }
-        let g = grid.as_ref().expect("set above");
-        let expected = points(&g.spec);
+    }
+    let grid = grid.expect("at least one shard");
+    let expected = points(&grid.spec);
+    let mut records: BTreeMap<usize, RunRecord> = BTreeMap::new();
+    for s in &shards {
         for r in read_records(s)? {
             // a record of another grid (issue 34: it became a third row of a 2-point
             // grid)
@@ -1565,15 +1570,13 @@ pub fn merge(dir: &Path) -> Result<Vec<String>, Error> {
                         "holds run {} ({}), not a point of the grid of {}",
                         r.point.id,
                         r.point.key,
-                        gp.display()
+                        s.join("grid.json").display()
                     ),
                 ));
             }
             records.insert(r.point.id, r);
         }
     }
-    let grid = grid.expect("at least one shard");
-    let expected = points(&grid.spec);
     let missing: Vec<usize> = expected
         .iter()
         .filter(|p| records.get(&p.id).is_none_or(|r| &r.point != *p))
