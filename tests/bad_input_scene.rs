@@ -904,6 +904,15 @@ fn issue_34_refusals_name_what_the_user_wrote() {
         &["loads.gravity", "axis of revolution"],
     );
     expect(
+        "a plane not normal to the axis",
+        check(
+            "meshes/hertz_ball.toml",
+            &["obstacles[0].normal=[0.6, 0.8]"],
+        ),
+        2,
+        &["obstacles[0].normal", "[0.6, 0.8]", "normal to the axis"],
+    );
+    expect(
         "plane-strain beside axisymmetric",
         check(
             "meshes/hertz_ball_on_plate.toml",

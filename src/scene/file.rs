@@ -1542,19 +1542,22 @@ impl Scene {
             ));
         }
         for (j, o) in self.obstacles.iter().enumerate() {
-            let (key, bad, what) = match o {
+            let (key, value, bad, what) = match o {
                 ObstacleSpec::Plane { normal, .. } => (
                     "normal",
+                    format!("{normal:?}"),
                     normal.first().is_some_and(|&n| n != 0.0),
                     "a plane of revolution is normal to the axis: give [0.0, ±1.0]",
                 ),
                 ObstacleSpec::Sphere { center, .. } => (
                     "center",
+                    format!("{center:?}"),
                     center.first().is_some_and(|&c| c != 0.0),
                     "a sphere of revolution is centred on the axis: give [0.0, y]",
                 ),
                 ObstacleSpec::Cylinder { .. } => (
                     "type",
+                    "cylinder".to_string(),
                     true,
                     "a cylinder is a 3-D obstacle; an axisymmetric scene takes planes and \
                      spheres",
@@ -1563,8 +1566,8 @@ impl Scene {
             if bad {
                 return Err(Error::invalid(
                     &format!("obstacles[{j}].{key}"),
-                    o.name(),
-                    what,
+                    value,
+                    &format!("(obstacle \"{}\") {what}", o.name()),
                 ));
             }
         }
