@@ -657,6 +657,16 @@ impl Delassus {
                 .is_some_and(|z| z.storage == ZoneStorage::Flexibility)
     }
 
+    /// The dense columns `Â⁻¹G` and `Â⁻¹K N G` (`n` values per row, row after row)
+    /// when the velocity and position corrections of [`Delassus::add_velocity_correction`]
+    /// and [`Delassus::add_position_correction`] are exactly their axpys (the dense path
+    /// without a zone, `M̂⁻¹` metric): what the integrator may fuse into one pass over
+    /// the state with the same operations in the same order (issue 35).
+    pub fn dense_columns(&self) -> Option<(&[f64], &[f64])> {
+        (self.dense && self.zone.is_none() && self.metric == Metric::Mass)
+            .then_some((&self.cg[..], &self.d[..]))
+    }
+
     /// Stores no columns for a support of more than `rows` rows (the one-step
     /// workspaces' cap): such problems are solved matrix-free, and their columns, computed
     /// `rows` solves at a time, would cost more than the products they save.

@@ -64,6 +64,11 @@ struct Cli {
     /// about 1.8× the cost of the bar's tridiagonal solve.
     #[arg(long, global = true)]
     portable_arithmetic: bool,
+    /// Keep IEEE gradual underflow (subnormal numbers) instead of flushing them to zero
+    /// on every computing thread: for a bitwise comparison with a build or peer that
+    /// keeps them, at up to several times the cost of a step on CPUs that stall on them.
+    #[arg(long, global = true)]
+    ieee_subnormals: bool,
     /// Factor and solve M̂ with MUMPS over the ranks of an MPI job (`mpirun -np N
     /// signorini run SCENE --mumps`; cargo feature `mumps`): rank 0 runs the command and
     /// the contact problems, the other ranks join MUMPS' factor and solves.
@@ -1142,7 +1147,7 @@ fn start_mumps(cli: &Cli) -> Result<Option<()>, signorini::Error> {
 /// after it: the bar's flags are accepted without a subcommand, so clap refuses any
 /// flag before one ("the subcommand 'run' cannot be used with '--mumps'", issue 34).
 fn globals_after_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
-    const GLOBALS: [&str; 2] = ["--mumps", "--portable-arithmetic"];
+    const GLOBALS: [&str; 3] = ["--mumps", "--portable-arithmetic", "--ieee-subnormals"];
     const SUBCOMMANDS: [&str; 10] = [
         "bar", "run", "check", "example", "study", "sweep", "resume", "plot", "fclib", "help",
     ];
@@ -1162,6 +1167,10 @@ fn globals_after_subcommand(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::
 fn main() -> ExitCode {
     let cli = Cli::parse_from(globals_after_subcommand(std::env::args_os().collect()));
     signorini::linalg::set_portable_arithmetic(cli.portable_arithmetic);
+    signorini::linalg::set_ieee_subnormals(cli.ieee_subnormals);
+    // every command's threads (this one and rayon's) in the run's subnormal mode; runs
+    // set it again for library callers (`run::run_scene` and friends)
+    let _flush = signorini::linalg::FlushGuard::for_run();
     // every command refuses a limit it cannot read (issue 34: ignored silently before)
     if let Err(e) = signorini::limits::memory_limit_setting() {
         err!("error: {e}");

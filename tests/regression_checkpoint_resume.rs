@@ -247,6 +247,34 @@ fn every_scheme_resumes_to_the_uninterrupted_bar() {
     }
 }
 
+/// The subnormal mode is part of the run (issue 35): a run started with
+/// `--ieee-subnormals` and killed is resumed, without the flag, in IEEE arithmetic (its
+/// summary, compared whole with the uninterrupted run's, says `ieee`), and the default
+/// run's checkpoint records `flushed`.
+#[test]
+fn the_subnormal_mode_is_resumed_with_the_run() {
+    let args = [
+        "--ieee-subnormals",
+        "bar",
+        "--elements",
+        "100",
+        "--dt",
+        "2e-6",
+        "--t-end",
+        "4e-4",
+        "--checkpoint-every",
+        "50",
+    ];
+    let s = check_resume("ieee", &args, &[120]);
+    assert_eq!(s["subnormals"], "ieee");
+    let dir = tmp("flushed-kill");
+    let o = run(&args[1..], &dir, Some(120));
+    assert!(!o.status.success());
+    let c: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("checkpoint.json")).unwrap()).unwrap();
+    assert_eq!(c["subnormals"], "flushed");
+}
+
 /// A scene copy with a shorter `t_end` (its probes' times moved within it), its mesh
 /// paths kept: its directory (removed when dropped) and the scene file.
 fn short_scene(name: &str, t_end: f64) -> (Scratch, PathBuf) {
@@ -400,7 +428,7 @@ fn missing_old_and_corrupt_checkpoints_are_named() {
     .unwrap();
     let e = err(&dir);
     assert!(
-        e.contains("version 0") && e.contains("reads version 5"),
+        e.contains("version 0") && e.contains("reads version 6"),
         "{e}"
     );
     // a real checkpoint with one vector cut short

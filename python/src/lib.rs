@@ -434,6 +434,9 @@ impl PySimulation {
     /// The statistics stay in Rust until asked for (`stats_json`): a Python loop of
     /// `step(1)` pays no conversion per step.
     fn step(&self, py: Python<'_>, n: usize) -> PyResult<usize> {
+        // the run's subnormal mode while building and stepping; this thread's own
+        // (Python's, numpy's) is put back on return
+        let _flush = signorini::linalg::FlushGuard::for_run();
         let mut g = self.lock()?;
         if g.finished.is_some() {
             return Err(PyRuntimeError::new_err(

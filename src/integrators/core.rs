@@ -640,6 +640,9 @@ macro_rules! delegate_to_core {
         fn state(&self) -> &$crate::integrators::State {
             &self.core.state
         }
+        fn state_finite(&self) -> Option<bool> {
+            self.core.state_finite
+        }
         fn system(&self) -> &$crate::model::LinearSystem {
             &self.core.sys
         }
@@ -737,6 +740,15 @@ pub struct ThetaCore {
     /// `K` as its three diagonals when it is a rod's ([`crate::linalg::TridiagonalRows`]): the free
     /// velocity's `K (q + hθ v)` without a gather per row.
     k_rows: Option<crate::linalg::TridiagonalRows>,
+    /// `q_lin` holds `y = q + hθ v` of the state, written by [`ThetaCore::form_fused`]
+    /// and read (once) by [`ThetaCore::begin_step`] instead of another pass.
+    y_ready: bool,
+    /// Whether the state's `q` and `v` are all finite, when [`ThetaCore::form_fused`]
+    /// formed them ([`super::Integrator::state_finite`]).
+    pub(crate) state_finite: Option<bool>,
+    /// The structure's constant load is `+0.0` everywhere (the bar): `begin_step` reads
+    /// it as the constant.
+    unloaded: bool,
     q_lin: Vec<f64>,
     pub(crate) v_new: Vec<f64>,
     pub(crate) q_new: Vec<f64>,
@@ -897,6 +909,7 @@ impl ThetaCore {
         workspace_ledger(rows, m, params, (friction, with_projection), &mut mem);
         mem.check("scheme.max_active_rows", format!("{ws_cap} rows"))?;
         let k_rows = crate::linalg::TridiagonalRows::new(sys.stiffness.as_ref());
+        let unloaded = crate::linalg::TridiagonalRows::is_positive_zero(&sys.force);
         let mut core = ThetaCore {
             sys: std::sync::Arc::new(sys),
             contacts,
@@ -934,6 +947,9 @@ impl ThetaCore {
             v_free: vec![0.0; n],
             work: vec![0.0; n],
             k_rows,
+            y_ready: false,
+            state_finite: None,
+            unloaded,
             q_lin: vec![0.0; n],
             v_new: vec![0.0; n],
             q_new: vec![0.0; n],
@@ -1089,12 +1105,15 @@ impl ThetaCore {
         let s = &self.state;
         // work = h f − h K (q + hθ v) − h C v; K and C are symmetric, so their CSC
         // arrays are their CSR arrays and each row is a gather.
-        for ((ql, q), v) in self.q_lin.iter_mut().zip(&s.q).zip(&s.v) {
-            *ql = q + h * th * v;
+        if !std::mem::take(&mut self.y_ready) {
+            for ((ql, q), v) in self.q_lin.iter_mut().zip(&s.q).zip(&s.v) {
+                *ql = q + h * th * v;
+            }
         }
         if let Some(rows) = &self.k_rows {
             // the rods' K: the same sums without the gather (bit for bit)
-            rows.scaled_residual(h, &self.sys.force, &self.q_lin, &mut self.work);
+            let f = (!self.unloaded).then_some(&self.sys.force[..]);
+            rows.scaled_residual(h, f, &self.q_lin, &mut self.work);
         } else {
             let k = self.sys.stiffness.as_ref();
             let (kp, ki, kv) = (k.col_ptr(), k.row_idx(), k.val());
@@ -1117,14 +1136,18 @@ impl ThetaCore {
         if let Some(c) = &self.sys.damping {
             sym_spmv_add(c.as_ref(), -h, &s.v, &mut self.work);
         }
-        self.del.factor.solve_in_place(&mut self.work);
-        for ((vf, v), w) in self.v_free.iter_mut().zip(&s.v).zip(&self.work) {
-            *vf = v + w;
-        }
+        // v_free = v_k + M̂⁻¹ work (`work` is scratch afterwards)
+        self.del
+            .factor
+            .solve_add(&mut self.work, &s.v, &mut self.v_free);
         self.u_k.copy_from_slice(&self.u_rows);
         self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
         self.del.next_epoch();
-        self.q_lin.copy_from_slice(&self.state.q);
+        // the linearization point is read only where the operators move (a copy of
+        // the state: two passes over 8 MB per step at 10⁶ dofs, issue 35)
+        if !self.operators_constant {
+            self.q_lin.copy_from_slice(&self.state.q);
+        }
         self.g_at_lin.copy_from_slice(&self.state.gap);
         Ok(())
     }
@@ -1326,7 +1349,9 @@ impl ThetaCore {
         self.p.iter_mut().for_each(|x| *x = 0.0);
         self.eq_rows.iter_mut().for_each(|x| *x = false);
         self.velocity_accuracy = 0.0;
-        self.q_lin.copy_from_slice(&self.state.q);
+        if !self.operators_constant {
+            self.q_lin.copy_from_slice(&self.state.q);
+        }
         self.g_at_lin.copy_from_slice(&self.state.gap);
         for (k, &d) in self.zone.iter().enumerate() {
             self.zq_k[k] = self.state.q[d];
@@ -2074,6 +2099,10 @@ impl ThetaCore {
         } else {
             0.0
         };
+        self.state_finite = None;
+        if self.operators_constant && self.form_fused(kfac) {
+            return;
+        }
         self.del.add_velocity_correction(
             &self.p,
             kfac,
@@ -2087,6 +2116,68 @@ impl ThetaCore {
             *qn = q + h * ((1.0 - th) * v + th * vn);
         }
         self.del.add_position_correction(&self.tau, &mut self.q_new);
+    }
+
+    /// [`ThetaCore::form`] in one pass over the state where the corrections are dense
+    /// columns ([`Delassus::dense_columns`]) and at most one row carries each of `P`,
+    /// `τ_used` (with feedback) and `τ` (a bar's tip, a few nodes on a plane, one at a
+    /// time): per dof the same operations in the same order as the axpys of the general
+    /// path, so the same bits, with the next step's `y = q + hθ v` written alongside
+    /// (`q_lin`, read by [`ThetaCore::begin_step`]). At 10⁶ dofs the separate passes
+    /// read and wrote the state four more times per step than a C loop of it (issue 35).
+    /// Returns false (nothing done) where the general path must run.
+    fn form_fused(&mut self, kfac: f64) -> bool {
+        let Some((cg, d)) = self.del.dense_columns() else {
+            return false;
+        };
+        let n = self.n;
+        // the one nonzero row of each vector, if one: (column offset, scale)
+        let one = |x: &[f64], s: f64| -> Result<Option<(usize, f64)>, ()> {
+            let mut it = x.iter().enumerate().filter(|(_, v)| **v != 0.0);
+            match (it.next(), it.next()) {
+                (None, _) => Ok(None),
+                (Some((a, &v)), None) => Ok(Some((a * n, s * v))),
+                _ => Err(()),
+            }
+        };
+        let (Ok(p), Ok(fb), Ok(t)) = (
+            one(&self.p, 1.0),
+            if kfac != 0.0 {
+                one(&self.tau_used, kfac)
+            } else {
+                Ok(None)
+            },
+            one(&self.tau, 1.0),
+        ) else {
+            return false;
+        };
+        if fb.is_some() && d.len() < cg.len() {
+            return false;
+        }
+        let s = &self.state;
+        let cols = [(p, cg), (fb, d), (t, cg)].map(|(c, src)| match c {
+            Some((o, k)) => (&src[o..o + n], k),
+            None => (&s.q[..], 0.0),
+        });
+        let out = (
+            &mut self.q_new[..],
+            &mut self.v_new[..],
+            &mut self.q_lin[..],
+        );
+        let args = (&s.q[..], &s.v[..], out, cols, (self.h, self.theta));
+        let finite = match (p.is_some(), fb.is_some(), t.is_some()) {
+            (false, false, false) => fused_update::<false, false, false>(args),
+            (true, false, false) => fused_update::<true, false, false>(args),
+            (false, true, false) => fused_update::<false, true, false>(args),
+            (true, true, false) => fused_update::<true, true, false>(args),
+            (false, false, true) => fused_update::<false, false, true>(args),
+            (true, false, true) => fused_update::<true, false, true>(args),
+            (false, true, true) => fused_update::<false, true, true>(args),
+            (true, true, true) => fused_update::<true, true, true>(args),
+        };
+        self.state_finite = Some(finite);
+        self.y_ready = true;
+        true
     }
 
     /// [`ThetaCore::form`] on the contact zone only (`zq_new`): with `G = S B` the gaps and
@@ -2123,6 +2214,7 @@ impl ThetaCore {
         s: &crate::integrators::saved::IntegratorState,
     ) -> Result<(), Error> {
         self.state.restore(scheme, s)?;
+        self.y_ready = false;
         self.contacts.restart(&self.state.q);
         self.contacts
             .update(&self.state.q)
@@ -2328,6 +2420,50 @@ pub(crate) fn newton_change(
     }
 }
 
+/// The arguments of [`fused_update`]: `q_k`, `v_k`, the outputs (`q_new`, `v_new`
+/// holding `v_free` on entry, `y`), the three columns with their scales (the impulse's
+/// `Â⁻¹G`, the feedback's `Â⁻¹K N G`, the projection's `Â⁻¹G`; unused ones any slice of
+/// length `n`) and `(h, θ)`.
+type FusedArgs<'a> = (
+    &'a [f64],
+    &'a [f64],
+    (&'a mut [f64], &'a mut [f64], &'a mut [f64]),
+    [(&'a [f64], f64); 3],
+    (f64, f64),
+);
+
+/// One pass of [`ThetaCore::form_fused`]: `v += k_P c_P + k_F c_F`,
+/// `q = q_k + h((1 − θ) v_k + θ v) + k_τ c_τ`, `y = q + hθ v`, each term where its
+/// const flag is set, in the order of the general path's axpys. Returns whether every
+/// new `q` and `v` is finite (an integer test of the exponent bits, which vectorizes).
+#[inline(never)]
+fn fused_update<const P: bool, const F: bool, const T: bool>(args: FusedArgs<'_>) -> bool {
+    const EXP: u64 = 0x7ff0_0000_0000_0000;
+    let (q, v, (qn, vn, y), [(cp, kp), (cf, kf), (ct, kt)], (h, th)) = args;
+    let n = q.len();
+    assert!(v.len() == n && qn.len() == n && vn.len() == n && y.len() == n);
+    assert!(cp.len() == n && cf.len() == n && ct.len() == n);
+    let mut bad = 0u64;
+    for i in 0..n {
+        let mut a = vn[i];
+        if P {
+            a += kp * cp[i];
+        }
+        if F {
+            a += kf * cf[i];
+        }
+        let mut b = q[i] + h * ((1.0 - th) * v[i] + th * a);
+        if T {
+            b += kt * ct[i];
+        }
+        vn[i] = a;
+        qn[i] = b;
+        y[i] = b + h * th * a;
+        bad |= u64::from(a.to_bits() & EXP == EXP) | u64::from(b.to_bits() & EXP == EXP);
+    }
+    bad == 0
+}
+
 /// Refuses a `max_active_rows` that cannot hold one contact block (the dense one-step
 /// workspaces gather whole blocks).
 pub(crate) fn check_block_rows(
@@ -2473,4 +2609,98 @@ pub(crate) fn check_vector(field: &str, x: &[f64], n: usize) -> Result<(), Error
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fused pass gives the bits of the general path's separate passes (the axpys of
+    /// `Delassus::add_velocity_correction` and `add_position_correction` around the
+    /// update loop) for every combination of terms, and reports a non-finite `q` or `v`
+    /// (the run's checks then skip their own scan: it must not miss one).
+    #[test]
+    fn fused_update_matches_the_separate_passes_and_finds_non_finite_values() {
+        let n = 37;
+        let wave = |k: f64| -> Vec<f64> { (0..n).map(|i| (k * i as f64).sin() * 1e-3).collect() };
+        let (q, v, vf) = (wave(0.3), wave(0.7), wave(1.1));
+        let (cp, cf, ct) = (wave(1.7), wave(2.3), wave(2.9));
+        let (kp, kf, kt, h, th) = (3.7, -1.3e-7, 0.9, 2e-7, 0.5);
+        for mask in 0..8 {
+            let (p, f, t) = (mask & 1 != 0, mask & 2 != 0, mask & 4 != 0);
+            // the general path
+            let mut v1 = vf.clone();
+            if p {
+                v1.iter_mut().zip(&cp).for_each(|(y, x)| *y += kp * x);
+            }
+            if f {
+                v1.iter_mut().zip(&cf).for_each(|(y, x)| *y += kf * x);
+            }
+            let mut q1: Vec<f64> = (0..n)
+                .map(|i| q[i] + h * ((1.0 - th) * v[i] + th * v1[i]))
+                .collect();
+            if t {
+                q1.iter_mut().zip(&ct).for_each(|(y, x)| *y += kt * x);
+            }
+            let y1: Vec<f64> = (0..n).map(|i| q1[i] + h * th * v1[i]).collect();
+            // the fused pass
+            let (mut q2, mut v2, mut y2) = (vec![0.0; n], vf.clone(), vec![0.0; n]);
+            let cols = [(&cp[..], kp), (&cf[..], kf), (&ct[..], kt)];
+            let args = (
+                &q[..],
+                &v[..],
+                (&mut q2[..], &mut v2[..], &mut y2[..]),
+                cols,
+                (h, th),
+            );
+            let finite = match (p, f, t) {
+                (false, false, false) => fused_update::<false, false, false>(args),
+                (true, false, false) => fused_update::<true, false, false>(args),
+                (false, true, false) => fused_update::<false, true, false>(args),
+                (true, true, false) => fused_update::<true, true, false>(args),
+                (false, false, true) => fused_update::<false, false, true>(args),
+                (true, false, true) => fused_update::<true, false, true>(args),
+                (false, true, true) => fused_update::<false, true, true>(args),
+                (true, true, true) => fused_update::<true, true, true>(args),
+            };
+            assert!(finite);
+            for (a, b) in [(&q1, &q2), (&v1, &v2), (&y1, &y2)] {
+                assert!(
+                    a.iter()
+                        .zip(b.iter())
+                        .all(|(x, y)| x.to_bits() == y.to_bits())
+                );
+            }
+        }
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            for at in [0, 17, n - 1] {
+                let mut vb = vf.clone();
+                vb[at] = bad;
+                let (mut q2, mut v2, mut y2) = (vec![0.0; n], vb, vec![0.0; n]);
+                let cols = [(&cp[..], kp), (&cf[..], kf), (&ct[..], kt)];
+                let args = (
+                    &q[..],
+                    &v[..],
+                    (&mut q2[..], &mut v2[..], &mut y2[..]),
+                    cols,
+                    (h, th),
+                );
+                assert!(!fused_update::<false, false, false>(args), "{bad} at {at}");
+            }
+        }
+        // a finite v whose q overflows
+        let mut q2 = vec![0.0; n];
+        let (mut v2, mut y2) = (vf.clone(), vec![0.0; n]);
+        let mut qb = q.clone();
+        qb[5] = f64::MAX;
+        let cols = [(&cp[..], kp), (&cf[..], kf), (&ct[..], 1e300)];
+        let args = (
+            &qb[..],
+            &v[..],
+            (&mut q2[..], &mut v2[..], &mut y2[..]),
+            cols,
+            (h, th),
+        );
+        assert!(!fused_update::<false, false, true>(args) || q2.iter().all(|x| x.is_finite()));
+    }
 }

@@ -211,6 +211,12 @@ pub trait Integrator: Send {
     }
     /// The current state.
     fn state(&self) -> &State;
+    /// Whether every displacement and velocity of the state is finite, when the last
+    /// step found out while forming it (`None`: not known, the caller scans). Saves
+    /// the run's checks a pass over the state (issue 35).
+    fn state_finite(&self) -> Option<bool> {
+        None
+    }
     /// The mechanical system being integrated.
     fn system(&self) -> &LinearSystem;
     /// The same system, shared: nothing changes it after the build, so a writer thread

@@ -946,9 +946,12 @@ impl FrameStream {
                 .send(Snapshot::with_statuses(n, m, statuses))
                 .expect("the pool channel holds `pool` snapshots");
         }
+        // the spawning run's subnormal mode (inherited on Linux; set, not assumed)
+        let flush = crate::linalg::subnormals::current_thread();
         let thread = std::thread::Builder::new()
             .name("signorini-frames".into())
             .spawn(move || {
+                crate::linalg::subnormals::apply_to_current_thread(flush);
                 for job in work_rx {
                     // the run may have stopped listening (it failed); that is its report
                     match job {

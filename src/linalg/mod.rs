@@ -11,6 +11,8 @@
 //! - [`Arithmetic`]: fused multiply-add in the tridiagonal solve where the CPU has it
 //!   (pulp's run-time dispatch), or the portable arithmetic that gives the same bits on
 //!   every CPU ([`set_portable_arithmetic`]).
+//! - [`subnormals`]: subnormal numbers flushed to zero on every computing thread of a
+//!   run ([`FlushGuard`]), or IEEE gradual underflow ([`set_ieee_subnormals`]).
 //! - [`spmv`] / [`spmv_add`] / [`sym_spmv_add`]: `y = A x` for a CSC matrix. Written here rather than
 //!   calling `faer::sparse::linalg::matmul::sparse_dense_matmul` because the vectors
 //!   are plain slices owned by the integrator and the loop is five lines; faer's
@@ -24,8 +26,10 @@
 #[cfg(feature = "mumps")]
 pub mod mumps;
 pub mod solver;
+pub mod subnormals;
 
 pub use solver::{LinearSolver, SolverKind};
+pub use subnormals::{FlushGuard, Subnormals, set_ieee_subnormals, subnormals};
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
@@ -281,6 +285,66 @@ impl Tridiagonal {
             x[i] = xn;
         }
     }
+
+    /// `out = base + A⁻¹ x` with the sum formed in the backward sweep (`x` keeps the
+    /// forward sweep's values): the same operations as [`Tridiagonal::solve`] then the
+    /// sum, in one pass fewer.
+    fn solve_add(&self, x: &mut [f64], base: &[f64], out: &mut [f64]) {
+        let n = x.len();
+        if n == 0 {
+            return;
+        }
+        assert!(base.len() == n && out.len() == n && self.l.len() == n && self.dinv.len() == n);
+        if self.fused {
+            return pulp::Arch::new().dispatch(FusedSolveAdd {
+                l: &self.l,
+                dinv: &self.dinv,
+                x,
+                base,
+                out,
+            });
+        }
+        let mut y = x[0];
+        for i in 1..n {
+            y = x[i] - self.l[i] * y;
+            x[i] = y;
+        }
+        let mut xn = x[n - 1] * self.dinv[n - 1];
+        out[n - 1] = base[n - 1] + xn;
+        for i in (0..n - 1).rev() {
+            xn = x[i] * self.dinv[i] - self.l[i + 1] * xn;
+            out[i] = base[i] + xn;
+        }
+    }
+}
+
+/// [`FusedSolve`] with the sum of [`Tridiagonal::solve_add`] in its backward sweep.
+struct FusedSolveAdd<'a> {
+    l: &'a [f64],
+    dinv: &'a [f64],
+    x: &'a mut [f64],
+    base: &'a [f64],
+    out: &'a mut [f64],
+}
+
+impl pulp::WithSimd for FusedSolveAdd<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let (l, dinv, x, base, out) = (self.l, self.dinv, self.x, self.base, self.out);
+        let n = x.len();
+        let mut y = x[0];
+        for i in 1..n {
+            y = (-l[i]).mul_add(y, x[i]);
+            x[i] = y;
+        }
+        let mut xn = x[n - 1] * dinv[n - 1];
+        out[n - 1] = base[n - 1] + xn;
+        for i in (0..n - 1).rev() {
+            xn = (-l[i + 1]).mul_add(xn, x[i] * dinv[i]);
+            out[i] = base[i] + xn;
+        }
+    }
 }
 
 /// `L` without its diagonal (CSC) plus the inverse diagonal, extracted from faer's
@@ -486,6 +550,20 @@ impl SpdFactor {
         let llt = LltRef::<usize, f64>::new(&f.symbolic, &f.values);
         let rhs = MatMut::from_column_major_slice_mut(x, self.n, 1);
         llt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(&mut f.mem));
+    }
+
+    /// `out = base + A⁻¹ x` ([`LinearSolver::solve_add`]): the tridiagonal factor adds
+    /// within its backward sweep and leaves `x` holding the forward sweep's values; the
+    /// others solve in place, then add. The same bits either way.
+    pub fn solve_add(&mut self, x: &mut [f64], base: &[f64], out: &mut [f64]) {
+        debug_assert!(x.len() == self.n && base.len() == self.n && out.len() == self.n);
+        if let Backend::Tridiagonal(t) = &self.backend {
+            return t.solve_add(x, base, out);
+        }
+        self.solve_in_place(x);
+        for ((o, b), d) in out.iter_mut().zip(base).zip(x.iter()) {
+            *o = b + d;
+        }
     }
 
     /// Overwrites the `k` columns of the column-major `n × k` block `x` with `A⁻¹ x`,
@@ -711,7 +789,8 @@ impl QuadraticForm {
             QuadraticForm::General => quadratic_form(a, x),
             QuadraticForm::Tridiagonal(rows) => {
                 // row i of a symmetric matrix is its column i
-                let (above, diag, below) = (&rows.left, &rows.diag, &rows.right);
+                // a_{i,i+1} = a_{i+1,i}: the row below's left value
+                let (above, diag, below) = (&rows.left, &rows.diag, &rows.left[1..]);
                 let n = x.len();
                 debug_assert_eq!(diag.len(), n);
                 // the first and last columns miss a neighbour
@@ -755,8 +834,8 @@ pub struct TridiagonalRows {
     left: Vec<f64>,
     /// `a_ii`.
     diag: Vec<f64>,
-    /// `a_{i,i+1}` (0 for the last row).
-    right: Vec<f64>,
+    // `a_{i,i+1}` is `left[i + 1]` (symmetry, checked bit for bit): one array fewer to
+    // stream per step (issue 35)
 }
 
 impl TridiagonalRows {
@@ -786,26 +865,45 @@ impl TridiagonalRows {
         }
         // a_{j+1,j} (below the diagonal of column j) = a_{j,j+1} (above in column j+1)
         let symmetric = (0..n - 1).all(|j| right[j].to_bits() == left[j + 1].to_bits());
-        symmetric.then_some(TridiagonalRows { left, diag, right })
+        symmetric.then_some(TridiagonalRows { left, diag })
     }
 
     /// `out_i = h (f_i − (K x)_i)`, each row summed as the CSC gather of the same matrix
-    /// would (bit for bit). Does not allocate.
-    pub fn scaled_residual(&self, h: f64, f: &[f64], x: &[f64], out: &mut [f64]) {
+    /// would (bit for bit); `f = None` for a load that is `+0.0` everywhere (read as the
+    /// constant, not from memory: the same bits). Does not allocate.
+    pub fn scaled_residual(&self, h: f64, f: Option<&[f64]>, x: &[f64], out: &mut [f64]) {
         let n = x.len();
-        debug_assert!(n >= 2 && f.len() == n && out.len() == n && self.diag.len() == n);
-        let (l, d, r) = (&self.left, &self.diag, &self.right);
+        debug_assert!(n >= 2 && out.len() == n && self.diag.len() == n);
+        debug_assert!(f.is_none_or(|f| f.len() == n));
+        let (l, d, r) = (&self.left, &self.diag, &self.left[1..]);
+        let fi = |i: usize| f.map_or(0.0, |f| f[i]);
         let row2 = |a: f64, b: f64| -> f64 { [a, b].into_iter().sum() };
-        out[0] = h * (f[0] - row2(d[0] * x[0], r[0] * x[1]));
+        out[0] = h * (fi(0) - row2(d[0] * x[0], r[0] * x[1]));
         let m = n - 1;
-        pulp::Arch::new().dispatch(InteriorRows {
-            h,
-            out: &mut out[1..m],
-            f: &f[1..m],
-            lr: (&l[1..m], &d[1..m], &r[1..m]),
-            x,
-        });
-        out[n - 1] = h * (f[n - 1] - row2(l[n - 1] * x[n - 2], d[n - 1] * x[n - 1]));
+        let lr = (&l[1..m], &d[1..m], &r[1..m]);
+        let out_m = &mut out[1..m];
+        match f {
+            Some(f) => pulp::Arch::new().dispatch(InteriorRows {
+                h,
+                out: out_m,
+                f: &f[1..m],
+                lr,
+                x,
+            }),
+            None => pulp::Arch::new().dispatch(InteriorRowsUnloaded {
+                h,
+                out: out_m,
+                lr,
+                x,
+            }),
+        }
+        out[n - 1] = h * (fi(n - 1) - row2(l[n - 1] * x[n - 2], d[n - 1] * x[n - 1]));
+    }
+
+    /// Whether every value of `f` is `+0.0` (what [`TridiagonalRows::scaled_residual`]
+    /// may then read as the constant).
+    pub fn is_positive_zero(f: &[f64]) -> bool {
+        f.iter().all(|x| x.to_bits() == 0)
     }
 }
 
@@ -836,6 +934,33 @@ impl pulp::WithSimd for InteriorRows<'_> {
         for (((o, &fi), ((&li, &di), &ri)), ((&xl, &xc), &xr)) in rows {
             let kx: f64 = [li * xl, di * xc, ri * xr].into_iter().sum();
             *o = h * (fi - kx);
+        }
+    }
+}
+
+/// [`InteriorRows`] with a load of `+0.0` everywhere: `h (0 − (K x)_i)`, the same bits
+/// without the load's stream.
+struct InteriorRowsUnloaded<'a> {
+    h: f64,
+    out: &'a mut [f64],
+    lr: (&'a [f64], &'a [f64], &'a [f64]),
+    x: &'a [f64],
+}
+
+impl pulp::WithSimd for InteriorRowsUnloaded<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let (h, x, (l, d, r)) = (self.h, self.x, self.lr);
+        let m = x.len() - 1;
+        let rows = self
+            .out
+            .iter_mut()
+            .zip(l.iter().zip(d).zip(r))
+            .zip(x[..m - 1].iter().zip(&x[1..m]).zip(&x[2..]));
+        for ((o, ((&li, &di), &ri)), ((&xl, &xc), &xr)) in rows {
+            let kx: f64 = [li * xl, di * xc, ri * xr].into_iter().sum();
+            *o = h * (0.0 - kx);
         }
     }
 }
@@ -1402,9 +1527,17 @@ mod tests {
             ] {
                 let (mut a1, mut a2) = (vec![7.0; n], vec![7.0; n]);
                 gather(&f, &x, &mut a1);
-                rows.scaled_residual(1e-3, &f, &x, &mut a2);
+                rows.scaled_residual(1e-3, Some(&f), &x, &mut a2);
                 for (p, q) in a1.iter().zip(&a2) {
                     assert_eq!(p.to_bits(), q.to_bits(), "{a1:?} vs {a2:?}");
+                }
+                // a load of +0.0 read as the constant: the same bits (signed zeros too)
+                if TridiagonalRows::is_positive_zero(&f) {
+                    let mut a3 = vec![7.0; n];
+                    rows.scaled_residual(1e-3, None, &x, &mut a3);
+                    for (p, q) in a1.iter().zip(&a3) {
+                        assert_eq!(p.to_bits(), q.to_bits(), "{a1:?} vs {a3:?}");
+                    }
                 }
             }
         }

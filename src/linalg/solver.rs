@@ -54,6 +54,16 @@ pub trait LinearSolver: Send {
     fn refactor(&mut self, a: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<(), Error>;
     /// Overwrites `x` with `A⁻¹ x`.
     fn solve_in_place(&mut self, x: &mut [f64]);
+    /// `out = base + A⁻¹ x`, leaving `x` as scratch (its content afterwards is not
+    /// specified): the free velocity `v_free = v_k + M̂⁻¹ r` of every linear step. The
+    /// tridiagonal factor forms it within its backward sweep (one pass over the state
+    /// fewer, issue 35); every backend gives the bits of `solve_in_place` then the sum.
+    fn solve_add(&mut self, x: &mut [f64], base: &[f64], out: &mut [f64]) {
+        self.solve_in_place(x);
+        for ((o, b), d) in out.iter_mut().zip(base).zip(x.iter()) {
+            *o = b + d;
+        }
+    }
     /// Overwrites the `k` columns of the column-major `n × k` block `x` with `A⁻¹ x`,
     /// each column alone, so that its result does not depend on the others'.
     fn solve_columns_independently(&mut self, x: &mut [f64], k: usize) {
@@ -97,6 +107,9 @@ impl LinearSolver for SpdFactor {
     }
     fn solve_in_place(&mut self, x: &mut [f64]) {
         SpdFactor::solve_in_place(self, x)
+    }
+    fn solve_add(&mut self, x: &mut [f64], base: &[f64], out: &mut [f64]) {
+        SpdFactor::solve_add(self, x, base, out)
     }
     fn solve_columns_independently(&mut self, x: &mut [f64], k: usize) {
         SpdFactor::solve_columns_independently(self, x, k)

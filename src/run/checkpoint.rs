@@ -17,7 +17,7 @@
 //!   frames, then appended to. Nothing in it grows with the number of steps (version
 //!   3: version 2 held the per-step force trace and every frame's time). Version 4
 //!   adds the friction fallback and complementarity fallback counters and the energy
-//!   balance; version 5 the digest.
+//!   balance; version 5 the digest; version 6 the subnormal mode.
 //!
 //! What a checkpoint guards (since version 2): the build that wrote it, the output directory it
 //! belongs to, and the size and SHA-256 of every input file (the scene file and its mesh
@@ -43,7 +43,7 @@ use crate::integrators::saved::{Bits, Floats, IntegratorState};
 /// The format name in every checkpoint.
 pub const FORMAT: &str = "signorini-checkpoint";
 /// The format version this build writes and reads.
-pub const VERSION: u32 = 5;
+pub const VERSION: u32 = 6;
 /// The checkpoint's file name in a run directory.
 pub const FILE: &str = "checkpoint.json";
 
@@ -237,6 +237,9 @@ pub struct Checkpoint {
     /// resumed run takes the same, so that it ends byte for byte as the uninterrupted one.
     #[serde(default = "portable")]
     pub arithmetic: crate::linalg::Arithmetic,
+    /// What the run's threads did with subnormal numbers
+    /// ([`crate::linalg::subnormals`]): a resumed run does the same.
+    pub subnormals: crate::linalg::Subnormals,
     /// SHA-256 of the rest of the checkpoint (every field but this one and `out_dir`,
     /// which `verify` checks itself), set by [`Checkpoint::write`]: `resume` refuses a
     /// checkpoint edited or damaged after it was written (issue 34: a NaN

@@ -66,9 +66,12 @@ impl HistoryThread {
                 .expect("the pool channel holds POOL buffers");
         }
         let mut scratch = vec![0.0; 2 * sys.prescribed_dofs()];
+        // the spawning run's subnormal mode (inherited on Linux; set, not assumed)
+        let flush = crate::linalg::subnormals::current_thread();
         let thread = std::thread::Builder::new()
             .name("signorini-history".into())
             .spawn(move || {
+                crate::linalg::subnormals::apply_to_current_thread(flush);
                 for job in work_rx {
                     match job {
                         Job::Row(row) => {

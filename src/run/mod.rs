@@ -73,6 +73,7 @@ fn run_bar_from(
     progress: &mut dyn Progress,
     resume: Option<&Checkpoint>,
 ) -> Result<RunResult, Error> {
+    let _flush = crate::linalg::FlushGuard::for_run();
     let t0 = Instant::now();
     progress.phase("building the model");
     let mut model = scene.build()?;
@@ -128,6 +129,7 @@ fn run_scene_from(
     progress: &mut dyn Progress,
     resume: Option<&Checkpoint>,
 ) -> Result<RunResult, Error> {
+    let _flush = crate::linalg::FlushGuard::for_run();
     let t0 = Instant::now();
     progress.phase("building the model (mesh, assembly, contacts)");
     let (mut model, report) = scene.build()?;
@@ -204,6 +206,20 @@ pub fn resume(dir: &Path, progress: &mut dyn Progress) -> Result<RunResult, Erro
             ));
         }
         a => crate::linalg::set_portable_arithmetic(a == crate::linalg::Arithmetic::Portable),
+    }
+    // and its subnormal mode (the guard of the run rebuilt below applies it)
+    match c.subnormals {
+        crate::linalg::Subnormals::Flushed if !crate::linalg::subnormals::flush_supported() => {
+            return Err(Error::bad_file(
+                dir.join(checkpoint::FILE),
+                "`subnormals`",
+                "flushed: the run flushed subnormal numbers to zero and this build cannot \
+                 on this CPU, so the resumed steps would round differently; resume on an \
+                 x86-64 or aarch64 machine"
+                    .to_string(),
+            ));
+        }
+        m => crate::linalg::set_ieee_subnormals(m == crate::linalg::Subnormals::Ieee),
     }
     let out = Output {
         dir,
@@ -551,6 +567,9 @@ pub fn run_checkpointed(
         energy_balance,
         probes: probes.summaries(reference.as_ref()),
         arithmetic: crate::linalg::arithmetic().name().to_string(),
+        subnormals: crate::linalg::subnormals::current_thread()
+            .name()
+            .to_string(),
         history_thread,
         path: integ.path(),
         model_seconds: 0.0,

@@ -392,6 +392,7 @@ impl RunObserver {
             out_dir: p.out_dir.clone(),
             inputs: p.inputs.clone(),
             arithmetic: crate::linalg::arithmetic(),
+            subnormals: crate::linalg::subnormals::current_thread(),
             digest: String::new(),
         }
         .write(&p.dir)

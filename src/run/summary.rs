@@ -206,6 +206,10 @@ pub struct Summary {
     /// or `portable` (`--portable-arithmetic`, or a CPU without FMA: the same bits on
     /// every CPU); see [`crate::linalg::Arithmetic`].
     pub arithmetic: String,
+    /// What the run's threads did with subnormal numbers: `flushed` to zero (the
+    /// default) or `ieee` (`--ieee-subnormals`, or a CPU without the control); see
+    /// [`crate::linalg::subnormals`].
+    pub subnormals: String,
     /// The displacement probes (a scene's `[[probes]]`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub probes: Vec<super::probes::ProbeSummary>,
