@@ -97,8 +97,9 @@ enum Command {
         quiet: bool,
     },
     /// Run a study: the paper's, on its academic examples (convergence,
-    /// projection-multiplier, chattering, energy), or the impacting bar's
-    /// (speed-accuracy, extremes). Writes CSV, plots and verdict lines.
+    /// projection-multiplier, chattering, energy), the impacting bar's (speed-accuracy,
+    /// extremes), the slider–crank's, or the costs per size (costs). Writes CSV, plots
+    /// and verdict lines.
     Study {
         /// The study.
         name: String,
@@ -245,6 +246,12 @@ struct SweepRunArgs {
     /// the table.
     #[arg(long, conflicts_with = "shard")]
     mpi: bool,
+    /// Points run at the same time, each on its share of the cores (default: one per
+    /// core; 1 with --repeat > 1, whose timing medians want each point alone, and with
+    /// --mpi, whose ranks fill the cores). Every point's record is the same with any
+    /// value, times and peak memory aside.
+    #[arg(long, value_name = "N")]
+    jobs: Option<usize>,
     /// Print only one line per run.
     #[arg(long)]
     quiet: bool,
@@ -948,6 +955,18 @@ fn sweep(a: &SweepArgs) -> Result<(), signorini::Error> {
             spec.repeat.unwrap_or(1)
         );
     }
+    let jobs = match r.jobs {
+        Some(j) if !(1..=sweep::MAX_JOBS).contains(&j) => {
+            return Err(signorini::Error::invalid(
+                "--jobs",
+                j.to_string(),
+                &format!("expected 1 to {} points at the same time", sweep::MAX_JOBS),
+            ));
+        }
+        Some(j) => j,
+        None if r.mpi => 1,
+        None => 0,
+    };
     let job = sweep::Sweep {
         source,
         set: r.set.clone(),
@@ -955,6 +974,7 @@ fn sweep(a: &SweepArgs) -> Result<(), signorini::Error> {
         dir: dir.clone(),
         resume: r.resume,
         shard,
+        jobs,
     };
     let v = if r.mpi {
         #[cfg(feature = "mpi")]

@@ -27,6 +27,7 @@ fn sweep(dir: &Path, set: Vec<String>, spec: SweepSpec, source: Source) -> Resul
         dir: dir.to_path_buf(),
         resume: false,
         shard: None,
+        jobs: 0,
     }
     .run(&mut c)
     .map(|_| c.0)
@@ -216,6 +217,7 @@ fn sweeps_touch_only_their_own_records() {
             dir: sh.clone(),
             resume: false,
             shard: Some(Shard { index: i, count: 2 }),
+            jobs: 0,
         }
         .run(&mut c)
         .unwrap();

@@ -34,6 +34,7 @@ fn sweep_into(dir: &Path, shard: Option<Shard>, resume: bool) -> (Vec<String>, u
         dir: dir.to_path_buf(),
         resume,
         shard,
+        jobs: 0,
     }
     .run(&mut c)
     .unwrap();
@@ -157,6 +158,7 @@ fn shards_merge_into_the_unsharded_table_and_resume_skips_recorded_runs() {
         dir: whole.clone(),
         resume: true,
         shard: None,
+        jobs: 0,
     }
     .run(&mut Count(0))
     .unwrap_err()
@@ -201,6 +203,7 @@ fn without_a_closed_form_the_finest_run_is_the_reference() {
         dir: dir.clone(),
         resume: false,
         shard: None,
+        jobs: 0,
     }
     .run(&mut c)
     .unwrap();
@@ -266,6 +269,7 @@ fn bad_sweeps_are_named_before_any_run() {
             dir,
             resume: false,
             shard: None,
+            jobs: 0,
         }
         .run(&mut c)
         .unwrap_err();
@@ -463,6 +467,7 @@ fn probes_on_the_bar_are_compared_with_the_closed_form() {
         dir: dir.clone(),
         resume: false,
         shard: None,
+        jobs: 0,
     }
     .run(&mut Count(0))
     .unwrap();

@@ -11,7 +11,7 @@
 //! - [`Arithmetic`]: fused multiply-add in the tridiagonal solve where the CPU has it
 //!   (pulp's run-time dispatch), or the portable arithmetic that gives the same bits on
 //!   every CPU ([`set_portable_arithmetic`]).
-//! - [`subnormals`]: subnormal numbers flushed to zero on every computing thread of a
+//! - [`subnormals`](mod@subnormals): subnormal numbers flushed to zero on every computing thread of a
 //!   run ([`FlushGuard`]), or IEEE gradual underflow ([`set_ieee_subnormals`]).
 //! - [`spmv`] / [`spmv_add`] / [`sym_spmv_add`]: `y = A x` for a CSC matrix. Written here rather than
 //!   calling `faer::sparse::linalg::matmul::sparse_dense_matmul` because the vectors

@@ -238,7 +238,7 @@ pub struct Checkpoint {
     #[serde(default = "portable")]
     pub arithmetic: crate::linalg::Arithmetic,
     /// What the run's threads did with subnormal numbers
-    /// ([`crate::linalg::subnormals`]): a resumed run does the same.
+    /// ([`crate::linalg::subnormals`](mod@crate::linalg::subnormals)): a resumed run does the same.
     pub subnormals: crate::linalg::Subnormals,
     /// SHA-256 of the rest of the checkpoint (every field but this one and `out_dir`,
     /// which `verify` checks itself), set by [`Checkpoint::write`]: `resume` refuses a

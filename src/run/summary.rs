@@ -208,7 +208,7 @@ pub struct Summary {
     pub arithmetic: String,
     /// What the run's threads did with subnormal numbers: `flushed` to zero (the
     /// default) or `ieee` (`--ieee-subnormals`, or a CPU without the control); see
-    /// [`crate::linalg::subnormals`].
+    /// [`crate::linalg::subnormals`](mod@crate::linalg::subnormals).
     pub subnormals: String,
     /// The displacement probes (a scene's `[[probes]]`).
     #[serde(skip_serializing_if = "Vec::is_empty")]

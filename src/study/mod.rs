@@ -28,9 +28,12 @@
 //! brief's extremes, 10⁶ elements included). The slider–crank of sec. 6.3.1 has
 //! `slider-crank` in [`slider_crank`] (Table 3, Figs. 21–24). `extremes` on a scene file
 //! (`signorini study extremes SCENE`) is [`extremes`]: every scheme at the scene's
-//! step ×1/8 … ×8, e = 0 and 1, θ = 1/2 and 1, stiffness ×1e-3 and ×1e3.
+//! step ×1/8 … ×8, e = 0 and 1, θ = 1/2 and 1, stiffness ×1e-3 and ×1e3. `costs`
+//! ([`costs`]) measures a step, a set-up and the memory per size (bars of 10³ … 10⁶
+//! elements, hex8 cubes of 4³ … 16³ cells), in contact and in flight.
 
 pub mod bar;
+pub mod costs;
 pub mod extremes;
 pub mod slider_crank;
 pub mod sweep;
@@ -49,7 +52,7 @@ use crate::model::point_mass::{oscillator, point_mass, rigid_block};
 use crate::plot::{Curve, lines};
 
 /// The studies `signorini study` knows.
-pub const NAMES: [&str; 7] = [
+pub const NAMES: [&str; 8] = [
     "convergence",
     "projection-multiplier",
     "chattering",
@@ -57,6 +60,7 @@ pub const NAMES: [&str; 7] = [
     "speed-accuracy",
     "extremes",
     "slider-crank",
+    "costs",
 ];
 
 /// A run of the ball: per step the time at the end of the step, height, velocity,
@@ -669,6 +673,7 @@ pub fn run(name: &str, dir: &Path) -> Result<Vec<String>, Error> {
         "speed-accuracy" => bar::speed_accuracy(dir)?,
         "extremes" => bar::extremes(dir)?,
         "slider-crank" => slider_crank::study(dir)?,
+        "costs" => costs::costs(dir)?,
         other => {
             return Err(Error::invalid(
                 "study",

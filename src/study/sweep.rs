@@ -58,6 +58,9 @@ pub const TRACE_SAMPLES: usize = 512;
 /// Largest grid a sweep expands (points).
 pub const MAX_POINTS: usize = 100_000;
 
+/// Most points a sweep runs at the same time (`--jobs`): a thread and a rayon pool each.
+pub const MAX_JOBS: usize = 1024;
+
 /// Accuracy levels of the verdict when the sweep names none.
 pub const DEFAULT_LEVELS: [f64; 3] = [1e-1, 1e-2, 1e-3];
 
@@ -1192,6 +1195,15 @@ impl Shard {
     }
 }
 
+/// What [`Sweep::run_parallel`] reports against: the records' directory, the worker
+/// (shard) index, the points of this process and their total weight.
+struct Jobs<'a> {
+    dir: Option<&'a Path>,
+    worker: usize,
+    total: usize,
+    total_weight: f64,
+}
+
 /// What `grid.json` holds: the sweep's identity, checked on resume and merge.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Grid {
@@ -1225,6 +1237,23 @@ pub struct Sweep {
     pub resume: bool,
     /// Run only this shard's points.
     pub shard: Option<Shard>,
+    /// Points run at the same time, each on its share of the cores in a rayon pool of
+    /// its own (`--jobs`); 0 picks [`default_jobs`]. A point's record is the same bit
+    /// for bit with any value, but for the measurements of the process (times, peak
+    /// memory: the process's peak over the points running together).
+    pub jobs: usize,
+}
+
+/// The cores of this machine (1 where it cannot be read).
+pub fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// `--jobs` when not given: one point per core, or one at a time when `repeat` asks for
+/// timing medians (points running together share the memory bandwidth and caches, and
+/// a timing study wants each point alone).
+pub fn default_jobs(repeat: usize) -> usize {
+    if repeat > 1 { 1 } else { cores() }
 }
 
 impl Sweep {
@@ -1348,6 +1377,21 @@ impl Sweep {
         let (mut spent, mut spent_weight) = (0.0, 0.0);
         let repeat = self.spec.repeat.unwrap_or(1);
         let mut n_done = mine.len() - todo.len();
+        let jobs = match self.jobs {
+            0 => default_jobs(repeat),
+            j => j,
+        }
+        .min(todo.len());
+        if jobs > 1 {
+            let weights: Vec<f64> = todo.iter().map(|p| weight(p)).collect();
+            let ctx = Jobs {
+                dir,
+                worker,
+                total: mine.len(),
+                total_weight,
+            };
+            return self.run_parallel(&todo, &weights, jobs, n_done, ctx, progress);
+        }
         let mut out = Vec::with_capacity(todo.len());
         for p in todo {
             let t0 = Instant::now();
@@ -1369,6 +1413,97 @@ impl Sweep {
             out.push(rec);
         }
         Ok(out)
+    }
+
+    /// [`Sweep::run_points`] on `jobs` threads, each running one point at a time in a
+    /// rayon pool of `cores / jobs` threads, the heaviest points first (longest
+    /// processing time first: the last points to end are the short ones). This thread
+    /// writes each record as it arrives and reports it; the first error stops the
+    /// workers from taking new points (those running finish, their records are kept)
+    /// and is returned.
+    fn run_parallel(
+        &self,
+        todo: &[&&Point],
+        weights: &[f64],
+        jobs: usize,
+        mut n_done: usize,
+        ctx: Jobs<'_>,
+        progress: &mut dyn SweepProgress,
+    ) -> Result<Vec<RunRecord>, Error> {
+        use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+        let mut order: Vec<usize> = (0..todo.len()).collect();
+        order.sort_by(|&a, &b| weights[b].total_cmp(&weights[a]).then(a.cmp(&b)));
+        let threads = (cores() / jobs).max(1);
+        let repeat = self.spec.repeat.unwrap_or(1);
+        let next = AtomicUsize::new(0);
+        let stop = AtomicBool::new(false);
+        let (tx, rx) = std::sync::mpsc::channel::<(usize, Result<RunRecord, Error>)>();
+        let t0 = Instant::now();
+        let mut out = Vec::with_capacity(todo.len());
+        let mut first_error = None;
+        std::thread::scope(|scope| {
+            for _ in 0..jobs {
+                let tx = tx.clone();
+                let (order, next, stop) = (&order, &next, &stop);
+                scope.spawn(move || {
+                    let pool = match rayon::ThreadPoolBuilder::new().num_threads(threads).build() {
+                        Ok(p) => p,
+                        Err(e) => {
+                            let e = Error::invalid("--jobs", jobs.to_string(), &e.to_string());
+                            let _ = tx.send((usize::MAX, Err(e)));
+                            return;
+                        }
+                    };
+                    while !stop.load(Ordering::Relaxed) {
+                        let k = next.fetch_add(1, Ordering::Relaxed);
+                        let Some(&i) = order.get(k) else { break };
+                        let r =
+                            pool.install(|| run_point(&self.source, &self.set, todo[i], repeat));
+                        if tx.send((i, r)).is_err() {
+                            break;
+                        }
+                    }
+                });
+            }
+            drop(tx);
+            let mut spent_weight = 0.0;
+            for (i, r) in rx {
+                let written = r.and_then(|mut rec| {
+                    rec.worker = ctx.worker;
+                    if let Some(dir) = ctx.dir {
+                        write_atomic(
+                            &dir.join("runs").join(format!("{:06}.json", rec.point.id)),
+                            serde_json::to_string(&rec)
+                                .expect("record serializes")
+                                .as_bytes(),
+                        )?;
+                    }
+                    Ok(rec)
+                });
+                match written {
+                    Ok(rec) => {
+                        spent_weight += weights[i];
+                        n_done += 1;
+                        let spent = t0.elapsed().as_secs_f64();
+                        let eta = spent / spent_weight.max(1e-300)
+                            * (ctx.total_weight - spent_weight).max(0.0);
+                        progress.run(n_done, ctx.total, &rec, eta);
+                        out.push(rec);
+                    }
+                    Err(e) => {
+                        stop.store(true, Ordering::Relaxed);
+                        first_error.get_or_insert(e);
+                    }
+                }
+            }
+        });
+        match first_error {
+            Some(e) => Err(e),
+            None => {
+                out.sort_by_key(|r| r.point.id);
+                Ok(out)
+            }
+        }
     }
 
     /// Writes the table of `records` into `dir`; returns the verdicts.
