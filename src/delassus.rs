@@ -553,8 +553,9 @@ impl Delassus {
             for (k, &d) in zone[start..start + w].iter().enumerate() {
                 yb[k * n + d] = 1.0;
             }
-            // at set-up: the threaded blocked solves
-            solve_columns(self.factor.as_mut(), yb, w, true);
+            // at set-up: the threaded blocked solves, skipping the factor's blocks that
+            // a unit vector on the zone never reaches (issue 35)
+            self.factor.solve_block_for_rows(yb, w, None);
             self.column_solves += w;
             restrict(zone, yb, n, &mut f[start * z..(start + w) * z]);
             if per == 2 {
@@ -571,7 +572,10 @@ impl Delassus {
                         }
                     }
                 }
-                solve_columns(self.factor.as_mut(), eb, w, true);
+                // the flexibilities read only the zone's rows of E (the backward sweep
+                // stops at their ancestors); the full storage keeps E whole
+                let rows = (storage == ZoneStorage::Flexibility).then_some(zone);
+                self.factor.solve_block_for_rows(eb, w, rows);
                 self.column_solves += w;
                 restrict(zone, eb, n, &mut fe[start * z..(start + w) * z]);
             }
@@ -1406,6 +1410,10 @@ fn k_times_columns(k: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64],
     let (cp, ri, val) = (k.col_ptr(), k.row_idx(), k.val());
     let tile = |(xt, yt): &mut (Vec<f64>, Vec<f64>), (xs, ys): (&[f64], &mut [f64])| {
         let cols = xs.len() / n;
+        if cols < T {
+            // the last tile's unused lanes: zero, so that a zero row is skipped
+            xt.iter_mut().for_each(|v| *v = 0.0);
+        }
         for c in 0..cols {
             for (j, &v) in xs[c * n..(c + 1) * n].iter().enumerate() {
                 xt[j * T + c] = v;
@@ -1414,6 +1422,11 @@ fn k_times_columns(k: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64],
         yt.iter_mut().for_each(|v| *v = 0.0);
         for j in 0..n {
             let xr: [f64; T] = xt[j * T..(j + 1) * T].try_into().expect("tile row");
+            // a column of K times zeros adds nothing (the columns of a zone's body
+            // are zero on every other body: issue 35)
+            if xr.iter().all(|&v| v == 0.0) {
+                continue;
+            }
             for p in cp[j]..cp[j + 1] {
                 let (i, a) = (ri[p], val[p]);
                 let yr = &mut yt[i * T..(i + 1) * T];

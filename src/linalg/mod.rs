@@ -26,6 +26,7 @@
 #[cfg(feature = "mumps")]
 pub mod mumps;
 pub mod solver;
+mod sparse_rhs;
 pub mod subnormals;
 
 pub use solver::{LinearSolver, SolverKind};

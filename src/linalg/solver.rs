@@ -82,6 +82,14 @@ pub trait LinearSolver: Send {
     fn solve_block_in_place_par(&mut self, x: &mut [f64], k: usize) {
         self.solve_block_in_place(x, k);
     }
+    /// Like [`LinearSolver::solve_block_in_place_par`] where only `rows` of the result
+    /// are read (all when `None`; the others are then unspecified): a supernodal factor
+    /// skips the blocks that are zero or not needed (`linalg::sparse_rhs`, the zone
+    /// flexibilities' set-up); other backends solve every row.
+    fn solve_block_for_rows(&mut self, x: &mut [f64], k: usize, rows: Option<&[usize]>) {
+        let _ = rows;
+        self.solve_block_in_place_par(x, k);
+    }
 }
 
 impl std::fmt::Debug for dyn LinearSolver {
@@ -119,6 +127,9 @@ impl LinearSolver for SpdFactor {
     }
     fn solve_block_in_place_par(&mut self, x: &mut [f64], k: usize) {
         SpdFactor::solve_block_in_place_par(self, x, k)
+    }
+    fn solve_block_for_rows(&mut self, x: &mut [f64], k: usize, rows: Option<&[usize]>) {
+        SpdFactor::solve_block_for_rows(self, x, k, rows)
     }
 }
 
