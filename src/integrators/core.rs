@@ -2165,16 +2165,7 @@ impl ThetaCore {
             &mut self.q_lin[..],
         );
         let args = (&s.q[..], &s.v[..], out, cols, (self.h, self.theta));
-        let finite = match (p.is_some(), fb.is_some(), t.is_some()) {
-            (false, false, false) => fused_update::<false, false, false>(args),
-            (true, false, false) => fused_update::<true, false, false>(args),
-            (false, true, false) => fused_update::<false, true, false>(args),
-            (true, true, false) => fused_update::<true, true, false>(args),
-            (false, false, true) => fused_update::<false, false, true>(args),
-            (true, false, true) => fused_update::<true, false, true>(args),
-            (false, true, true) => fused_update::<false, true, true>(args),
-            (true, true, true) => fused_update::<true, true, true>(args),
-        };
+        let finite = fused_update_with((p.is_some(), fb.is_some(), t.is_some()), args);
         self.state_finite = Some(finite);
         self.y_ready = true;
         true
@@ -2432,6 +2423,20 @@ type FusedArgs<'a> = (
     (f64, f64),
 );
 
+/// [`fused_update`] with the terms `(P, F, T)` given at run time.
+fn fused_update_with(terms: (bool, bool, bool), args: FusedArgs<'_>) -> bool {
+    match terms {
+        (false, false, false) => fused_update::<false, false, false>(args),
+        (true, false, false) => fused_update::<true, false, false>(args),
+        (false, true, false) => fused_update::<false, true, false>(args),
+        (true, true, false) => fused_update::<true, true, false>(args),
+        (false, false, true) => fused_update::<false, false, true>(args),
+        (true, false, true) => fused_update::<true, false, true>(args),
+        (false, true, true) => fused_update::<false, true, true>(args),
+        (true, true, true) => fused_update::<true, true, true>(args),
+    }
+}
+
 /// One pass of [`ThetaCore::form_fused`]: `v += k_P c_P + k_F c_F`,
 /// `q = q_k + h((1 − θ) v_k + θ v) + k_τ c_τ`, `y = q + hθ v`, each term where its
 /// const flag is set, in the order of the general path's axpys. Returns whether every
@@ -2653,16 +2658,7 @@ mod tests {
                 cols,
                 (h, th),
             );
-            let finite = match (p, f, t) {
-                (false, false, false) => fused_update::<false, false, false>(args),
-                (true, false, false) => fused_update::<true, false, false>(args),
-                (false, true, false) => fused_update::<false, true, false>(args),
-                (true, true, false) => fused_update::<true, true, false>(args),
-                (false, false, true) => fused_update::<false, false, true>(args),
-                (true, false, true) => fused_update::<true, false, true>(args),
-                (false, true, true) => fused_update::<false, true, true>(args),
-                (true, true, true) => fused_update::<true, true, true>(args),
-            };
+            let finite = fused_update_with((p, f, t), args);
             assert!(finite);
             for (a, b) in [(&q1, &q2), (&v1, &v2), (&y1, &y2)] {
                 assert!(

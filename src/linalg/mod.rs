@@ -883,21 +883,13 @@ impl TridiagonalRows {
         let m = n - 1;
         let lr = (&l[1..m], &d[1..m], &r[1..m]);
         let out_m = &mut out[1..m];
-        match f {
-            Some(f) => pulp::Arch::new().dispatch(InteriorRows {
-                h,
-                out: out_m,
-                f: &f[1..m],
-                lr,
-                x,
-            }),
-            None => pulp::Arch::new().dispatch(InteriorRowsUnloaded {
-                h,
-                out: out_m,
-                lr,
-                x,
-            }),
-        }
+        pulp::Arch::new().dispatch(InteriorRows {
+            h,
+            out: out_m,
+            f: f.map(|f| &f[1..m]),
+            lr,
+            x,
+        });
         out[n - 1] = h * (fi(n - 1) - row2(l[n - 1] * x[n - 2], d[n - 1] * x[n - 1]));
     }
 
@@ -911,11 +903,13 @@ impl TridiagonalRows {
 /// The interior rows of [`TridiagonalRows::scaled_residual`], over zipped slices (no
 /// bounds checks), compiled by pulp's dispatch for the CPU's vector width: the loop
 /// vectorizes across rows while each row's sum keeps its order, and Rust never fuses a
-/// multiply and an add on its own, so the bits are those of the plain loop.
+/// multiply and an add on its own, so the bits are those of the plain loop. `f = None`:
+/// a load of `+0.0` everywhere, read as the constant (the same bits without the load's
+/// stream).
 struct InteriorRows<'a> {
     h: f64,
     out: &'a mut [f64],
-    f: &'a [f64],
+    f: Option<&'a [f64]>,
     lr: (&'a [f64], &'a [f64], &'a [f64]),
     x: &'a [f64],
 }
@@ -924,45 +918,31 @@ impl pulp::WithSimd for InteriorRows<'_> {
     type Output = ();
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) {
-        let (h, x, (l, d, r)) = (self.h, self.x, self.lr);
-        let m = x.len() - 1;
-        let rows = self
-            .out
-            .iter_mut()
-            .zip(self.f)
-            .zip(l.iter().zip(d).zip(r))
-            .zip(x[..m - 1].iter().zip(&x[1..m]).zip(&x[2..]));
-        for (((o, &fi), ((&li, &di), &ri)), ((&xl, &xc), &xr)) in rows {
-            let kx: f64 = [li * xl, di * xc, ri * xr].into_iter().sum();
-            *o = h * (fi - kx);
+        match self.f {
+            Some(f) => interior_rows(self.h, self.out, f.iter().copied(), self.lr, self.x),
+            None => interior_rows(self.h, self.out, std::iter::repeat(0.0), self.lr, self.x),
         }
     }
 }
 
-/// [`InteriorRows`] with a load of `+0.0` everywhere: `h (0 − (K x)_i)`, the same bits
-/// without the load's stream.
-struct InteriorRowsUnloaded<'a> {
+/// `out_i = h (f_i − (K x)_i)` over the interior rows, `f` one value per row.
+#[inline(always)]
+fn interior_rows(
     h: f64,
-    out: &'a mut [f64],
-    lr: (&'a [f64], &'a [f64], &'a [f64]),
-    x: &'a [f64],
-}
-
-impl pulp::WithSimd for InteriorRowsUnloaded<'_> {
-    type Output = ();
-    #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _: S) {
-        let (h, x, (l, d, r)) = (self.h, self.x, self.lr);
-        let m = x.len() - 1;
-        let rows = self
-            .out
-            .iter_mut()
-            .zip(l.iter().zip(d).zip(r))
-            .zip(x[..m - 1].iter().zip(&x[1..m]).zip(&x[2..]));
-        for ((o, ((&li, &di), &ri)), ((&xl, &xc), &xr)) in rows {
-            let kx: f64 = [li * xl, di * xc, ri * xr].into_iter().sum();
-            *o = h * (0.0 - kx);
-        }
+    out: &mut [f64],
+    f: impl Iterator<Item = f64>,
+    (l, d, r): (&[f64], &[f64], &[f64]),
+    x: &[f64],
+) {
+    let m = x.len() - 1;
+    let rows = out
+        .iter_mut()
+        .zip(f)
+        .zip(l.iter().zip(d).zip(r))
+        .zip(x[..m - 1].iter().zip(&x[1..m]).zip(&x[2..]));
+    for (((o, fi), ((&li, &di), &ri)), ((&xl, &xc), &xr)) in rows {
+        let kx: f64 = [li * xl, di * xc, ri * xr].into_iter().sum();
+        *o = h * (fi - kx);
     }
 }
 
