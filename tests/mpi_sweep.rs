@@ -44,6 +44,7 @@ fn the_gathered_table_is_independent_of_the_rank_count() {
         dir: one.clone(),
         resume: false,
         shard: None,
+        jobs: 0,
     }
     .run(&mut Quiet)
     .unwrap();
