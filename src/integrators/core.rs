@@ -2631,6 +2631,20 @@ mod tests {
         let (q, v, vf) = (wave(0.3), wave(0.7), wave(1.1));
         let (cp, cf, ct) = (wave(1.7), wave(2.3), wave(2.9));
         let (kp, kf, kt, h, th) = (3.7, -1.3e-7, 0.9, 2e-7, 0.5);
+        // the fused pass from q_k = `q`, v_free = `vf`: (q, v, y) and the finiteness
+        let fused = |terms: (bool, bool, bool), q: &[f64], vf: &[f64], kt: f64| {
+            let (mut q2, mut v2, mut y2) = (vec![0.0; n], vf.to_vec(), vec![0.0; n]);
+            let cols = [(&cp[..], kp), (&cf[..], kf), (&ct[..], kt)];
+            let args = (
+                q,
+                &v[..],
+                (&mut q2[..], &mut v2[..], &mut y2[..]),
+                cols,
+                (h, th),
+            );
+            let finite = fused_update_with(terms, args);
+            (q2, v2, y2, finite)
+        };
         for mask in 0..8 {
             let (p, f, t) = (mask & 1 != 0, mask & 2 != 0, mask & 4 != 0);
             // the general path
@@ -2649,16 +2663,7 @@ mod tests {
             }
             let y1: Vec<f64> = (0..n).map(|i| q1[i] + h * th * v1[i]).collect();
             // the fused pass
-            let (mut q2, mut v2, mut y2) = (vec![0.0; n], vf.clone(), vec![0.0; n]);
-            let cols = [(&cp[..], kp), (&cf[..], kf), (&ct[..], kt)];
-            let args = (
-                &q[..],
-                &v[..],
-                (&mut q2[..], &mut v2[..], &mut y2[..]),
-                cols,
-                (h, th),
-            );
-            let finite = fused_update_with((p, f, t), args);
+            let (q2, v2, y2, finite) = fused((p, f, t), &q, &vf, kt);
             assert!(finite);
             for (a, b) in [(&q1, &q2), (&v1, &v2), (&y1, &y2)] {
                 assert!(
@@ -2672,31 +2677,14 @@ mod tests {
             for at in [0, 17, n - 1] {
                 let mut vb = vf.clone();
                 vb[at] = bad;
-                let (mut q2, mut v2, mut y2) = (vec![0.0; n], vb, vec![0.0; n]);
-                let cols = [(&cp[..], kp), (&cf[..], kf), (&ct[..], kt)];
-                let args = (
-                    &q[..],
-                    &v[..],
-                    (&mut q2[..], &mut v2[..], &mut y2[..]),
-                    cols,
-                    (h, th),
-                );
-                assert!(!fused_update::<false, false, false>(args), "{bad} at {at}");
+                let (.., finite) = fused((false, false, false), &q, &vb, kt);
+                assert!(!finite, "{bad} at {at}");
             }
         }
-        // a finite v whose q overflows
-        let mut q2 = vec![0.0; n];
-        let (mut v2, mut y2) = (vf.clone(), vec![0.0; n]);
+        // a finite v whose q overflows: reported, or every q finite
         let mut qb = q.clone();
         qb[5] = f64::MAX;
-        let cols = [(&cp[..], kp), (&cf[..], kf), (&ct[..], 1e300)];
-        let args = (
-            &qb[..],
-            &v[..],
-            (&mut q2[..], &mut v2[..], &mut y2[..]),
-            cols,
-            (h, th),
-        );
-        assert!(!fused_update::<false, false, true>(args) || q2.iter().all(|x| x.is_finite()));
+        let (q2, .., finite) = fused((false, false, true), &qb, &vf, 1e300);
+        assert!(!finite || q2.iter().all(|x| x.is_finite()));
     }
 }

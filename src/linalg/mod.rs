@@ -173,30 +173,43 @@ pub fn arithmetic() -> Arithmetic {
     }
 }
 
-/// The fused tridiagonal solve, compiled for the CPU's vector extension by pulp's
-/// dispatch (so `mul_add` is one instruction).
-struct FusedSolve<'a> {
+/// The tridiagonal solve's two sweeps (`ADD`: the backward sweep writes `base + x` into
+/// `out` and leaves `x` with the forward sweep's values, [`Tridiagonal::solve_add`];
+/// else it overwrites `x`), with separate multiply and add, or fused (`FUSED`: compiled
+/// for the CPU's vector extension by pulp's dispatch, so `mul_add` is one instruction).
+struct Sweeps<'a, const ADD: bool, const FUSED: bool> {
     l: &'a [f64],
     dinv: &'a [f64],
     x: &'a mut [f64],
+    base: &'a [f64],
+    out: &'a mut [f64],
 }
 
-impl pulp::WithSimd for FusedSolve<'_> {
+impl<const ADD: bool, const FUSED: bool> pulp::WithSimd for Sweeps<'_, ADD, FUSED> {
     type Output = ();
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) {
-        let (l, dinv, x) = (self.l, self.dinv, self.x);
+        let (l, dinv, x, base, out) = (self.l, self.dinv, self.x, self.base, self.out);
+        // `a − b c` as the arithmetic asks
+        let sub = |a: f64, b: f64, c: f64| if FUSED { (-b).mul_add(c, a) } else { a - b * c };
         let n = x.len();
         let mut y = x[0];
         for i in 1..n {
-            y = (-l[i]).mul_add(y, x[i]);
+            y = sub(x[i], l[i], y);
             x[i] = y;
         }
         let mut xn = x[n - 1] * dinv[n - 1];
-        x[n - 1] = xn;
+        let mut put = |i: usize, v: f64, x: &mut [f64]| {
+            if ADD {
+                out[i] = base[i] + v;
+            } else {
+                x[i] = v;
+            }
+        };
+        put(n - 1, xn, x);
         for i in (0..n - 1).rev() {
-            xn = (-l[i + 1]).mul_add(xn, x[i] * dinv[i]);
-            x[i] = xn;
+            xn = sub(x[i] * dinv[i], l[i + 1], xn);
+            put(i, xn, x);
         }
     }
 }
@@ -263,87 +276,45 @@ impl Tridiagonal {
     }
 
     fn solve(&self, x: &mut [f64]) {
-        let n = x.len();
-        if n == 0 {
-            return;
-        }
-        if self.fused {
-            return pulp::Arch::new().dispatch(FusedSolve {
-                l: &self.l,
-                dinv: &self.dinv,
-                x,
-            });
-        }
-        let mut y = x[0];
-        for i in 1..n {
-            y = x[i] - self.l[i] * y;
-            x[i] = y;
-        }
-        let mut xn = x[n - 1] * self.dinv[n - 1];
-        x[n - 1] = xn;
-        for i in (0..n - 1).rev() {
-            xn = x[i] * self.dinv[i] - self.l[i + 1] * xn;
-            x[i] = xn;
-        }
+        self.sweeps::<false>(x, &[], &mut []);
     }
 
     /// `out = base + A⁻¹ x` with the sum formed in the backward sweep (`x` keeps the
     /// forward sweep's values): the same operations as [`Tridiagonal::solve`] then the
     /// sum, in one pass fewer.
     fn solve_add(&self, x: &mut [f64], base: &[f64], out: &mut [f64]) {
+        assert!(base.len() == x.len() && out.len() == x.len());
+        self.sweeps::<true>(x, base, out);
+    }
+
+    /// [`Sweeps`] in the factor's arithmetic.
+    fn sweeps<const ADD: bool>(&self, x: &mut [f64], base: &[f64], out: &mut [f64]) {
         let n = x.len();
         if n == 0 {
             return;
         }
-        assert!(base.len() == n && out.len() == n && self.l.len() == n && self.dinv.len() == n);
+        assert!(self.l.len() == n && self.dinv.len() == n);
+        let (l, dinv) = (&self.l[..], &self.dinv[..]);
         if self.fused {
-            return pulp::Arch::new().dispatch(FusedSolveAdd {
-                l: &self.l,
-                dinv: &self.dinv,
+            pulp::Arch::new().dispatch(Sweeps::<ADD, true> {
+                l,
+                dinv,
                 x,
                 base,
                 out,
             });
-        }
-        let mut y = x[0];
-        for i in 1..n {
-            y = x[i] - self.l[i] * y;
-            x[i] = y;
-        }
-        let mut xn = x[n - 1] * self.dinv[n - 1];
-        out[n - 1] = base[n - 1] + xn;
-        for i in (0..n - 1).rev() {
-            xn = x[i] * self.dinv[i] - self.l[i + 1] * xn;
-            out[i] = base[i] + xn;
-        }
-    }
-}
-
-/// [`FusedSolve`] with the sum of [`Tridiagonal::solve_add`] in its backward sweep.
-struct FusedSolveAdd<'a> {
-    l: &'a [f64],
-    dinv: &'a [f64],
-    x: &'a mut [f64],
-    base: &'a [f64],
-    out: &'a mut [f64],
-}
-
-impl pulp::WithSimd for FusedSolveAdd<'_> {
-    type Output = ();
-    #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _: S) {
-        let (l, dinv, x, base, out) = (self.l, self.dinv, self.x, self.base, self.out);
-        let n = x.len();
-        let mut y = x[0];
-        for i in 1..n {
-            y = (-l[i]).mul_add(y, x[i]);
-            x[i] = y;
-        }
-        let mut xn = x[n - 1] * dinv[n - 1];
-        out[n - 1] = base[n - 1] + xn;
-        for i in (0..n - 1).rev() {
-            xn = (-l[i + 1]).mul_add(xn, x[i] * dinv[i]);
-            out[i] = base[i] + xn;
+        } else {
+            // the portable arithmetic: plain code, no dispatch
+            pulp::WithSimd::with_simd(
+                Sweeps::<ADD, false> {
+                    l,
+                    dinv,
+                    x,
+                    base,
+                    out,
+                },
+                pulp::Scalar::new(),
+            );
         }
     }
 }
