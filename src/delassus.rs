@@ -261,12 +261,14 @@ pub enum ZoneStorage {
 /// chunks so that both threads solve at once.
 pub const ZONE_CHUNK: usize = 2 * crate::linalg::SOLVE_CHUNK;
 
-/// The step matrix condensed once onto the contact-zone dofs `S` (every dof a Jacobian
-/// column can touch): `Y = Â⁻¹S` and `E = Â⁻¹K N S` (`n × z` each) and the zone's
-/// flexibilities `F = SᵀY`, `F_E = SᵀE` (`z × z`). With `G = S B` (`B` the few entries
-/// of each column), a re-linearization is `W = BᵀFB`, `W_D = BᵀF_E B` (no solve, no
-/// `n`-vector), and a correction `Â⁻¹G x = Y (B x)` touches only the columns of `Y`
-/// under the contacts that carry an impulse.
+/// The step matrix condensed once onto the contact-zone dofs `S`: `Y = Â⁻¹S` and
+/// `E = Â⁻¹K N S` (`n × z` each) and the zone's flexibilities `F = SᵀY`, `F_E = SᵀE`
+/// (`z × z`). With `G = S B` (`B` the few entries of each column), a re-linearization is
+/// `W = BᵀFB`, `W_D = BᵀF_E B` (no solve, no `n`-vector), and a correction `Â⁻¹G x =
+/// Y (B x)` touches only the columns of `Y` under the contacts that carry an impulse.
+///
+/// `M̂` couples no two bodies, so a column of `F` or `F_E` is zero outside its body's
+/// rows: every product runs over [`Zone::span`] only (half the work with two bodies).
 #[derive(Debug)]
 struct Zone {
     /// Zone index of each dof (`NONE` outside the zone).
@@ -279,10 +281,23 @@ struct Zone {
     e: Vec<f64>,
     f: Vec<f64>,
     fe: Vec<f64>,
+    /// Rows `lo..hi` of the zone outside which column `k` of `F` and of `F_E` is zero.
+    span: Vec<(usize, usize)>,
     /// `F B` and `F_E B` (`z × m`), and a zone vector.
     fb: Vec<f64>,
     feb: Vec<f64>,
     r: Vec<f64>,
+    /// Zone index of each entry of the Jacobian (as [`ContactJacobian::entries`] lists them).
+    bpos: Vec<usize>,
+    /// The Jacobian's non-zero entries, column after column: first of each column
+    /// (`m + 1`), zone index, value.
+    cptr: Vec<usize>,
+    cpos: Vec<usize>,
+    cval: Vec<f64>,
+    /// The Jacobian's dofs and values when `F B` (`[0]`) and `F_E B` (`[1]`) were formed:
+    /// while `G` is still that one, a correction is `(F B) p` (`m` columns) rather than
+    /// `F (B p)` (`z` columns).
+    formed_at: [(Vec<usize>, Vec<f64>); 2],
     /// Rows whose column `B_α` never changes (a plane contact beside contacts between
     /// bodies): their `F B` columns and their `W`, `W_D` entries with each other are
     /// formed once.
@@ -292,61 +307,143 @@ struct Zone {
 }
 
 impl Zone {
+    /// A zone on `dofs` (`pos` their inverse) with flexibilities `f`, `fe` (`fe` empty
+    /// where `W_D` is not formed) and, for [`ZoneStorage::Full`], the columns `y`, `e`.
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        pos: Vec<usize>,
+        dofs: Vec<usize>,
+        storage: ZoneStorage,
+        (y, e): (Vec<f64>, Vec<f64>),
+        (f, fe): (Vec<f64>, Vec<f64>),
+        fixed: Vec<bool>,
+        jac: &ContactJacobian,
+    ) -> Zone {
+        let (z, m) = (dofs.len(), jac.ncols());
+        let nnz = jac.entries().1.len();
+        let span = (0..z)
+            .map(|k| {
+                let nonzero =
+                    |i: &usize| f[k * z + i] != 0.0 || fe.get(k * z + i).is_some_and(|&v| v != 0.0);
+                let lo = (0..z).find(nonzero).unwrap_or(0);
+                let hi = (lo..z).rev().find(nonzero).map_or(lo, |i| i + 1);
+                (lo, hi)
+            })
+            .collect();
+        let snapshot = || (vec![NONE; nnz], vec![f64::NAN; nnz]);
+        Zone {
+            pos,
+            dofs,
+            storage,
+            y,
+            e,
+            fb: vec![0.0; z * m],
+            feb: vec![0.0; if fe.is_empty() { 0 } else { z * m }],
+            f,
+            fe,
+            span,
+            r: vec![0.0; z],
+            bpos: vec![NONE; nnz],
+            cptr: vec![0; m + 1],
+            cpos: vec![0; nnz],
+            cval: vec![0.0; nnz],
+            formed_at: [snapshot(), snapshot()],
+            fixed,
+            formed: [false; 2],
+        }
+    }
+
     /// `out = Bᵀ X B` (`m × m`, column-major) with `X = F_E` (`e`) or `F`; after the
     /// first time only the entries of a changing row (not [`Zone::fixed`]).
     fn condensed(&mut self, jac: &ContactJacobian, e: bool, out: &mut [f64]) {
         let z = self.dofs.len();
         let m = jac.ncols();
         let all = !self.formed[usize::from(e)];
+        let (ptr, dofs, vals) = jac.entries();
+        for (p, &d) in self.bpos.iter_mut().zip(dofs) {
+            *p = self.pos[d];
+        }
         let (x, xb) = if e {
             (&self.fe, &mut self.feb)
         } else {
             (&self.f, &mut self.fb)
         };
-        Self::times_b(jac, &self.pos, z, x, xb, |b| all || !self.fixed[b]);
+        pulp::Arch::new().dispatch(TimesB {
+            ptr,
+            bpos: &self.bpos,
+            vals,
+            span: &self.span,
+            x,
+            out: xb,
+            fixed: (!all).then_some(&self.fixed[..]),
+        });
+        // the non-zero entries of each column, in their order
+        let (cptr, cpos, cval) = (&mut self.cptr, &mut self.cpos, &mut self.cval);
+        let mut len = 0;
+        for a in 0..m {
+            for i in ptr[a]..ptr[a + 1] {
+                if vals[i] != 0.0 {
+                    (cpos[len], cval[len]) = (self.bpos[i], vals[i]);
+                    len += 1;
+                }
+            }
+            cptr[a + 1] = len;
+        }
+        let (cptr, cpos, cval) = (&self.cptr[..], &self.cpos[..], &self.cval[..]);
+        let fixed = &self.fixed;
+        // the sum's neutral element, so that each entry is the bits of the iterator's sum
+        let zero: f64 = std::iter::empty::<f64>().sum();
         for b in 0..m {
             let col = &xb[b * z..(b + 1) * z];
-            for a in 0..m {
-                if all || !self.fixed[a] || !self.fixed[b] {
-                    out[a + b * m] = Self::dot(jac, &self.pos, a, col);
+            let need = |a: usize| all || !fixed[a] || !fixed[b];
+            // `B_aᵀ col`, four rows of `W` at a time where their columns have as many
+            // entries (independent sums in flight; each in its entries' order)
+            let mut a = 0;
+            while a < m {
+                let l = cptr[a + 1] - cptr[a];
+                if a + 4 <= m && (1..4).all(|j| cptr[a + j + 1] - cptr[a + j] == l) {
+                    let mut acc = [zero; 4];
+                    for t in 0..l {
+                        for (j, s) in acc.iter_mut().enumerate() {
+                            let i = cptr[a + j] + t;
+                            *s += cval[i] * col[cpos[i]];
+                        }
+                    }
+                    for (j, s) in acc.into_iter().enumerate() {
+                        if need(a + j) {
+                            out[a + j + b * m] = s;
+                        }
+                    }
+                    a += 4;
+                } else {
+                    if need(a) {
+                        let mut s = zero;
+                        for i in cptr[a]..cptr[a + 1] {
+                            s += cval[i] * col[cpos[i]];
+                        }
+                        out[a + b * m] = s;
+                    }
+                    a += 1;
                 }
             }
         }
+        let at = &mut self.formed_at[usize::from(e)];
+        at.0.copy_from_slice(dofs);
+        at.1.copy_from_slice(vals);
         self.formed[usize::from(e)] = true;
     }
 
-    /// `out[:, b] = X B_b` for the columns `b` that `which` selects (`X` is `F` or
-    /// `F_E`, `z × z`).
-    fn times_b(
-        jac: &ContactJacobian,
-        pos: &[usize],
-        z: usize,
-        x: &[f64],
-        out: &mut [f64],
-        which: impl Fn(usize) -> bool,
-    ) {
-        for (b, col) in out.chunks_mut(z).enumerate().filter(|(b, _)| which(*b)) {
-            col.iter_mut().for_each(|v| *v = 0.0);
-            let (dofs, vals) = jac.col(b);
-            for (&d, &g) in dofs.iter().zip(vals) {
-                if g != 0.0 {
-                    let k = pos[d];
-                    for (o, &f) in col.iter_mut().zip(&x[k * z..(k + 1) * z]) {
-                        *o += g * f;
-                    }
-                }
-            }
-        }
-    }
-
-    /// `B_aᵀ v` for a zone vector `v`.
-    fn dot(jac: &ContactJacobian, pos: &[usize], a: usize, v: &[f64]) -> f64 {
-        let (dofs, vals) = jac.col(a);
-        dofs.iter()
-            .zip(vals)
-            .filter(|(_, g)| **g != 0.0)
-            .map(|(&d, &g)| g * v[pos[d]])
-            .sum()
+    /// Whether `F B` (`e`: `F_E B`) was formed at the Jacobian `jac` is now.
+    fn formed_at(&self, jac: &ContactJacobian, e: bool) -> bool {
+        let (_, dofs, vals) = jac.entries();
+        let at = &self.formed_at[usize::from(e)];
+        self.formed[usize::from(e)]
+            && at.0 == dofs
+            && at
+                .1
+                .iter()
+                .zip(vals)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
     }
 
     /// `r = B x` (zone coordinates).
@@ -365,14 +462,29 @@ impl Zone {
     }
 
     /// `y += s X r` for a zone matrix `X` (`F` or `F_E`, `z × z`, column-major), over the
-    /// non-zero entries of `r`.
-    fn zone_times(x: &[f64], r: &[f64], s: f64, y: &mut [f64]) {
-        let z = r.len();
-        for (k, &rk) in r.iter().enumerate() {
-            if rk != 0.0 {
-                axpy(s * rk, &x[k * z..(k + 1) * z], y);
-            }
-        }
+    /// non-zero entries of `r` and the rows of each column's [`Zone::span`].
+    fn zone_times(&self, fe: bool, s: f64, y: &mut [f64]) {
+        let x = if fe { &self.fe } else { &self.f };
+        pulp::Arch::new().dispatch(ZoneTimes {
+            x,
+            r: &self.r,
+            span: &self.span,
+            s,
+            y,
+        });
+    }
+
+    /// `y += s (X B) x` for `X B` (`F B` or `F_E B`, `z × m`) formed at the current `G`.
+    fn times_formed(&self, fe: bool, s: f64, x: &[f64], y: &mut [f64]) {
+        let xb = if fe { &self.feb } else { &self.fb };
+        let z = y.len();
+        pulp::Arch::new().dispatch(Combine {
+            cols: xb,
+            n: z,
+            weights: x,
+            s,
+            y,
+        });
     }
 
     /// `y += s X (B x)` for the zone's `X` (`Y` or `E`, `n × z`).
@@ -383,6 +495,94 @@ impl Zone {
         for (k, &rk) in self.r.iter().enumerate() {
             if rk != 0.0 {
                 axpy(s * rk, &cols[k * n..(k + 1) * n], y);
+            }
+        }
+    }
+}
+
+/// `X B` column by column (`X` is `F` or `F_E`, `z × z`; the columns `b` not
+/// [`Zone::fixed`] when `fixed` is given), each entry `g` of `B_b` adding `g X_k` over
+/// the span of column `k`: compiled by pulp's dispatch for the CPU's vector width, with
+/// separate multiply and add (the bits of the plain loop).
+struct TimesB<'a> {
+    ptr: &'a [usize],
+    bpos: &'a [usize],
+    vals: &'a [f64],
+    span: &'a [(usize, usize)],
+    x: &'a [f64],
+    out: &'a mut [f64],
+    fixed: Option<&'a [bool]>,
+}
+
+impl pulp::WithSimd for TimesB<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let z = self.span.len();
+        if z == 0 {
+            return;
+        }
+        for (b, col) in self.out.chunks_exact_mut(z).enumerate() {
+            if self.fixed.is_some_and(|f| f[b]) {
+                continue;
+            }
+            col.iter_mut().for_each(|v| *v = 0.0);
+            for i in self.ptr[b]..self.ptr[b + 1] {
+                let g = self.vals[i];
+                if g != 0.0 {
+                    let k = self.bpos[i];
+                    let (lo, hi) = self.span[k];
+                    axpy(g, &self.x[k * z + lo..k * z + hi], &mut col[lo..hi]);
+                }
+            }
+        }
+    }
+}
+
+/// `y += s X r` over the non-zero entries of `r` and each column's span (as [`TimesB`]).
+struct ZoneTimes<'a> {
+    x: &'a [f64],
+    r: &'a [f64],
+    span: &'a [(usize, usize)],
+    s: f64,
+    y: &'a mut [f64],
+}
+
+impl pulp::WithSimd for ZoneTimes<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let z = self.r.len();
+        for (k, &rk) in self.r.iter().enumerate() {
+            if rk != 0.0 {
+                let (lo, hi) = self.span[k];
+                axpy(
+                    self.s * rk,
+                    &self.x[k * z + lo..k * z + hi],
+                    &mut self.y[lo..hi],
+                );
+            }
+        }
+    }
+}
+
+/// `y += s Σ_b x_b C_b` over the non-zero `x_b` (`C` is `n × len(x)`), as [`TimesB`].
+struct Combine<'a> {
+    cols: &'a [f64],
+    n: usize,
+    weights: &'a [f64],
+    s: f64,
+    y: &'a mut [f64],
+}
+
+impl pulp::WithSimd for Combine<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let n = self.n;
+        for (b, &xb) in self.weights.iter().enumerate() {
+            if xb != 0.0 {
+                axpy(self.s * xb, &self.cols[b * n..(b + 1) * n], self.y);
             }
         }
     }
@@ -529,6 +729,9 @@ impl Delassus {
         };
         self.blk = vec![0.0; nb];
         self.blk2 = Vec::new();
+        if storage == ZoneStorage::Flexibility {
+            self.factor.reserve_sparse_rhs(2);
+        }
         let mut pos = vec![NONE; n];
         for (k, &d) in zone.iter().enumerate() {
             pos[d] = k;
@@ -588,20 +791,15 @@ impl Delassus {
         // the n × m blocks are never formed on this path
         self.cg = Vec::new();
         self.d = Vec::new();
-        self.zone = Some(Zone {
+        self.zone = Some(Zone::new(
             pos,
-            dofs: zone.to_vec(),
+            zone.to_vec(),
             storage,
-            y,
-            e,
-            f,
-            fe,
-            fb: vec![0.0; z * self.m],
-            feb: vec![0.0; if per == 2 { z * self.m } else { 0 }],
-            r: vec![0.0; z],
+            (y, e),
+            (f, fe),
             fixed,
-            formed: [false; 2],
-        });
+            &self.jac,
+        ));
         Some(storage)
     }
 
@@ -636,17 +834,34 @@ impl Delassus {
             .expect("zone_corrections needs a condensed contact zone");
         v.iter_mut().for_each(|x| *x = 0.0);
         q.iter_mut().for_each(|x| *x = 0.0);
-        zone.gather_b(&self.jac, p);
-        Zone::zone_times(&zone.f, &zone.r, 1.0, v);
+        // `(F B) p`: `m` columns where `F (B p)` reads `z`; `F B` is current whenever `W`
+        // was formed at this `G` (the Newton loop's case)
+        let fb_current = zone.formed_at(&self.jac, false);
+        if fb_current {
+            zone.times_formed(false, 1.0, p, v);
+        } else {
+            zone.gather_b(&self.jac, p);
+            zone.zone_times(false, 1.0, v);
+        }
         if kfac != 0.0 && !zone.fe.is_empty() && tau_used.iter().any(|&t| t != 0.0) {
-            zone.gather_b(&self.jac, tau_used);
-            Zone::zone_times(&zone.fe, &zone.r, kfac, v);
+            if zone.formed_at(&self.jac, true) {
+                zone.times_formed(true, kfac, tau_used, v);
+            } else {
+                zone.gather_b(&self.jac, tau_used);
+                zone.zone_times(true, kfac, v);
+            }
         }
         if tau.iter().any(|&t| t != 0.0) {
-            zone.gather_b(&self.jac, tau);
             match metric {
-                Metric::Mass => Zone::zone_times(&zone.f, &zone.r, 1.0, q),
-                Metric::Euclidean => q.copy_from_slice(&zone.r),
+                Metric::Mass if fb_current => zone.times_formed(false, 1.0, tau, q),
+                Metric::Mass => {
+                    zone.gather_b(&self.jac, tau);
+                    zone.zone_times(false, 1.0, q);
+                }
+                Metric::Euclidean => {
+                    zone.gather_b(&self.jac, tau);
+                    q.copy_from_slice(&zone.r);
+                }
             }
         }
     }
@@ -1179,7 +1394,8 @@ impl Delassus {
                     self.jac.axpy(a, tau[a], c1);
                 }
             }
-            self.factor.solve_block_in_place(blk, 2);
+            // right-hand sides on the contact zone: the forward sweep's zero blocks skipped
+            self.factor.solve_sparse_rhs_in_place(blk, 2);
             self.ng_ready = any_tau;
         }
         self.gather_g(p);
@@ -1446,6 +1662,8 @@ fn k_times_columns(k: SparseColMatRef<'_, usize, f64>, x: &[f64], y: &mut [f64],
         .for_each_init(|| (vec![0.0; n * T], vec![0.0; n * T]), tile);
 }
 
+/// `y += s x` (inlined into the pulp kernels, so it compiles for their vector width).
+#[inline(always)]
 fn axpy(s: f64, x: &[f64], y: &mut [f64]) {
     for (yi, xi) in y.iter_mut().zip(x) {
         *yi += s * xi;

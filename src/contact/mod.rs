@@ -261,6 +261,12 @@ impl ContactJacobian {
         self.col_ptr.len() - 1
     }
 
+    /// Every column's entries at once: the first entry of each column (`ncols + 1`
+    /// values), then the dofs and values of all entries, column after column.
+    pub fn entries(&self) -> (&[usize], &[usize], &[f64]) {
+        (&self.col_ptr, &self.dofs, &self.values)
+    }
+
     /// Dofs and values of column `alpha` (a row of the contact space).
     pub fn col(&self, alpha: usize) -> (&[usize], &[f64]) {
         let r = self.col_ptr[alpha]..self.col_ptr[alpha + 1];

@@ -87,6 +87,9 @@ struct FaerLlt {
     values: Vec<f64>,
     mem: MemBuffer,
     scratch: Vec<f64>,
+    /// The permuted block and the update scratch of
+    /// [`SpdFactor::solve_sparse_rhs_in_place`] (sized by [`SpdFactor::reserve_sparse_rhs`]).
+    sparse: (Vec<f64>, Vec<f64>),
     /// Simplicial factors in solve-ready form.
     simplicial: Option<SimplicialSolve>,
 }
@@ -408,6 +411,7 @@ impl SpdFactor {
                 values,
                 mem: MemBuffer::new(req),
                 scratch: vec![0.0; n],
+                sparse: (Vec::new(), Vec::new()),
                 simplicial: None,
             })),
         };

@@ -90,6 +90,17 @@ pub trait LinearSolver: Send {
         let _ = rows;
         self.solve_block_in_place_par(x, k);
     }
+    /// Sizes what [`LinearSolver::solve_sparse_rhs_in_place`] needs for `k` columns
+    /// (at set-up; nothing for backends without it).
+    fn reserve_sparse_rhs(&mut self, k: usize) {
+        let _ = k;
+    }
+    /// Like [`LinearSolver::solve_block_in_place`] for right-hand sides supported on a
+    /// few rows: a supernodal factor skips the forward sweep's zero blocks
+    /// (`linalg::sparse_rhs`); the same results on every row; does not allocate.
+    fn solve_sparse_rhs_in_place(&mut self, x: &mut [f64], k: usize) {
+        self.solve_block_in_place(x, k);
+    }
 }
 
 impl std::fmt::Debug for dyn LinearSolver {
@@ -130,6 +141,12 @@ impl LinearSolver for SpdFactor {
     }
     fn solve_block_for_rows(&mut self, x: &mut [f64], k: usize, rows: Option<&[usize]>) {
         SpdFactor::solve_block_for_rows(self, x, k, rows)
+    }
+    fn reserve_sparse_rhs(&mut self, k: usize) {
+        SpdFactor::reserve_sparse_rhs(self, k)
+    }
+    fn solve_sparse_rhs_in_place(&mut self, x: &mut [f64], k: usize) {
+        SpdFactor::solve_sparse_rhs_in_place(self, x, k)
     }
 }
 

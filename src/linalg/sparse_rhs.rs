@@ -14,6 +14,10 @@
 //!   read, every supernode that is not one of theirs or an ancestor of one (a result
 //!   row needs only its ancestors' values).
 //!
+//! [`SpdFactor::solve_sparse_rhs_in_place`] is the step loop's form of the forward skip
+//! (sequential, no allocation): the projection corrections `M̂⁻¹ [G τ_used, G τ]` of a
+//! zone kept as flexibilities only, whose right-hand sides live on the contact zone.
+//!
 //! Written here rather than through faer's `LltRef::solve_in_place_with_conj`, which
 //! sweeps every supernode for every block: faer has no sparse right-hand-side solve.
 //! The skipped blocks would have computed zeros (up to the sign of a zero), so the
@@ -107,6 +111,75 @@ impl SpdFactor {
         };
         use rayon::prelude::*;
         x.par_chunks_mut(n * SOLVE_CHUNK).for_each(solve);
+    }
+}
+
+impl SpdFactor {
+    /// Sizes the scratch of [`SpdFactor::solve_sparse_rhs_in_place`] for blocks of up to
+    /// `k` columns (allocates: at set-up).
+    pub fn reserve_sparse_rhs(&mut self, k: usize) {
+        let n = self.n;
+        if let Backend::Faer(f) = &mut self.backend
+            && f.simplicial.is_none()
+            && let SymbolicCholeskyRaw::Supernodal(sym) = f.symbolic.raw()
+        {
+            let llt = SupernodalLltRef::<usize, f64>::new(sym, &f.values);
+            let widest = (0..sym.n_supernodes())
+                .map(|s| llt.supernode(s).pattern().len())
+                .max()
+                .unwrap_or(0);
+            if f.sparse.0.len() < n * k {
+                f.sparse.0 = vec![0.0; n * k];
+            }
+            if f.sparse.1.len() < widest * k {
+                f.sparse.1 = vec![0.0; widest * k];
+            }
+        }
+    }
+
+    /// Overwrites the `k` columns of `x` (`n × k`, column-major) with `A⁻¹ x`, the
+    /// forward sweep skipping every supernode whose rows of the block are zero (module
+    /// doc): the results of [`SpdFactor::solve_block_in_place`] on every row, at the cost
+    /// of the rows the right-hand sides reach. Sequential; allocates nothing once
+    /// [`SpdFactor::reserve_sparse_rhs`] covered `k` (else it solves the whole block).
+    pub fn solve_sparse_rhs_in_place(&mut self, x: &mut [f64], k: usize) {
+        let n = self.n;
+        debug_assert_eq!(x.len(), n * k);
+        let Backend::Faer(f) = &mut self.backend else {
+            return self.solve_block_in_place(x, k);
+        };
+        let sym = match f.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(s) if f.simplicial.is_none() => s,
+            _ => return self.solve_block_in_place(x, k),
+        };
+        if f.sparse.0.len() < n * k || n == 0 || k == 0 {
+            return self.solve_block_in_place(x, k);
+        }
+        let llt = SupernodalLltRef::<usize, f64>::new(sym, &f.values);
+        let perm = f.symbolic.perm().map(|p| p.arrays());
+        let (xp, tmp) = (&mut f.sparse.0[..n * k], &mut f.sparse.1[..]);
+        match perm {
+            Some((fwd, _)) => {
+                for (dst, src) in xp.chunks_exact_mut(n).zip(x.chunks_exact(n)) {
+                    for (d, &i) in dst.iter_mut().zip(fwd) {
+                        *d = src[i];
+                    }
+                }
+            }
+            None => xp.copy_from_slice(x),
+        }
+        let width = tmp.len() / k;
+        sweeps(llt, xp, n, k, &mut tmp[..width * k], None);
+        match perm {
+            Some((_, inv)) => {
+                for (dst, src) in x.chunks_exact_mut(n).zip(xp.chunks_exact(n)) {
+                    for (d, &i) in dst.iter_mut().zip(inv) {
+                        *d = src[i];
+                    }
+                }
+            }
+            None => x.copy_from_slice(xp),
+        }
     }
 }
 
@@ -272,5 +345,29 @@ mod tests {
                 assert!((a - b).abs() <= 1e-14 * scale, "zone row {r}: {a} vs {b}");
             }
         }
+        // the step loop's form: two columns on the face (combinations, as `G τ_used`,
+        // `G τ`), the scratch reserved once; every row of both within 1e-14 of the full
+        // block solve (the skipped blocks compute zeros; the tolerance covers a reordered
+        // sum in faer's kernels, which the history comparison found bitwise equal)
+        f.reserve_sparse_rhs(2);
+        let mut two = vec![0.0; 2 * n];
+        for (i, &d) in face.iter().enumerate() {
+            two[d] = 1.0 + i as f64 / k as f64;
+            two[n + d] = if i % 3 == 0 { -0.5 } else { 0.0 };
+        }
+        let mut reference = two.clone();
+        f.solve_block_in_place(&mut reference, 2);
+        f.solve_sparse_rhs_in_place(&mut two, 2);
+        let scale = reference.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0);
+        for (r, (a, b)) in reference.iter().zip(&two).enumerate() {
+            assert!((a - b).abs() <= 1e-14 * scale, "entry {r}: {a} vs {b}");
+        }
+        // without the reserve a wider block falls back to the whole solve
+        let mut three = vec![1.0; 3 * n];
+        let mut full3 = three.clone();
+        f.solve_block_in_place(&mut full3, 3);
+        f.solve_sparse_rhs_in_place(&mut three, 3);
+        assert_eq!(three, full3);
     }
 }
