@@ -110,7 +110,7 @@ pub struct Scene {
     pub reference: Option<Reference>,
     /// The grid `signorini sweep` runs this scene over (ignored by `run`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sweep: Option<crate::study::sweep::SweepSpec>,
+    pub sweep: Option<crate::scene::sweep::SweepSpec>,
 }
 
 /// `[reference]`.

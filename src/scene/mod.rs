@@ -9,6 +9,7 @@ pub mod check;
 pub mod example;
 pub mod file;
 pub mod solid_bar;
+pub mod sweep;
 
 use crate::contact::ContactSet;
 use crate::error::Error;

@@ -22,8 +22,10 @@ pub mod friction;
 pub mod global;
 pub mod lcp;
 pub mod mlcp;
-pub mod newton;
 pub mod operator;
+
+/// The semismooth Newton friction solver, now a child of [`friction`] (the path kept).
+pub use friction::newton;
 
 /// What a one-step solve reports.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

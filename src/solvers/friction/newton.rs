@@ -35,8 +35,8 @@
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 
-use super::friction::{Block, FrictionInfo, FrictionParams, FrictionProblem, FrictionSolver, norm};
-use super::operator::DelassusOperator;
+use super::super::operator::DelassusOperator;
+use super::{Block, FrictionInfo, FrictionParams, FrictionProblem, FrictionSolver, norm};
 
 /// Which Newton method runs (module doc).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,7 +70,7 @@ const SPARSE_MIN_ROWS: usize = 64;
 
 /// `A_α` and `B_α` (row-major `d × d`) of the Alart–Curnier Jacobian of one block,
 /// `dΦ_α = A_α dr_α + B_α du_α`, and `Φ_α`, at `(r_α, u_α)`.
-pub(super) fn ac_block(
+pub(in crate::solvers) fn ac_block(
     r: &[f64],
     u: &[f64],
     mu: f64,
@@ -154,7 +154,7 @@ enum Jacobian {
 /// The step loop keeps one, sized once at set-up ([`FrictionSolver::with_capacity`]),
 /// and uses only its dense `J`, so a solve does not allocate; one-step problems build
 /// one per solve, sparse where `W` is.
-pub(super) struct NewtonWork {
+pub(in crate::solvers) struct NewtonWork {
     capacity: usize,
     k: usize,
     wd: Vec<f64>,
