@@ -14,7 +14,7 @@
 //! ```
 //! use signorini::scene::bar::BarScene;
 //! let scene = BarScene { elements: 50, dt: 1e-6, t_end: 5e-4, ..BarScene::default() };
-//! let result = signorini::run::run_bar(&scene, None, &mut signorini::run::Quiet).unwrap();
+//! let result = signorini::app::run_bar(&scene, None, &mut signorini::run::Quiet).unwrap();
 //! let c = result.summary.contact.as_ref().unwrap();
 //! // 1 % from the analytic E S |v0| / c0 even on a 50-element bar
 //! assert!((c.plateau_force / c.analytic_force - 1.0).abs() < 0.01);
@@ -25,6 +25,7 @@
 #![deny(unsafe_code)]
 
 pub mod analytic;
+pub mod app;
 pub mod assembly;
 pub mod contact;
 pub mod delassus;

@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use signorini::app;
 use signorini::delassus::DelassusKind;
 use signorini::integrators::{Forecast, Metric, ProjectionRule, SchemeKind};
 use signorini::io::OutputOptions;
@@ -613,7 +614,7 @@ fn run_bar(args: &BarArgs) -> Result<(), signorini::Error> {
         dir: &args.out,
         options: &options,
     };
-    let result = run::run_bar(&scene, Some(out), progress_sink(args.quiet).as_mut())?;
+    let result = app::run_bar(&scene, Some(out), progress_sink(args.quiet).as_mut())?;
     if !args.quiet {
         print_summary(&result.summary, &args.out);
     }
@@ -668,7 +669,7 @@ fn run_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
         dir: &out,
         options: &options,
     };
-    let result = run::run_scene(&scene, Some(o), progress_sink(args.quiet).as_mut())
+    let result = app::run_scene(&scene, Some(o), progress_sink(args.quiet).as_mut())
         .map_err(|e| e.in_file(&args.scene))?;
     if !args.quiet {
         print_summary(&result.summary, &out);
@@ -683,7 +684,7 @@ fn run_example(name: &str, out: Option<PathBuf>, quiet: bool) -> Result<(), sign
         dir: &out,
         options: &scene.output,
     };
-    let result = run::run_scene(&scene, Some(o), progress_sink(quiet).as_mut())?;
+    let result = app::run_scene(&scene, Some(o), progress_sink(quiet).as_mut())?;
     if !quiet {
         print_summary(&result.summary, &out);
     }
@@ -1189,7 +1190,7 @@ fn main() -> ExitCode {
     signorini::linalg::set_portable_arithmetic(cli.portable_arithmetic);
     signorini::linalg::set_ieee_subnormals(cli.ieee_subnormals);
     // every command's threads (this one and rayon's) in the run's subnormal mode; runs
-    // set it again for library callers (`run::run_scene` and friends)
+    // set it again for library callers (`app::run_scene` and friends)
     let _flush = signorini::linalg::FlushGuard::for_run();
     // every command refuses a limit it cannot read (issue 34: ignored silently before)
     if let Err(e) = signorini::limits::memory_limit_setting() {
@@ -1256,7 +1257,7 @@ fn main() -> ExitCode {
             })
         }
         Some(Command::Sweep(a)) => sweep(&a),
-        Some(Command::Resume { dir, quiet }) => run::resume(&dir, progress_sink(quiet).as_mut())
+        Some(Command::Resume { dir, quiet }) => app::resume(&dir, progress_sink(quiet).as_mut())
             .map(|r| {
                 if !quiet {
                     print_summary(&r.summary, &dir);

@@ -2,8 +2,9 @@
 //! force `E S |v0| / c0 = 1271.472 N` for `T = 2L/c0`, release at `−v0`, total impulse
 //! `2 ρ S L |v0|`.
 
+use signorini::app::run_bar;
 use signorini::integrators::{Forecast, Metric, SchemeKind};
-use signorini::run::{Quiet, RunResult, run_bar};
+use signorini::run::{Quiet, RunResult};
 use signorini::scene::bar::BarScene;
 
 fn bar(kind: SchemeKind, dt: f64) -> BarScene {

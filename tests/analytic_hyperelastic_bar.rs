@@ -8,7 +8,8 @@
 //! mesh and step within 1e-4 (measured 4.8e-6 neo-Hookean, 1.45e-5 SVK, the sign of each
 //! law's stiffening or softening in compression: 1e-4 is about ten times the strain).
 
-use signorini::run::{Quiet, run_scene};
+use signorini::app::run_scene;
+use signorini::run::Quiet;
 use signorini::scene::file::Scene;
 
 /// The bar as a 3-D hex8 solid, or (`plane`) as a plane-strain quad4 strip of height

@@ -5,8 +5,9 @@
 //! reads the θ-method's displacement, linear within the step (eq. 18).
 
 use signorini::analytic::ImpactingBar;
+use signorini::app::run_scene;
+use signorini::run::Quiet;
 use signorini::run::probes::ProbeSummary;
-use signorini::run::{Quiet, run_scene};
 use signorini::scene::file::Scene;
 use signorini::study::sweep::BAR_SCENE;
 

@@ -70,7 +70,7 @@ struct Outcome {
 
 fn run(s: &Scene) -> Outcome {
     let (model, _) = s.build().unwrap();
-    let n1 = model.v0.iter().filter(|&&v| v != 0.0).count();
+    let n1 = model.problem.v0.iter().filter(|&&v| v != 0.0).count();
     let mut integ = model.into_integrator(&s.scheme, s.time.dt).unwrap();
     let h = integ.dt();
     let mut force = Vec::with_capacity(s.steps());
@@ -244,7 +244,8 @@ fn hex_scene(extra: &[&str]) -> Scene {
 
 #[test]
 fn hex8_bars_meshed_non_matching_give_the_rod_plateau() {
-    use signorini::run::{Quiet, run_scene};
+    use signorini::app::run_scene;
+    use signorini::run::Quiet;
     let f_ref = E * AREA * V0 / (2.0 * c0());
     let t_ref = 2.0 / c0();
     for kind in ["moreau-jean", "combined-projection"] {
@@ -284,7 +285,8 @@ fn hex8_bars_meshed_non_matching_give_the_rod_plateau() {
 
 #[test]
 fn redistributed_mass_on_both_sides_removes_the_impact_loss() {
-    use signorini::run::{Quiet, run_scene};
+    use signorini::app::run_scene;
+    use signorini::run::Quiet;
     // Khenous–Laborde–Renard: no mass on the contact nodes of either side, so the
     // closing interface has no inertia to lose. Algorithm 2, energy lost over the run:
     // consistent mass 2.5e-4, redistributed on the striker only 1.2e-4, on both sides
@@ -308,7 +310,8 @@ fn redistributed_mass_on_both_sides_removes_the_impact_loss() {
 
 #[test]
 fn condensed_zone_and_per_column_delassus_agree() {
-    use signorini::run::{Quiet, run_scene};
+    use signorini::app::run_scene;
+    use signorini::run::Quiet;
     // the zone condensation (auto, dense) against the columns path, which solves with
     // the factor for every column: the same iterates to round-off (measured 5e-15)
     let a = run_scene(&hex_scene(&[]), None, &mut Quiet).unwrap();

@@ -6,9 +6,10 @@ use std::path::PathBuf;
 mod common;
 
 use common::{read_frame, read_pvd};
+use signorini::app::{run_bar, run_scene};
 use signorini::io::OutputOptions;
 use signorini::io::frames::{Encoding, FrameStream, FrameWriter};
-use signorini::run::{Output, Quiet, run_bar, run_scene};
+use signorini::run::{Output, Quiet};
 use signorini::scene::bar::BarScene;
 use signorini::scene::file::Scene;
 

@@ -6,8 +6,9 @@ use std::path::PathBuf;
 
 mod common;
 
+use signorini::app::run_bar;
 use signorini::io::OutputOptions;
-use signorini::run::{Output, Quiet, run_bar};
+use signorini::run::{Output, Quiet};
 use signorini::scene::bar::BarScene;
 
 fn tmp(name: &str) -> PathBuf {

@@ -91,9 +91,10 @@ fn cli_run_writes_summary_and_history() {
 /// impulses summed in the same order; the counts exactly).
 #[test]
 fn many_contacts_keep_their_sums_in_the_csv() {
+    use signorini::app::run_scene;
     use signorini::io::{ContactColumns, OutputOptions};
     use signorini::run::Output;
-    use signorini::run::{Quiet, run_scene};
+    use signorini::run::Quiet;
     use signorini::scene::file::Scene;
     let scene = Scene::from_toml(
         r#"

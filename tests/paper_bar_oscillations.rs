@@ -6,8 +6,9 @@
 //! which DESIGN.md reports at 229 N); trapezoidal rule with position-level contact
 //! (Fig. 11) 280 N at h = 5e-7.
 
+use signorini::app::run_bar;
 use signorini::integrators::{Metric, SchemeKind};
-use signorini::run::{Quiet, run_bar};
+use signorini::run::Quiet;
 use signorini::scene::bar::BarScene;
 
 fn plateau_std(kind: SchemeKind, dt: f64, f: impl FnOnce(&mut BarScene)) -> f64 {

@@ -14,7 +14,8 @@
 //!   (measured 1.01×), where the forecast of eq. 62 alone lets a node at the edge of the
 //!   growing patch sink 6.2× the bound.
 
-use signorini::run::{Quiet, run_scene};
+use signorini::app::run_scene;
+use signorini::run::Quiet;
 use signorini::scene::file::Scene;
 
 fn scene(name: &str, overrides: &[&str]) -> Scene {

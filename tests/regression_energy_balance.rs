@@ -8,12 +8,13 @@
 //! shipped scene and scheme measured at most 1.4e-13 of its scale; 1e-9 asserted).
 
 use signorini::Error;
+use signorini::app::run_scene;
 use signorini::contact::ContactJacobian;
 use signorini::integrators::saved::IntegratorState;
 use signorini::integrators::{Integrator, State, StepStats};
 use signorini::model::LinearSystem;
 use signorini::model::energy::EnergyAudit;
-use signorini::run::{Quiet, run_scene};
+use signorini::run::Quiet;
 use signorini::scene::file::Scene;
 
 fn meshes(name: &str) -> std::path::PathBuf {

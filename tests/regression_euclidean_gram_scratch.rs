@@ -2,8 +2,9 @@
 //! that still held `G`, doubling it, so each projection removed only half the
 //! violation (the bar's tip gap halved step after step: −1.25e-7, −6.25e-8, …).
 
+use signorini::app::run_bar;
 use signorini::integrators::{Metric, SchemeKind};
-use signorini::run::{Quiet, run_bar};
+use signorini::run::Quiet;
 use signorini::scene::bar::BarScene;
 
 #[test]

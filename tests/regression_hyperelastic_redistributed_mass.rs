@@ -6,7 +6,8 @@
 //! 1e-3); the two laws differ at O(strain), so the total contact impulses must agree to
 //! 1e-2 (measured 6.4e-4), with no penetration (Algorithm 2: round-off, ≤ 1e-15 m).
 
-use signorini::run::{Quiet, run_scene};
+use signorini::app::run_scene;
+use signorini::run::Quiet;
 use signorini::scene::file::Scene;
 
 fn cube(model: &str) -> Scene {

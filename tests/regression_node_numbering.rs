@@ -9,8 +9,9 @@ use std::path::PathBuf;
 mod common;
 
 use common::{read_frame, read_pvd};
+use signorini::app::run_scene;
 use signorini::io::OutputOptions;
-use signorini::run::{Output, Quiet, run_scene};
+use signorini::run::{Output, Quiet};
 use signorini::scene::file::Scene;
 
 fn tmp(name: &str) -> PathBuf {

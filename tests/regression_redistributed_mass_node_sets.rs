@@ -22,7 +22,7 @@ fn scene(nodes: &str, within: &str) -> String {
 fn masses(text: &str) -> (f64, f64, f64) {
     let (model, _) = Scene::from_toml(text).unwrap().build().unwrap();
     let g = &model.geometry;
-    let m = model.system.mass.as_ref();
+    let m = model.problem.system.mass.as_ref();
     let (mut bottom, mut rest) = (0.0, 0.0);
     for (k, d) in g.dof_of.iter().enumerate() {
         let Some(d) = *d else { continue };
@@ -32,7 +32,7 @@ fn masses(text: &str) -> (f64, f64, f64) {
             .sum();
         if z == 0.0 { bottom += row } else { rest += row }
     }
-    (bottom, rest, model.system.total_mass())
+    (bottom, rest, model.problem.system.total_mass())
 }
 
 #[test]

@@ -94,3 +94,37 @@ fn a_second_run_into_a_held_directory_is_refused_and_a_killed_holder_leaves_no_l
     assert!(Path::new(&out.join("summary.json")).exists());
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// The study_sweep flake of this session (issue 36's test run, under load): a sweep's
+/// directory was refused as held by "another signorini run" whose process was the test
+/// itself. A lock this process holds (here: a run's lock still alive, as a child process
+/// between its fork and its exec would keep it) is waited for, then refused by a message
+/// that says so, without the 26 stray blanks the message had (issue 37 §10); a lock
+/// released during the wait is taken.
+#[test]
+fn a_lock_held_by_this_process_is_waited_for_and_named_as_ours() {
+    use signorini::io::RunLock;
+    let out = std::env::temp_dir().join(format!("signorini-selflock-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let held = RunLock::acquire(&out).unwrap();
+    let t = Instant::now();
+    let msg = RunLock::acquire(&out).unwrap_err().to_string();
+    // the wait is `SELF_HELD_RETRY` (2 s); at least one second of it passed
+    assert!(t.elapsed() >= Duration::from_secs(1), "{:?}", t.elapsed());
+    assert!(
+        msg.contains("another run in this process")
+            && msg.contains(&std::process::id().to_string())
+            && !msg.contains("  "),
+        "{msg}"
+    );
+    // released while the second caller waits: it gets the lock
+    let releaser = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(200));
+        drop(held);
+    });
+    let again = RunLock::acquire(&out);
+    releaser.join().unwrap();
+    assert!(again.is_ok(), "{:?}", again.err());
+    drop(again);
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -35,7 +35,7 @@ fn an_interrupted_run_leaves_a_readable_directory() {
     let _ = std::fs::remove_dir_all(&base);
     let options = signorini::io::OutputOptions::default();
     let full = base.join("full");
-    run::run_bar(
+    signorini::app::run_bar(
         &bar(),
         Some(Output {
             dir: &full,
@@ -45,7 +45,7 @@ fn an_interrupted_run_leaves_a_readable_directory() {
     )
     .unwrap();
     let cut = base.join("cut");
-    let Err(e) = run::run_bar(
+    let Err(e) = signorini::app::run_bar(
         &bar(),
         Some(Output {
             dir: &cut,

@@ -39,13 +39,13 @@ total = [1000.0]
     )
     .unwrap();
     let (model, _) = scene.build().unwrap();
-    let mass = model.system.total_mass();
+    let mass = model.problem.system.total_mass();
     let params = SchemeParams {
         kind: SchemeKind::SchatzmanPaoli,
         ..SchemeParams::default()
     };
     let h = 1e-5;
-    let sys = model.system.clone();
+    let sys = model.problem.system.clone();
     let mut integ = model.into_integrator(&params, h).unwrap();
     let steps = 100;
     for _ in 0..steps {

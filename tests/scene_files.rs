@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use signorini::run::{Quiet, run_bar, run_scene};
+use signorini::app::{run_bar, run_scene};
+use signorini::run::Quiet;
 use signorini::scene::bar::BarScene;
 use signorini::scene::file::Scene;
 
@@ -250,7 +251,8 @@ fn meshio_plate_and_gmsh_ball_on_a_cylinder_run_without_penetration() {
 /// scenes name the key.
 #[test]
 fn academic_examples_run_from_scene_files() {
-    use signorini::run::{Quiet, run_scene};
+    use signorini::app::run_scene;
+    use signorini::run::Quiet;
     let ball = load("bouncing_ball.toml");
     let r = run_scene(&ball, None, &mut Quiet).unwrap();
     let h = ball.time.dt;

@@ -3,8 +3,9 @@
 //! e = 1. Each run must finish without a cap, with finite results, no energy growth,
 //! and the projection schemes without penetration.
 
+use signorini::app::run_bar;
 use signorini::integrators::SchemeKind;
-use signorini::run::{Quiet, run_bar};
+use signorini::run::Quiet;
 use signorini::scene::bar::BarScene;
 use signorini::study::bar::{extreme_cases, extreme_failure};
 

@@ -20,7 +20,7 @@ use pyo3::prelude::*;
 use signorini::Error;
 use signorini::integrators::{Integrator, State, StepStats};
 use signorini::io::OutputOptions;
-use signorini::run::{self, Output, Progress, RunChecks};
+use signorini::run::{Output, Progress, RunChecks};
 use signorini::scene::bar::BarScene;
 use signorini::scene::file::Scene as FileScene;
 
@@ -401,8 +401,8 @@ impl PySimulation {
                 options: &options,
             };
             match kind {
-                Kind::File(s) => run::run_scene(s, Some(o), &mut prog),
-                Kind::Bar(b) => run::run_bar(b, Some(o), &mut prog),
+                Kind::File(s) => signorini::app::run_scene(s, Some(o), &mut prog),
+                Kind::Bar(b) => signorini::app::run_bar(b, Some(o), &mut prog),
             }
         });
         let r = match result {

@@ -23,10 +23,9 @@
 //! friction on undamped elastic bodies").
 
 use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};
+use super::problem::Problem;
 use super::{Integrator, ProjectionRule, SchemeParams, StepStats};
-use crate::contact::ContactSet;
 use crate::error::Error;
-use crate::model::LinearSystem;
 
 /// Algorithm 2.
 pub struct CombinedProjection {
@@ -36,16 +35,9 @@ pub struct CombinedProjection {
 
 impl CombinedProjection {
     /// Factors `M̂` and condenses `W`, `W_D`, `W_N` once.
-    pub fn new(
-        params: &SchemeParams,
-        system: LinearSystem,
-        contacts: Box<dyn ContactSet>,
-        q0: &[f64],
-        v0: &[f64],
-        h: f64,
-    ) -> Result<Self, Error> {
+    pub fn new(params: &SchemeParams, problem: Problem, h: f64) -> Result<Self, Error> {
         Ok(CombinedProjection {
-            core: ThetaCore::new(params, system, contacts, q0, v0, h, true)?,
+            core: ThetaCore::new(params, problem, h, true)?,
             rule: params.projection_rule,
         })
     }

@@ -84,6 +84,7 @@
 //! - Rows that keep `g = 0` with `P = 0` and `τ < 0` because eq. 65 had no solution for
 //!   the index set are counted in `StepStats::held_rows` (position problem below).
 
+use super::problem::Problem;
 use super::structure::Structure;
 use super::{Forecast, NewtonParams, ProjectionRule, SchemeParams, State, StepStats};
 use crate::assembly::linear_combination;
@@ -595,32 +596,13 @@ const STALL: usize = 5;
 /// position solve ([`ThetaCore::coupled_correction`]).
 const COUPLED_AFTER: usize = 2;
 
-/// Checks the scheme parameters, `h` and the initial state (`n` values each).
-pub(crate) fn check_step_inputs(
-    params: &SchemeParams,
-    n: usize,
-    q0: &[f64],
-    v0: &[f64],
-    h: f64,
-) -> Result<(), Error> {
-    params.validate()?;
-    crate::error::require_positive("dt", h)?;
-    check_vector("initial displacement", q0, n)?;
-    check_vector("initial velocity", v0, n)
-}
-
-/// Checks the inputs ([`check_step_inputs`]), then forms and factors `M + a·K + b·C`
-/// (the step matrix of a scheme), naming it `what` in errors.
+/// Forms and factors `M + a·K + b·C` (the step matrix of a scheme), naming it `what` in
+/// errors; the inputs were checked once by [`Problem::validate`].
 pub(crate) fn factor_step_matrix(
-    params: &SchemeParams,
     sys: &LinearSystem,
-    q0: &[f64],
-    v0: &[f64],
-    h: f64,
     (a, b): (f64, f64),
     what: &str,
 ) -> Result<Box<dyn LinearSolver>, Error> {
-    check_step_inputs(params, sys.ndof(), q0, v0, h)?;
     let mut terms = vec![(1.0, &sys.mass), (a, &sys.stiffness)];
     if let Some(c) = &sys.damping {
         terms.push((b, c));
@@ -805,13 +787,17 @@ impl ThetaCore {
     /// Delassus operators. `with_projection` also prepares `W_D` and `W_N`.
     pub fn new(
         params: &SchemeParams,
-        sys: LinearSystem,
-        contacts: Box<dyn ContactSet>,
-        q0: &[f64],
-        v0: &[f64],
+        problem: Problem,
         h: f64,
         with_projection: bool,
     ) -> Result<Self, Error> {
+        let Problem {
+            system: sys,
+            contacts,
+            q0,
+            v0,
+        } = problem;
+        let (q0, v0) = (&q0[..], &v0[..]);
         check_block_rows(params, contacts.as_ref())?;
         // A nonsymmetric M̂ⁿ (gyroscopic terms) makes W nonsymmetric: `N = M̂⁻¹` is then
         // no metric (eq. 59 needs N positive definite) and block pivoting's Cholesky
@@ -841,16 +827,11 @@ impl ThetaCore {
         });
         let factor = match &mut structure {
             None => factor_step_matrix(
-                params,
                 &sys,
-                q0,
-                v0,
-                h,
                 (h * h * theta * theta, h * theta),
                 "iteration matrix M + hθC + h²θ²K",
             )?,
             Some(st) => {
-                check_step_inputs(params, sys.ndof(), q0, v0, h)?;
                 // the pattern's symbolic analysis, on M̂ⁿ at the initial state (the mass
                 // alone is singular where `mass = "redistributed"` leaves contact nodes
                 // none, issue 34); the first step forms its own values

@@ -18,10 +18,9 @@
 //! the ball drop with e = 1; none with the closure).
 
 use super::core::{PositionRule, ThetaCore, delegate_to_core};
+use super::problem::Problem;
 use super::{Forecast, Integrator, SchemeParams, StepStats};
-use crate::contact::ContactSet;
 use crate::error::Error;
-use crate::model::LinearSystem;
 
 /// Algorithm 1.
 pub struct DirectProjection {
@@ -32,16 +31,9 @@ pub struct DirectProjection {
 
 impl DirectProjection {
     /// Factors `M̂` and condenses `W`, `W_D`, `W_N` once.
-    pub fn new(
-        params: &SchemeParams,
-        system: LinearSystem,
-        contacts: Box<dyn ContactSet>,
-        q0: &[f64],
-        v0: &[f64],
-        h: f64,
-    ) -> Result<Self, Error> {
+    pub fn new(params: &SchemeParams, problem: Problem, h: f64) -> Result<Self, Error> {
         Ok(DirectProjection {
-            core: ThetaCore::new(params, system, contacts, q0, v0, h, true)?,
+            core: ThetaCore::new(params, problem, h, true)?,
             forecast: params.forecast,
             closure: params.activation_closure,
         })

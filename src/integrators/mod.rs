@@ -28,6 +28,7 @@ pub mod core;
 pub mod direct_projection;
 pub mod moreau_jean;
 pub mod plan;
+pub mod problem;
 pub mod saved;
 pub mod schatzman_paoli;
 pub mod structure;
@@ -368,6 +369,7 @@ pub enum Forecast {
 }
 
 pub use crate::delassus::Metric;
+pub use problem::Problem;
 
 /// Algorithm 2's position rule on the active set `Iᵛ` (eq. 65 and 67–70): which active
 /// rows are held at `g_{k+1} = 0` with a free `τ`; the others take `0 ≤ g ⊥ τ ≥ 0`.
@@ -654,67 +656,34 @@ impl SchemeParams {
     }
 }
 
-/// Everything [`build`] checks before it factors anything: the parameters, the step,
-/// the free dofs, the scheme against the structure, prescribed motion and friction, and
-/// the initial state's length and finiteness. `signorini check` runs it with the plan
-/// ([`plan::plan`]) instead of building.
-pub fn validate(
+/// Builds the integrator chosen by `params` for `problem` with step `h`, after checking
+/// them once ([`Problem::validate`]); nothing below checks them again.
+pub fn build_problem(
     params: &SchemeParams,
-    system: &LinearSystem,
-    contacts: &dyn ContactSet,
-    q0: &[f64],
-    v0: &[f64],
+    problem: Problem,
     h: f64,
-) -> Result<(), Error> {
-    params.validate()?;
-    crate::error::require_positive("dt", h)?;
-    if system.ndof() == 0 {
-        return Err(Error::invalid(
-            "bodies",
-            "0 free degrees of freedom",
-            "every node is fixed or prescribed: there is nothing to integrate (free some \
-             nodes of `fixed`, or drop the [[prescribed]] entries that cover every node)",
-        ));
-    }
-    if system.linearity() != crate::model::system::Linearity::Linear
-        && params.kind == SchemeKind::SchatzmanPaoli
-    {
-        return Err(Error::invalid(
-            "scheme.kind",
-            params.kind.name(),
-            "integrates linear structures only (a body has a nonlinear material); use a \
-             θ-method scheme (moreau-jean, direct-projection, combined-projection)",
-        ));
-    }
-    if system.prescribed.is_some() && params.kind == SchemeKind::SchatzmanPaoli {
-        return Err(Error::invalid(
-            "scheme.kind",
-            params.kind.name(),
-            "does not take prescribed velocities ([[prescribed]]); use a θ-method scheme",
-        ));
-    }
-    if contacts.has_friction()
-        && matches!(
-            params.kind,
-            SchemeKind::SchatzmanPaoli | SchemeKind::TrapezoidPosition
-        )
-    {
-        // Schatzman–Paoli (eq. 20–22) and the position-level trapezoid state the contact
-        // at position level, where Coulomb's law (a velocity-level law, eq. 12–15) has
-        // no discrete counterpart in the paper.
-        return Err(Error::invalid(
-            "scheme.kind",
-            params.kind.name(),
-            "does not support Coulomb friction (a contact has friction > 0); use \
-             moreau-jean, direct-projection or combined-projection",
-        ));
-    }
-    core::check_vector("initial displacement", q0, system.ndof())?;
-    core::check_vector("initial velocity", v0, system.ndof())
+) -> Result<Box<dyn Integrator>, Error> {
+    problem.validate(params, h)?;
+    Ok(match params.kind {
+        SchemeKind::MoreauJean => Box::new(moreau_jean::MoreauJean::new(params, problem, h)?),
+        SchemeKind::DirectProjection => Box::new(direct_projection::DirectProjection::new(
+            params, problem, h,
+        )?),
+        SchemeKind::CombinedProjection => Box::new(combined_projection::CombinedProjection::new(
+            params, problem, h,
+        )?),
+        SchemeKind::TrapezoidPosition => {
+            Box::new(trapezoid::TrapezoidPosition::new(params, problem, h)?)
+        }
+        SchemeKind::SchatzmanPaoli => {
+            Box::new(schatzman_paoli::SchatzmanPaoli::new(params, problem, h)?)
+        }
+    })
 }
 
-/// Builds the integrator chosen by `params` for `system` with `contacts`, initial
-/// state `(q0, v0)` at `t = 0` and step `h`.
+/// [`build_problem`] from the parts of a [`Problem`]: the structure `system`, its
+/// `contacts`, the initial state `(q0, v0)` at `t = 0` (the form the tests, benches and
+/// studies that assemble a system by hand use).
 pub fn build(
     params: &SchemeParams,
     system: LinearSystem,
@@ -723,22 +692,9 @@ pub fn build(
     v0: &[f64],
     h: f64,
 ) -> Result<Box<dyn Integrator>, Error> {
-    validate(params, &system, contacts.as_ref(), q0, v0, h)?;
-    Ok(match params.kind {
-        SchemeKind::MoreauJean => Box::new(moreau_jean::MoreauJean::new(
-            params, system, contacts, q0, v0, h,
-        )?),
-        SchemeKind::DirectProjection => Box::new(direct_projection::DirectProjection::new(
-            params, system, contacts, q0, v0, h,
-        )?),
-        SchemeKind::CombinedProjection => Box::new(combined_projection::CombinedProjection::new(
-            params, system, contacts, q0, v0, h,
-        )?),
-        SchemeKind::TrapezoidPosition => Box::new(trapezoid::TrapezoidPosition::new(
-            params, system, contacts, q0, v0, h,
-        )?),
-        SchemeKind::SchatzmanPaoli => Box::new(schatzman_paoli::SchatzmanPaoli::new(
-            params, system, contacts, q0, v0, h,
-        )?),
-    })
+    build_problem(
+        params,
+        Problem::new(system, contacts, q0.to_vec(), v0.to_vec()),
+        h,
+    )
 }

@@ -19,10 +19,9 @@
 //! `|U_k|(1−θ)h` below where it started. `activation_closure = false` is eq. 61/62 alone.
 
 use super::core::{PositionRule, ThetaCore, delegate_to_core};
+use super::problem::Problem;
 use super::{Forecast, Integrator, SchemeParams, StepStats};
-use crate::contact::ContactSet;
 use crate::error::Error;
-use crate::model::LinearSystem;
 
 /// The Moreau–Jean integrator.
 pub struct MoreauJean {
@@ -33,16 +32,9 @@ pub struct MoreauJean {
 
 impl MoreauJean {
     /// Factors `M̂` and condenses `W` once.
-    pub fn new(
-        params: &SchemeParams,
-        system: LinearSystem,
-        contacts: Box<dyn ContactSet>,
-        q0: &[f64],
-        v0: &[f64],
-        h: f64,
-    ) -> Result<Self, Error> {
+    pub fn new(params: &SchemeParams, problem: Problem, h: f64) -> Result<Self, Error> {
         Ok(MoreauJean {
-            core: ThetaCore::new(params, system, contacts, q0, v0, h, false)?,
+            core: ThetaCore::new(params, problem, h, false)?,
             forecast: params.forecast,
             closure: params.activation_closure,
         })

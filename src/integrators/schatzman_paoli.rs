@@ -17,6 +17,7 @@
 //! The reported impulse is `P/h` (N·s), comparable with the velocity-level schemes.
 
 use super::core::{Workspace, factor_step_matrix, fail, grow_solve, newton_change};
+use super::problem::Problem;
 use super::{Integrator, Metric, NewtonParams, SchemeParams, State, StepStats};
 use crate::contact::{ContactJacobian, ContactSet};
 use crate::delassus::{Delassus, Op};
@@ -58,21 +59,17 @@ pub struct SchatzmanPaoli {
 
 impl SchatzmanPaoli {
     /// Factors `M_SP` and condenses `W_SP = Gᵀ M_SP⁻¹ G` once.
-    pub fn new(
-        params: &SchemeParams,
-        sys: LinearSystem,
-        contacts: Box<dyn ContactSet>,
-        q0: &[f64],
-        v0: &[f64],
-        h: f64,
-    ) -> Result<Self, Error> {
-        let theta = params.theta;
-        let factor = factor_step_matrix(
-            params,
-            &sys,
+    pub fn new(params: &SchemeParams, problem: Problem, h: f64) -> Result<Self, Error> {
+        let Problem {
+            system: sys,
+            contacts,
             q0,
             v0,
-            h,
+        } = problem;
+        let (q0, v0) = (&q0[..], &v0[..]);
+        let theta = params.theta;
+        let factor = factor_step_matrix(
+            &sys,
             (h * h * theta, 0.5 * h * theta),
             "Schatzman–Paoli matrix M + h²θK + (hθ/2)C",
         )?;

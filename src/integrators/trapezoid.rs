@@ -5,10 +5,9 @@
 //! contact velocity and force oscillate step to step (the paper's Fig. 11).
 
 use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};
+use super::problem::Problem;
 use super::{Integrator, SchemeParams, StepStats};
-use crate::contact::ContactSet;
 use crate::error::Error;
-use crate::model::LinearSystem;
 
 /// The position-level trapezoidal rule.
 pub struct TrapezoidPosition {
@@ -17,16 +16,9 @@ pub struct TrapezoidPosition {
 
 impl TrapezoidPosition {
     /// Factors `M̂` and condenses `W` once.
-    pub fn new(
-        params: &SchemeParams,
-        system: LinearSystem,
-        contacts: Box<dyn ContactSet>,
-        q0: &[f64],
-        v0: &[f64],
-        h: f64,
-    ) -> Result<Self, Error> {
+    pub fn new(params: &SchemeParams, problem: Problem, h: f64) -> Result<Self, Error> {
         Ok(TrapezoidPosition {
-            core: ThetaCore::new(params, system, contacts, q0, v0, h, false)?,
+            core: ThetaCore::new(params, problem, h, false)?,
         })
     }
 }

@@ -124,6 +124,10 @@ pub fn check_output_dir(flag: &str, dir: &Path) -> Result<(), Error> {
 /// The lock file a run holds in its output directory.
 pub const LOCK_FILE: &str = ".signorini.lock";
 
+/// How long [`RunLock::acquire`] waits for a lock that this process itself holds (a
+/// child process between its fork and its exec) before refusing the directory.
+const SELF_HELD_RETRY: std::time::Duration = std::time::Duration::from_secs(2);
+
 /// One run's hold on its output directory: the operating system's advisory exclusive
 /// lock (`flock` on Unix, `LockFileEx` on Windows, through `std::fs::File::try_lock`) on
 /// [`LOCK_FILE`], held for the run or its resume and released when dropped, or by the
@@ -148,25 +152,40 @@ impl RunLock {
             .truncate(false)
             .open(&path)
             .map_err(|e| Error::write(&path, e))?;
-        match file.try_lock() {
-            Ok(()) => {}
-            Err(std::fs::TryLockError::WouldBlock) => {
-                let holder = std::fs::read_to_string(&path).unwrap_or_default();
-                let holder = holder.trim();
-                return Err(Error::invalid(
-                    "--out",
-                    dir.display(),
-                    &format!(
-                        "another signorini run{} is writing into this directory; wait for                          it to finish or choose another output directory",
-                        if holder.is_empty() {
-                            String::new()
-                        } else {
-                            format!(" (process {holder})")
-                        }
-                    ),
-                ));
+        // a descriptor this process's threads let a child inherit between its fork and
+        // its exec holds the lock for that moment (flock belongs to the open file,
+        // which the child shares): when the holder is this process, try again for a
+        // while before refusing
+        let deadline = std::time::Instant::now() + SELF_HELD_RETRY;
+        loop {
+            match file.try_lock() {
+                Ok(()) => break,
+                Err(std::fs::TryLockError::WouldBlock) => {
+                    let holder = std::fs::read_to_string(&path).unwrap_or_default();
+                    let holder = holder.trim();
+                    let ours = holder == std::process::id().to_string();
+                    if ours && std::time::Instant::now() < deadline {
+                        std::thread::sleep(std::time::Duration::from_millis(10));
+                        continue;
+                    }
+                    let who = if ours {
+                        format!("another run in this process (process {holder})")
+                    } else if holder.is_empty() {
+                        "another signorini run".to_string()
+                    } else {
+                        format!("another signorini run (process {holder})")
+                    };
+                    return Err(Error::invalid(
+                        "--out",
+                        dir.display(),
+                        &format!(
+                            "{who} is writing into this directory; wait for it to finish or \
+                             choose another output directory"
+                        ),
+                    ));
+                }
+                Err(std::fs::TryLockError::Error(e)) => return Err(Error::write(&path, e)),
             }
-            Err(std::fs::TryLockError::Error(e)) => return Err(Error::write(&path, e)),
         }
         file.set_len(0).map_err(|e| Error::write(&path, e))?;
         writeln!(file, "{}", std::process::id()).map_err(|e| Error::write(&path, e))?;

@@ -47,27 +47,6 @@ pub const VERSION: u32 = 6;
 /// The checkpoint's file name in a run directory.
 pub const FILE: &str = "checkpoint.json";
 
-/// What to rebuild on resume.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
-pub enum RunSource {
-    /// The impacting bar (`signorini bar`), with its parameters.
-    Bar {
-        /// The bar scene as run.
-        scene: crate::scene::bar::BarScene,
-    },
-    /// A scene file: its text as run (a later edit of the file does not change the
-    /// resumed run) and the directory its relative mesh paths start from.
-    Scene {
-        /// The scene file's path (for messages).
-        file: PathBuf,
-        /// Its TOML text.
-        toml: String,
-        /// The directory of relative mesh paths.
-        base_dir: PathBuf,
-    },
-}
-
 /// The run's accumulators and output cursors at the checkpoint.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -183,30 +162,6 @@ pub fn build_id() -> String {
     )
 }
 
-impl RunSource {
-    /// The files the run reads: the scene file and its mesh files (none for the bar).
-    pub fn input_files(&self) -> Result<Vec<InputFile>, Error> {
-        match self {
-            RunSource::Bar { .. } => Ok(Vec::new()),
-            RunSource::Scene {
-                file,
-                toml,
-                base_dir,
-            } => {
-                let scene = crate::scene::file::Scene::from_toml(toml)?;
-                let mut files = Vec::new();
-                if !file.as_os_str().is_empty() {
-                    files.push(InputFile::of(file)?);
-                }
-                for path in scene.mesh_files() {
-                    files.push(InputFile::of(&base_dir.join(path))?);
-                }
-                Ok(files)
-            }
-        }
-    }
-}
-
 /// A whole checkpoint.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -215,8 +170,9 @@ pub struct Checkpoint {
     pub format: String,
     /// [`VERSION`].
     pub version: u32,
-    /// What to rebuild.
-    pub source: RunSource,
+    /// What the application needs to rebuild the run, as it gave it (opaque to the
+    /// driver: `crate::app::source::RunSource` for `signorini`'s runs).
+    pub source: serde_json::Value,
     /// The output options as run.
     pub output: crate::io::OutputOptions,
     /// Checkpoint every this many steps (the resumed run goes on doing so).

@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::checkpoint::{self, Checkpoint, RunSource, RunState};
+use super::checkpoint::{self, Checkpoint, RunState};
 use super::driver::Observer;
 use super::summary::{FrictionSummary, Iterations, MeanMax};
 use crate::error::Error;
@@ -215,7 +215,7 @@ impl Writers {
 pub(super) struct CheckpointPlan {
     pub(super) every: usize,
     pub(super) dir: PathBuf,
-    pub(super) source: RunSource,
+    pub(super) source: serde_json::Value,
     pub(super) output: OutputOptions,
     pub(super) steps: usize,
     pub(super) energy0: f64,

@@ -223,7 +223,7 @@ pub struct Summary {
     pub parameters: serde_json::Value,
 }
 
-/// What [`run_bar`](super::run_bar) returns: the summary and the per-step contact force.
+/// What [`run_bar`](crate::app::run_bar) returns: the summary and the per-step contact force.
 pub struct RunResult {
     /// The run summary.
     pub summary: Summary,

@@ -5,6 +5,7 @@
 //! `x = −gap`; the whole bar moves with `velocity` (negative: towards the wall), so
 //! `g(q) = u_0 + gap`.
 
+use crate::integrators::Problem;
 use serde::{Deserialize, Serialize};
 
 use crate::analytic::ImpactingBar;
@@ -128,10 +129,12 @@ impl BarScene {
             self.restitution,
         )?;
         Ok(Model {
-            system,
-            contacts: Box::new(contacts),
-            q0: vec![0.0; n],
-            v0: vec![self.velocity; n],
+            problem: Problem {
+                system,
+                contacts: Box::new(contacts),
+                q0: vec![0.0; n],
+                v0: vec![self.velocity; n],
+            },
             geometry: Geometry {
                 outlines: vec![wall(-self.gap, 0.2 * self.length)],
                 ..Geometry::rod(self.length, self.elements, self.young, self.density)

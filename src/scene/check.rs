@@ -105,9 +105,9 @@ impl BarScene {
     pub fn check(&self) -> Result<CheckReport, Error> {
         let model = self.build()?;
         let report = ModelReport {
-            dofs: model.q0.len(),
+            dofs: model.problem.q0.len(),
             cells: self.elements,
-            contacts: model.contacts.len(),
+            contacts: model.problem.contacts.len(),
             linear_contacts: true,
             max_friction: 0.0,
             damping: false,
@@ -141,7 +141,7 @@ impl CheckReport {
         hdf5: bool,
     ) -> Result<CheckReport, Error> {
         let mut plan = model.plan(params, dt)?;
-        let (m, rows) = (model.contacts.len(), model.contacts.rows());
+        let (m, rows) = (model.problem.contacts.len(), model.problem.contacts.rows());
         plan.add_history(report.dofs, m, (rows - m) / m.max(1), hdf5);
         let newton = match (report.linear_structure, report.linear_contacts) {
             (true, true) => {

@@ -4,6 +4,7 @@
 //! the value the paper (or Ballard's example) uses, so `[example] kind = "rocking-block"`
 //! alone reproduces Fig. 9's set-up.
 
+use crate::integrators::Problem;
 use serde::{Deserialize, Serialize};
 
 use crate::contact::block::BlockCorners;
@@ -212,10 +213,12 @@ impl ExampleSpec {
                     q0,
                     v0,
                 } => Model {
-                    system: rigid_block(mass, length, thickness, gravity)?,
-                    contacts: Box::new(BlockCorners::new(length, thickness, restitution)?),
-                    q0: q0.to_vec(),
-                    v0: v0.to_vec(),
+                    problem: Problem {
+                        system: rigid_block(mass, length, thickness, gravity)?,
+                        contacts: Box::new(BlockCorners::new(length, thickness, restitution)?),
+                        q0: q0.to_vec(),
+                        v0: v0.to_vec(),
+                    },
                     geometry: Geometry::default(),
                     probes: Vec::new(),
                 },
@@ -234,10 +237,12 @@ impl ExampleSpec {
                     }
                     let corners = SliderCorners::new(&mechanism, restitution, friction)?;
                     Model {
-                        system: mechanism.system()?,
-                        contacts: Box::new(corners),
-                        q0: q0.to_vec(),
-                        v0: v0.to_vec(),
+                        problem: Problem {
+                            system: mechanism.system()?,
+                            contacts: Box::new(corners),
+                            q0: q0.to_vec(),
+                            v0: v0.to_vec(),
+                        },
                         geometry: Geometry::default(),
                         probes: Vec::new(),
                     }
@@ -256,8 +261,11 @@ impl ExampleSpec {
 /// ball at v0 = 1e308 wrote a non-finite history and exited 0). The examples are in
 /// metres of order one: 1e-9 m of overlap is round-off of their set-up.
 fn check_start(model: &Model) -> Result<(), Error> {
-    let mut gap = vec![0.0; model.contacts.len()];
-    model.contacts.starting_gaps(&model.q0, &mut gap);
+    let mut gap = vec![0.0; model.problem.contacts.len()];
+    model
+        .problem
+        .contacts
+        .starting_gaps(&model.problem.q0, &mut gap);
     if let Some((k, &g)) = gap
         .iter()
         .enumerate()
@@ -266,7 +274,7 @@ fn check_start(model: &Model) -> Result<(), Error> {
     {
         return Err(Error::invalid(
             "q0",
-            format!("{:?}", model.q0),
+            format!("{:?}", model.problem.q0),
             &format!(
                 "contact {k} starts {:.3e} m inside its obstacle (gap {g:.3e} m): give a \
                  starting position with every gap ≥ 0",
@@ -274,11 +282,14 @@ fn check_start(model: &Model) -> Result<(), Error> {
             ),
         ));
     }
-    let energy = model.system.kinetic_energy(&model.q0, &model.v0);
+    let energy = model
+        .problem
+        .system
+        .kinetic_energy(&model.problem.q0, &model.problem.v0);
     if !energy.is_finite() {
         return Err(Error::invalid(
             "v0",
-            format!("{:?}", model.v0),
+            format!("{:?}", model.problem.v0),
             &format!("gives an initial kinetic energy of {energy:e} J: expected a finite one"),
         ));
     }
@@ -295,10 +306,12 @@ fn on_the_line(
     crate::error::require_in("q0", q0, 0.0, f64::MAX)?;
     let contact = NodesOnPlane::new(vec![vec![0]], vec![vec![0.0]], vec![1.0], 0.0, restitution)?;
     Ok(Model {
-        system,
-        contacts: Box::new(contact),
-        q0: vec![q0],
-        v0: vec![v0],
+        problem: Problem {
+            system,
+            contacts: Box::new(contact),
+            q0: vec![q0],
+            v0: vec![v0],
+        },
         geometry: Geometry::default(),
         probes: Vec::new(),
     })

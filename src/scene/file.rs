@@ -39,6 +39,7 @@
 //! 1-D bar of eq. 71; node set `x0` is node 0). Meshes read from files come with the
 //! mesh readers.
 
+use crate::integrators::Problem;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -960,22 +961,23 @@ impl Scene {
         if let Some(x) = &self.example {
             let model = x.build()?;
             let report = ModelReport {
-                dofs: model.system.ndof(),
+                dofs: model.problem.system.ndof(),
                 cells: 0,
-                contacts: model.contacts.len(),
-                linear_contacts: model.contacts.is_linear(),
+                contacts: model.problem.contacts.len(),
+                linear_contacts: model.problem.contacts.is_linear(),
                 max_friction: model
+                    .problem
                     .contacts
                     .laws()
                     .iter()
                     .map(|l| l.friction)
                     .fold(0.0, f64::max),
-                damping: model.system.damping.is_some(),
-                gravity: model.system.force.iter().any(|&f| f != 0.0)
+                damping: model.problem.system.damping.is_some(),
+                gravity: model.problem.system.force.iter().any(|&f| f != 0.0)
                     || matches!(x, super::example::ExampleSpec::SliderCrank { mechanism, .. }
                         if mechanism.gravity > 0.0),
                 fixed_dofs: 0,
-                linear_structure: model.system.nonlinear.is_empty(),
+                linear_structure: model.problem.system.nonlinear.is_empty(),
                 interfaces: Vec::new(),
             };
             return Ok((model, report));
@@ -1384,10 +1386,12 @@ impl Scene {
         }
         Ok((
             Model {
-                system,
-                contacts,
-                q0: vec![0.0; n],
-                v0,
+                problem: Problem {
+                    system,
+                    contacts,
+                    q0: vec![0.0; n],
+                    v0,
+                },
                 geometry,
                 probes,
             },

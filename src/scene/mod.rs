@@ -11,21 +11,14 @@ pub mod file;
 pub mod solid_bar;
 pub mod sweep;
 
-use crate::contact::ContactSet;
 use crate::error::Error;
-use crate::integrators::{self, Integrator, SchemeParams};
-use crate::model::LinearSystem;
+use crate::integrators::{self, Integrator, Problem, SchemeParams};
 
-/// A built scene: the assembled structure, its contacts and its initial state.
+/// A built scene: the problem the integrator is built for (the assembled structure, its
+/// contacts and its initial state) and what the outputs need besides.
 pub struct Model {
-    /// The assembled structure (after Dirichlet elimination).
-    pub system: LinearSystem,
-    /// The candidate contacts.
-    pub contacts: Box<dyn ContactSet>,
-    /// Initial displacement.
-    pub q0: Vec<f64>,
-    /// Initial velocity.
-    pub v0: Vec<f64>,
+    /// The structure, contacts and initial state.
+    pub problem: Problem,
     /// Points, cells and dof map for the field output.
     pub geometry: crate::io::frames::Geometry,
     /// Displacement probes (a scene's `[[probes]]`).
@@ -39,22 +32,16 @@ impl Model {
         params: &SchemeParams,
         dt: f64,
     ) -> Result<Box<dyn Integrator>, Error> {
-        integrators::build(params, self.system, self.contacts, &self.q0, &self.v0, dt)
+        integrators::build_problem(params, self.problem, dt)
     }
 
     /// Validates the run of `params` at step `dt` as [`Model::into_integrator`] would and
     /// plans it ([`integrators::plan::plan`]: paths and memory ledger) without building
     /// it: what `signorini check` costs.
     pub fn plan(&self, params: &SchemeParams, dt: f64) -> Result<integrators::plan::Plan, Error> {
-        integrators::validate(
-            params,
-            &self.system,
-            self.contacts.as_ref(),
-            &self.q0,
-            &self.v0,
-            dt,
-        )?;
-        integrators::plan::plan(params, &self.system, self.contacts.as_ref(), dt)
+        self.problem.validate(params, dt)?;
+        let p = &self.problem;
+        integrators::plan::plan(params, &p.system, p.contacts.as_ref(), dt)
     }
 }
 

@@ -3,6 +3,7 @@
 //! With ν = 0 the axial response is the rod's, so the summed contact force has the
 //! same analytic plateau `E S |v0| / c0` (sec. 6.2).
 
+use crate::integrators::Problem;
 use serde::{Deserialize, Serialize};
 
 use crate::analytic::ImpactingBar;
@@ -145,10 +146,12 @@ impl SolidBarScene {
         let mut system = system;
         system.ordering = Some(crate::model::ordering::nested_dissection(&geometry, n));
         Ok(Model {
-            system,
-            contacts: Box::new(contacts),
-            q0: vec![0.0; n],
-            v0,
+            problem: Problem {
+                system,
+                contacts: Box::new(contacts),
+                q0: vec![0.0; n],
+                v0,
+            },
             geometry,
             probes: Vec::new(),
         })

@@ -22,11 +22,12 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use crate::app::run_bar;
 use crate::error::Error;
 use crate::integrators::SchemeKind;
 use crate::io::write_atomic;
 use crate::plot::{Curve, lines};
-use crate::run::{Quiet, Summary, run_bar};
+use crate::run::{Quiet, Summary};
 use crate::scene::bar::BarScene;
 
 /// Element counts of `speed-accuracy`.

@@ -22,10 +22,11 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use crate::app::{run_bar, run_scene};
 use crate::error::Error;
 use crate::integrators::SchemeKind;
 use crate::io::write_atomic;
-use crate::run::{Quiet, RunResult, run_bar, run_scene};
+use crate::run::{Quiet, RunResult};
 use crate::scene::bar::BarScene;
 use crate::scene::file::Scene;
 

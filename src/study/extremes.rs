@@ -31,11 +31,12 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
+use crate::app::run_scene;
 use crate::error::Error;
 use crate::integrators::{DEFAULT_MAX_ENERGY_EXCESS, SchemeKind};
 use crate::io::write_atomic;
 use crate::plot::{Curve, lines};
-use crate::run::{Quiet, run_scene};
+use crate::run::Quiet;
 use crate::scene::file::Scene;
 
 /// One extreme: a change of the scene's own settings.

@@ -45,10 +45,11 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+use crate::app::run_scene;
 use crate::error::Error;
 use crate::io::write_atomic;
 use crate::plot::{Curve, lines};
-use crate::run::{Quiet, run_scene};
+use crate::run::Quiet;
 use crate::scene::file::{MeshSpec, Scene};
 use crate::scene::sweep::scene_key;
 pub use crate::scene::sweep::{MAX_POINTS, SweepSpec};

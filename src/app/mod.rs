@@ -1,0 +1,223 @@
+//! The application: what `signorini bar`, `signorini run` and `signorini resume` do, as
+//! library calls. It sits above the scenes (it builds a scene's model and integrator)
+//! and below the studies and the CLI; it hands the driver (`crate::run`) an integrator
+//! and, for checkpoints, what it needs to rebuild the run ([`source::RunSource`], which
+//! the driver saves without reading).
+
+pub mod source;
+
+use std::path::Path;
+use std::time::Instant;
+
+use crate::error::Error;
+use crate::run::checkpoint::{self, Checkpoint};
+use crate::run::{
+    Checkpointing, Output, Progress, RunChecks, RunResult, finish, probes, run_checkpointed,
+};
+use crate::scene::bar::BarScene;
+use source::RunSource;
+
+/// Announces the integrator build of `model` (dofs and contacts) to `progress`.
+fn announce_integrator(model: &crate::scene::Model, progress: &mut dyn Progress) {
+    progress.phase(&format!(
+        "building the integrator: factoring M̂ ({} dofs) and the Delassus data of {} contact(s)",
+        model.problem.q0.len(),
+        model.problem.contacts.len()
+    ));
+}
+
+/// Runs the bar scene; writes `history.csv`, `summary.json` and the field frames
+/// (`fields.pvd`, `fields/*.vtu`) into `out.dir` if given.
+pub fn run_bar(
+    scene: &BarScene,
+    out: Option<Output>,
+    progress: &mut dyn Progress,
+) -> Result<RunResult, Error> {
+    run_bar_from(scene, out, progress, None)
+}
+
+fn run_bar_from(
+    scene: &BarScene,
+    out: Option<Output>,
+    progress: &mut dyn Progress,
+    resume: Option<&Checkpoint>,
+) -> Result<RunResult, Error> {
+    let _flush = crate::linalg::FlushGuard::for_run();
+    let t0 = Instant::now();
+    progress.phase("building the model");
+    let mut model = scene.build()?;
+    let geometry = std::mem::take(&mut model.geometry);
+    announce_integrator(&model, progress);
+    let t1 = Instant::now();
+    let mut integ = model.into_integrator(&scene.scheme, scene.dt)?;
+    let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
+    let parameters = serde_json::to_value(scene).expect("scene serializes");
+    let checks = RunChecks::new(&scene.scheme, geometry.size());
+    let ckpt =
+        (resume.is_some() || out.is_some_and(|o| o.options.checkpoint_every > 0)).then(|| {
+            Checkpointing {
+                source: RunSource::Bar {
+                    scene: scene.clone(),
+                }
+                .to_value(),
+                // the bar reads no file
+                inputs: Vec::new(),
+                resume,
+            }
+        });
+    run_checkpointed(
+        integ.as_mut(),
+        scene.steps(),
+        scene.elements,
+        scene.scheme.theta,
+        &checks,
+        scene.analytic(),
+        parameters,
+        out.map(|o| (o, geometry)),
+        progress,
+        ckpt,
+        probes::ProbeSet::default(),
+    )
+    .and_then(|r| {
+        let planned = scene.memory().total();
+        finish(r, setup, planned, out)
+    })
+}
+
+/// Runs a scene file; writes into `out.dir` if given. Errors raised while building name
+/// the scene's key paths; [`Scene::from_file`](crate::scene::file::Scene::from_file)
+/// adds the file.
+pub fn run_scene(
+    scene: &crate::scene::file::Scene,
+    out: Option<Output>,
+    progress: &mut dyn Progress,
+) -> Result<RunResult, Error> {
+    run_scene_from(scene, out, progress, None)
+}
+
+fn run_scene_from(
+    scene: &crate::scene::file::Scene,
+    out: Option<Output>,
+    progress: &mut dyn Progress,
+    resume: Option<&Checkpoint>,
+) -> Result<RunResult, Error> {
+    let _flush = crate::linalg::FlushGuard::for_run();
+    let t0 = Instant::now();
+    progress.phase("building the model (mesh, assembly, contacts)");
+    let (mut model, report) = scene.build()?;
+    let probes = probes::ProbeSet::new(&model.probes, &model.geometry);
+    let geometry = std::mem::take(&mut model.geometry);
+    // the run's memory ledger, checked before anything is factored
+    let mut plan = model.plan(&scene.scheme, scene.time.dt)?;
+    let (m, rows) = (model.problem.contacts.len(), model.problem.contacts.rows());
+    if let Some(o) = out {
+        plan.add_history(report.dofs, m, (rows - m) / m.max(1), o.options.hdf5());
+    }
+    plan.ledger.check(
+        "scene",
+        format!("{} dofs, {m} contacts ({rows} rows)", report.dofs),
+    )?;
+    announce_integrator(&model, progress);
+    let t1 = Instant::now();
+    let mut integ = model.into_integrator(&scene.scheme, scene.time.dt)?;
+    let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
+    let parameters = serde_json::to_value(scene).expect("scene serializes");
+    let checks = RunChecks::new(&scene.scheme, geometry.size());
+    // what a checkpoint rebuilds from: only formed when the run writes checkpoints
+    let ckpt = match resume {
+        Some(c) => Some(Checkpointing {
+            source: c.source.clone(),
+            inputs: Vec::new(),
+            resume,
+        }),
+        None if out.is_some_and(|o| o.options.checkpoint_every > 0) => {
+            let source = RunSource::Scene {
+                file: scene.file.clone().unwrap_or_default(),
+                toml: toml::to_string(scene).map_err(|e| {
+                    Error::Numerical(format!(
+                        "the scene does not serialize for a checkpoint: {e}"
+                    ))
+                })?,
+                base_dir: std::path::absolute(&scene.base_dir).unwrap_or(scene.base_dir.clone()),
+            };
+            Some(Checkpointing {
+                inputs: source.input_files()?,
+                source: source.to_value(),
+                resume: None,
+            })
+        }
+        None => None,
+    };
+    run_checkpointed(
+        integ.as_mut(),
+        scene.steps(),
+        report.cells,
+        scene.scheme.theta,
+        &checks,
+        scene.reference.map(|r| r.impacting_bar),
+        parameters,
+        out.map(|o| (o, geometry)),
+        progress,
+        ckpt,
+        probes,
+    )
+    .and_then(|r| finish(r, setup, plan.ledger.total(), out))
+}
+
+/// Finishes the killed run in `dir` from its `checkpoint.json` (see
+/// [`crate::run::checkpoint`]): rebuilds the model from the scene the checkpoint holds,
+/// restores the state and the outputs' cursors, and steps to the end, writing the same
+/// files an uninterrupted run writes.
+pub fn resume(dir: &Path, progress: &mut dyn Progress) -> Result<RunResult, Error> {
+    let c = Checkpoint::read(dir)?;
+    c.verify(dir)?;
+    // the run's arithmetic, for the same bits as the uninterrupted run
+    match c.arithmetic {
+        crate::linalg::Arithmetic::Fused if !crate::linalg::cpu_has_fma() => {
+            return Err(Error::bad_file(
+                dir.join(checkpoint::FILE),
+                "`arithmetic`",
+                "fused: the run was started on a CPU with fused multiply-add and this one has \
+                 none, so the resumed steps would round differently; resume on such a CPU"
+                    .to_string(),
+            ));
+        }
+        a => crate::linalg::set_portable_arithmetic(a == crate::linalg::Arithmetic::Portable),
+    }
+    // and its subnormal mode (the guard of the run rebuilt below applies it)
+    match c.subnormals {
+        crate::linalg::Subnormals::Flushed if !crate::linalg::subnormals::flush_supported() => {
+            return Err(Error::bad_file(
+                dir.join(checkpoint::FILE),
+                "`subnormals`",
+                "flushed: the run flushed subnormal numbers to zero and this build cannot \
+                 on this CPU, so the resumed steps would round differently; resume on an \
+                 x86-64 or aarch64 machine"
+                    .to_string(),
+            ));
+        }
+        m => crate::linalg::set_ieee_subnormals(m == crate::linalg::Subnormals::Ieee),
+    }
+    let out = Output {
+        dir,
+        options: &c.output,
+    };
+    let file = dir.join(checkpoint::FILE);
+    match &RunSource::from_checkpoint(&c.source, &file)? {
+        RunSource::Bar { scene } => {
+            scene.validate().map_err(|e| e.in_file(&file))?;
+            run_bar_from(scene, Some(out), progress, Some(&c))
+        }
+        RunSource::Scene {
+            file: scene_file,
+            toml,
+            base_dir,
+        } => {
+            let mut scene =
+                crate::scene::file::Scene::from_toml(toml).map_err(|e| e.in_file(&file))?;
+            scene.base_dir = base_dir.clone();
+            scene.file = Some(scene_file.clone());
+            run_scene_from(&scene, Some(out), progress, Some(&c))
+        }
+    }
+}
