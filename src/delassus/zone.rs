@@ -226,10 +226,11 @@ impl Zone {
     /// non-zero entries of `r` and the rows of each column's [`Zone::span`].
     pub(super) fn zone_times(&self, fe: bool, s: f64, y: &mut [f64]) {
         let x = if fe { &self.fe } else { &self.f };
-        pulp::Arch::new().dispatch(ZoneTimes {
-            x,
-            r: &self.r,
-            span: &self.span,
+        pulp::Arch::new().dispatch(Combine {
+            cols: x,
+            n: y.len(),
+            weights: &self.r,
+            span: Some(&self.span),
             s,
             y,
         });
@@ -243,6 +244,7 @@ impl Zone {
             cols: xb,
             n: z,
             weights: x,
+            span: None,
             s,
             y,
         });
@@ -307,38 +309,14 @@ impl pulp::WithSimd for TimesB<'_> {
     }
 }
 
-/// `y += s X r` over the non-zero entries of `r` and each column's span (as [`TimesB`]).
-pub(super) struct ZoneTimes<'a> {
-    x: &'a [f64],
-    r: &'a [f64],
-    span: &'a [(usize, usize)],
-    s: f64,
-    y: &'a mut [f64],
-}
-
-impl pulp::WithSimd for ZoneTimes<'_> {
-    type Output = ();
-    #[inline(always)]
-    fn with_simd<S: pulp::Simd>(self, _: S) {
-        let z = self.r.len();
-        for (k, &rk) in self.r.iter().enumerate() {
-            if rk != 0.0 {
-                let (lo, hi) = self.span[k];
-                axpy(
-                    self.s * rk,
-                    &self.x[k * z + lo..k * z + hi],
-                    &mut self.y[lo..hi],
-                );
-            }
-        }
-    }
-}
-
-/// `y += s Σ_b x_b C_b` over the non-zero `x_b` (`C` is `n × len(x)`), as [`TimesB`].
+/// `y += s Σ_b x_b C_b` over the non-zero `x_b` (`C` is `n × len(x)`), over the rows
+/// `span[b]` of each column where spans are given (the rows outside are zero), as
+/// [`TimesB`].
 pub(super) struct Combine<'a> {
     cols: &'a [f64],
     n: usize,
     weights: &'a [f64],
+    span: Option<&'a [(usize, usize)]>,
     s: f64,
     y: &'a mut [f64],
 }
@@ -350,7 +328,12 @@ impl pulp::WithSimd for Combine<'_> {
         let n = self.n;
         for (b, &xb) in self.weights.iter().enumerate() {
             if xb != 0.0 {
-                axpy(self.s * xb, &self.cols[b * n..(b + 1) * n], self.y);
+                let (lo, hi) = self.span.map_or((0, n), |s| s[b]);
+                axpy(
+                    self.s * xb,
+                    &self.cols[b * n + lo..b * n + hi],
+                    &mut self.y[lo..hi],
+                );
             }
         }
     }

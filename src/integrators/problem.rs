@@ -36,6 +36,11 @@ impl Problem {
         }
     }
 
+    /// The structure, the contacts, `q0` and `v0`, for a constructor that takes them apart.
+    pub fn into_parts(self) -> (LinearSystem, Box<dyn ContactSet>, Vec<f64>, Vec<f64>) {
+        (self.system, self.contacts, self.q0, self.v0)
+    }
+
     /// Everything [`build_problem`](super::build_problem) checks before it factors
     /// anything: the parameters, the step, the free dofs, the scheme against the
     /// structure, prescribed motion and friction, and the initial state's length and

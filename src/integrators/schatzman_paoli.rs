@@ -60,12 +60,7 @@ pub struct SchatzmanPaoli {
 impl SchatzmanPaoli {
     /// Factors `M_SP` and condenses `W_SP = Gᵀ M_SP⁻¹ G` once.
     pub fn new(params: &SchemeParams, problem: Problem, h: f64) -> Result<Self, Error> {
-        let Problem {
-            system: sys,
-            contacts,
-            q0,
-            v0,
-        } = problem;
+        let (sys, contacts, q0, v0) = problem.into_parts();
         let (q0, v0) = (&q0[..], &v0[..]);
         let theta = params.theta;
         let factor = factor_step_matrix(

@@ -1,0 +1,852 @@
+//! The θ-method machinery shared by Moreau–Jean, Algorithm 1, Algorithm 2 and the
+//! position-level trapezoidal rule.
+//!
+//! For `F(t, q, v) = f − C v − K q` the iteration matrix `M̂ = M + hθC + h²θ²K`
+//! (eq. 47) is constant: it is formed and factored once. Each step computes the free
+//! velocity (eq. 18 with `P = 0`)
+//!
+//! `M̂ (v_free − v_k) = h f(t_{k+θ}) − h C v_k − h K (q_k + hθ v_k)`,
+//!
+//! and every iterate of the decoupled Newton loop (eq. 56–58, with the sign erratum
+//! of the module [`crate::integrators`]) is then
+//!
+//! `vⁿ⁺¹ = v_free + M̂⁻¹G Pⁿ⁺¹ − hθ M̂⁻¹K N G τⁿ`,
+//! `qⁿ⁺¹ = q_k + h(1−θ)v_k + hθ vⁿ⁺¹ + N G τⁿ⁺¹`,
+//!
+//! with `N = I` (eq. 58) or `N = M̂⁻¹` (eq. 60). In contact space this needs only
+//! `W = GᵀM̂⁻¹G`, `W_D = Gᵀ M̂⁻¹K N G` and `W_N = GᵀNG`, computed once when `G` is
+//! constant (DESIGN.md §4): the velocity LCP (eq. 57) is
+//! `U + eU_k = W_AA P_A + (U_free − hθ W_D τⁿ + e U_k)_A`, the linearized gaps
+//! (eq. 51) are `g = g(qⁿ) + Gᵀ(q_k + h(1−θ)v_k − qⁿ) + hθ U + W_N τ`, and `v, q` are
+//! formed once per step. For nonlinear contacts `G(qⁿ)` and the operators are
+//! recomputed every Newton iteration (`m` extra solves, or none on the condensed contact
+//! zone, where `W = BᵀFB`). Contacts being nodal, `G` and `g` depend on the zone's dofs
+//! alone, and on a linear structure the zone rows of the iterate are
+//! `v_z = v_free,z + F B Pⁿ⁺¹ − hθ F_E B τⁿ`, `q_z = … + (N G τⁿ⁺¹)_z`: when the zone keeps
+//! only its flexibilities ([`crate::delassus::ZoneStorage::Flexibility`], where each
+//! `n`-space correction is a sparse solve) the loop iterates on these `z` values alone,
+//! converges on their change, and [`ThetaCore::commit`] forms `v`, `q` once. A round in
+//! which no row is in any problem (Algorithm 2's first, free round) re-evaluates `g`
+//! and `G` for the activation test without forming the operators, which it never reads.
+//!
+//! A nonlinear structure ([`crate::model::system::Linearity::ConstantMass`]: bodies with
+//! a large-deformation law; [`crate::model::system::Linearity::Nonlinear`]: a mass
+//! `M(q)`, the slider–crank) has no constant `M̂`: the structural side of the Newton loop
+//! of eq. 41–48 ([`super::structure`]) evaluates `M(q_θ)`, `F`, `Kⁿ` and `Cⁿ` at each
+//! iterate, refactors `M̂ⁿ` and gives the iteration's free velocity; `W` is condensed
+//! again on each new `M̂ⁿ` and the contact problems above are solved unchanged. The projection's feedback
+//! enters through `F(q_θ)` (whose `q` carries the last `τ`) instead of `−hθ W_D τⁿ`, the
+//! coupled position solve is not taken, and the loop converges on eq. 41's residual.
+//! A nonsymmetric `M̂ⁿ` (gyroscopic tangents) makes `W` nonsymmetric: the projection then
+//! takes the Euclidean metric of eq. 58 (`N = M̂⁻¹` is no metric) and the LCPs Lemke's
+//! method (block pivoting's Cholesky needs symmetry); the path names it.
+//!
+//! The operators live in [`Delassus`]: dense `n × m` blocks for the tens of contacts of
+//! the bar and the academic examples, per-active-column storage (columns computed when
+//! a contact first activates, corrections by one sparse solve) for thousands of
+//! candidates (DESIGN.md §4). A one-step problem with more active rows than the dense
+//! workspaces hold (`max_active_rows`) is solved matrix-free on products through the
+//! factor ([`crate::solvers::global`]: MPRGP, or the accelerated projected gradient with
+//! friction), the same laws to the friction tolerance.
+//!
+//! Contact space is the rows of the contact blocks ([`crate::contact`]): every
+//! contact-space vector here (`U`, `P`, `τ`, the right-hand sides) has one entry per
+//! row, normal row first in each block; gaps, forecasts and the position problem use
+//! the normal rows only (eq. 56–60, 67–70 project the normal part). With friction the
+//! velocity problem of an active set is the Coulomb problem of eq. 15 with Newton's law
+//! on the normal part, `U + e U_k = W P + (U_free − hθ W_D τⁿ + e U_k)`,
+//! `C* ∋ Û ⊥ P ∈ C`, solved by [`crate::solvers::friction`] (warm started from the
+//! previous step's impulse); without friction (every block one row) it is the LCP of
+//! before, operation for operation.
+//!
+//! Where the decoupled loop is not enough (issue 16 §1, measured on the undamped
+//! elastic block sliding with friction, `tests/regression_alg2_friction_undamped.rs`):
+//!
+//! - *Slow contraction.* The decoupled iteration feeds `τⁿ` back through `−hθ W_D τⁿ`;
+//!   on a mode of frequency ω it contracts by `(ωhθ)²/(1 + (ωhθ)²)` per iteration (metric
+//!   `M̂⁻¹`), 0.74 for the block's highest modes at h = 1e-4, 0.97 at 5e-4. From the
+//!   second iteration on, a step that has not converged solves the coupled problem of
+//!   eq. 52–55 on the current contact states (`ThetaCore::coupled_correction`: impulses
+//!   and projections together, dense LU, with active-set rounds on the signs) and takes
+//!   its `τ` as the next iterate; the decoupled iteration after it checks every law.
+//! - *Equality rows reconsidered.* An equality row (eq. 68, `P > 0`) dropped at selection
+//!   because its gap was already 0 re-enters when its neighbours' projection moves it
+//!   (before, such rows stayed off: 7e-8 m violations at h = 1e-5).
+//! - *Tolerances that follow the friction solve.* The velocity accuracy of the friction
+//!   solve (`solvers::friction::velocity_error`, m/s) sets a floor under the Newton
+//!   tolerance (16 × accuracy / |U|) and a dead band `2hθ·accuracy` for the rows resting at g ≈ 0, which
+//!   otherwise flip in and out of the position problem on the solver's last digits.
+//! - *Stagnation.* A loop that gains less than 10 % in 5 iterations ends; it converged
+//!   if it got within `√tol` (`StepStats::newton_stalls`), or, with a nonlinear `G`, if
+//!   its last iterate moved `q` by at most `tol·|q|∞` (a body at rest on other bodies
+//!   takes step increments at the solves' round-off, so the change relative to the
+//!   increment never falls), else it is a cap.
+//! - Rows that keep `g = 0` with `P = 0` and `τ < 0` because eq. 65 had no solution for
+//!   the index set are counted in `StepStats::held_rows` (position problem below).
+
+mod free;
+mod newton;
+mod position;
+mod workspace;
+
+pub(crate) use newton::newton_change;
+use newton::*;
+use position::*;
+pub use workspace::*;
+
+use super::problem::Problem;
+use super::structure::Structure;
+use super::{Forecast, NewtonParams, ProjectionRule, SchemeParams, State, StepStats};
+use crate::assembly::linear_combination;
+use crate::contact::{ContactJacobian, ContactSet, ContactStatus};
+use crate::delassus::{Delassus, Op};
+use crate::error::Error;
+use crate::linalg::{LinearSolver, SolverKind, SparseMatrix, spmv_add, sym_spmv_add};
+use crate::model::LinearSystem;
+use crate::model::system::Linearity;
+use crate::solvers::friction::{
+    Block, FrictionParams, FrictionProblem, FrictionSolver, FrictionSolverKind,
+};
+use crate::solvers::global::GlobalSolver;
+use crate::solvers::lcp::LcpSolver;
+use crate::solvers::mlcp::Mlcp;
+use crate::solvers::operator::{DelassusOperator, DenseOperator};
+use crate::solvers::{SolveError, SolveInfo};
+
+/// What the position step enforces (eq. 58 for Algorithm 1, eq. 68 for Algorithm 2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PositionRule {
+    /// No position correction (Moreau–Jean).
+    None,
+    /// `0 ≤ g ⊥ τ ≥ 0` over every contact (Algorithm 1, eq. 28 and 58).
+    AllComplementarity,
+    /// Over the contacts of `pos_mask`: `g = 0` with free `τ` on the rows `rule` holds
+    /// (none, those with `P > 0` as in eq. 68–70, or all), `0 ≤ g ⊥ τ ≥ 0` elsewhere.
+    Combined {
+        /// Which active rows are held at `g = 0`.
+        rule: ProjectionRule,
+    },
+}
+
+/// How the impulse `P` is determined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VelocityLaw {
+    /// Newton's impact law at velocity level on `vel_mask`:
+    /// `0 ≤ U_{k+1} + e U_k ⊥ P ≥ 0` (eq. 18d, 57).
+    Impact,
+    /// Signorini's condition at position level on every contact:
+    /// `0 ≤ g(q_{k+1}) ⊥ P ≥ 0` with `q_{k+1} = q_k + h v_{k+θ}` (the trapezoidal rule of
+    /// sec. 6.2, Fig. 11 when θ = 1/2).
+    PositionLevel,
+}
+
+/// Forms and factors `M + a·K + b·C` (the step matrix of a scheme), naming it `what` in
+/// errors; the inputs were checked once by [`Problem::validate`].
+pub(crate) fn factor_step_matrix(
+    sys: &LinearSystem,
+    (a, b): (f64, f64),
+    what: &str,
+) -> Result<Box<dyn LinearSolver>, Error> {
+    let mut terms = vec![(1.0, &sys.mass), (a, &sys.stiffness)];
+    if let Some(c) = &sys.damping {
+        terms.push((b, c));
+    }
+    crate::linalg::solver::factor(
+        linear_combination(&terms).as_ref(),
+        what,
+        SolverKind::Cholesky,
+        sys.ordering.as_deref(),
+    )
+}
+
+/// The [`Integrator`](super::Integrator) accessors of a scheme built on a `core:
+/// ThetaCore` field.
+macro_rules! delegate_to_core {
+    () => {
+        fn state(&self) -> &$crate::integrators::State {
+            &self.core.state
+        }
+        fn state_finite(&self) -> Option<bool> {
+            self.core.state_finite
+        }
+        fn system(&self) -> &$crate::model::LinearSystem {
+            &self.core.sys
+        }
+        fn shared_system(&self) -> std::sync::Arc<$crate::model::LinearSystem> {
+            self.core.sys.clone()
+        }
+        fn dt(&self) -> f64 {
+            self.core.h
+        }
+        fn path(&self) -> String {
+            self.core.path()
+        }
+        fn jacobian(&self) -> &$crate::contact::ContactJacobian {
+            &self.core.del.jac
+        }
+        fn save(&self) -> $crate::integrators::saved::IntegratorState {
+            self.core.state.save(self.name())
+        }
+        fn restore(
+            &mut self,
+            s: &$crate::integrators::saved::IntegratorState,
+        ) -> Result<(), $crate::error::Error> {
+            let name = self.name();
+            self.core.restore(name, s)
+        }
+        fn prepare(&mut self) -> Result<(), $crate::error::Error> {
+            self.core.update_contacts()
+        }
+    };
+}
+pub(crate) use delegate_to_core;
+
+/// Shared θ-method data and buffers (see the module doc).
+pub struct ThetaCore {
+    /// The structure, shared (read-only after the build) with the history thread.
+    pub(crate) sys: std::sync::Arc<LinearSystem>,
+    pub(crate) contacts: Box<dyn ContactSet>,
+    pub(crate) h: f64,
+    pub(crate) theta: f64,
+    pub(crate) n: usize,
+    /// Contacts.
+    pub(crate) m: usize,
+    /// Rows of the contact space (`m` without friction).
+    pub(crate) rows: usize,
+    /// First row of each contact's block (`m + 1` values).
+    pub(crate) off: Vec<usize>,
+    /// Friction coefficient per contact.
+    mu: Vec<f64>,
+    /// Some contact has friction (blocks of more than one row).
+    friction: bool,
+    friction_params: FrictionParams,
+    /// Row is a normal row.
+    normal: Vec<bool>,
+    /// `M̂` factored, `G` and the condensed operators.
+    pub(crate) del: Delassus,
+    /// Restitution per row (0 on tangential rows).
+    pub(crate) e: Vec<f64>,
+    with_projection: bool,
+    feedback: bool,
+    /// [`SchemeParams::energy_consistent_restitution`]: the restitution of a normal row
+    /// separating at the step's start is at least `(1 − θ)/θ` (the first value); on
+    /// every such row under Moreau–Jean (the second, true), on rows open in the last
+    /// step under the projection schemes ([`ThetaCore::restitution`]).
+    restitution_floor: Option<(f64, bool)>,
+    /// `G` does not depend on `q` (every contact set is linear).
+    pub(crate) g_constant: bool,
+    /// [`ContactSet::coordinate_scale`], for the convergence measure's round-off floor.
+    coordinate_scale: f64,
+    /// `G` constant and the structure linear: `M̂`, `W` are condensed once and the
+    /// Newton loop only re-solves the contact-space problem (eq. 56a).
+    pub(crate) operators_constant: bool,
+    /// A nonlinear structure's Newton data ([`super::structure`]); `None` when linear.
+    structure: Option<Box<Structure>>,
+    /// The structure is linearized at the step's first iterate (`v = v_k`, `τ = 0`):
+    /// a Newton loop starting now needs no new evaluation.
+    at_first_iterate: bool,
+    /// The last Newton loop of the step converged: a later round of Algorithm 2 starts
+    /// from its velocity ([`ThetaCore::restart_iterate`]).
+    last_converged: bool,
+    jac_at_qk: bool,
+    /// The Delassus data were formed at `q_k` (the step's start) and not since: a round
+    /// that re-evaluates `G` at `q_k` need not form them again.
+    w_at_qk: bool,
+    pub(crate) newton: NewtonParams,
+    pub(crate) projection_tolerance: f64,
+    pub(crate) state: State,
+    /// `U = Gᵀ v` at the start of the step, all rows.
+    u_rows: Vec<f64>,
+    /// Scratch of the prescribed dofs' velocities and displacements.
+    vp_a: Vec<f64>,
+    vp_b: Vec<f64>,
+    // n-vectors
+    pub(crate) v_free: Vec<f64>,
+    work: Vec<f64>,
+    /// `K` as its three diagonals when it is a rod's ([`crate::linalg::TridiagonalRows`]): the free
+    /// velocity's `K (q + hθ v)` without a gather per row.
+    k_rows: Option<crate::linalg::TridiagonalRows>,
+    /// `q_lin` holds `y = q + hθ v` of the state, written by [`ThetaCore::form_fused`]
+    /// and read (once) by [`ThetaCore::begin_step`] instead of another pass.
+    y_ready: bool,
+    /// Whether the state's `q` and `v` are all finite, when [`ThetaCore::form_fused`]
+    /// formed them ([`super::Integrator::state_finite`]).
+    pub(crate) state_finite: Option<bool>,
+    /// The structure's constant load is `+0.0` everywhere (the bar): `begin_step` reads
+    /// it as the constant.
+    unloaded: bool,
+    q_lin: Vec<f64>,
+    pub(crate) v_new: Vec<f64>,
+    pub(crate) q_new: Vec<f64>,
+    // per contact
+    g_at_lin: Vec<f64>,
+    // per row
+    pub(crate) u_k: Vec<f64>,
+    pub(crate) u_free: Vec<f64>,
+    u_new: Vec<f64>,
+    wp: Vec<f64>,
+    wt: Vec<f64>,
+    coupling: Vec<f64>,
+    a: Vec<f64>,
+    pub(crate) b: Vec<f64>,
+    pub(crate) g_lin: Vec<f64>,
+    pub(crate) p: Vec<f64>,
+    p_warm: Vec<f64>,
+    pub(crate) tau: Vec<f64>,
+    tau_prev: Vec<f64>,
+    tau_used: Vec<f64>,
+    dtau: Vec<f64>,
+    /// Contacts whose velocity-level impact law is enforced this round.
+    pub(crate) vel_mask: Vec<bool>,
+    /// Contacts projected this round (Algorithm 2).
+    pub(crate) pos_mask: Vec<bool>,
+    /// Rows projected with `g = 0` in this Newton loop (Algorithm 2: `P > 0` at some
+    /// iterate). The set only grows within a loop, so the decoupled iteration cannot
+    /// cycle between two equality sets (with friction, a lifting contact's `P_N`
+    /// alternated between 0 and > 0 every iteration until the cap).
+    eq_rows: Vec<bool>,
+    pub(crate) ws: Workspace,
+    /// The coupled position problem's buffers (projection with feedback only).
+    coupled: Option<Coupled>,
+    /// Velocity accuracy (m/s) of the friction solves of this Newton loop (the largest
+    /// [`crate::solvers::friction::velocity_error`] met, so that the tolerances derived
+    /// from it do not move between iterations); 0 without friction, where the LCP
+    /// solves are exact to rounding.
+    velocity_accuracy: f64,
+    /// The contact zone's dofs when the Newton loop iterates on the zone alone
+    /// ([`ThetaCore::form_zone`]: a linear structure, a nonlinear `G`, the zone keeping its
+    /// flexibilities only, [`Delassus::flexibility_zone`]); empty otherwise.
+    zone: Vec<usize>,
+    /// Zone scratch (zone order): the velocity and position corrections, and `q` at the
+    /// iterate, at the last iterate and at the step's start.
+    zv: Vec<f64>,
+    zq: Vec<f64>,
+    zq_new: Vec<f64>,
+    zq_lin: Vec<f64>,
+    zq_k: Vec<f64>,
+}
+
+impl ThetaCore {
+    /// Forms and factors `M̂`, evaluates the contacts at `q0` and condenses the
+    /// Delassus operators. `with_projection` also prepares `W_D` and `W_N`.
+    pub fn new(
+        params: &SchemeParams,
+        problem: Problem,
+        h: f64,
+        with_projection: bool,
+    ) -> Result<Self, Error> {
+        let (sys, contacts, q0, v0) = problem.into_parts();
+        let (q0, v0) = (&q0[..], &v0[..]);
+        check_block_rows(params, contacts.as_ref())?;
+        // A nonsymmetric M̂ⁿ (gyroscopic terms) makes W nonsymmetric: `N = M̂⁻¹` is then
+        // no metric (eq. 59 needs N positive definite) and block pivoting's Cholesky
+        // does not apply, so the projection takes eq. 58's Euclidean metric and the
+        // LCPs Lemke's method (which needs no symmetry).
+        let adjusted;
+        let params = if !sys.symmetric() {
+            adjusted = SchemeParams {
+                metric: crate::delassus::Metric::Euclidean,
+                lcp: match params.lcp {
+                    p @ crate::solvers::LcpKind::Pgs { .. } => p,
+                    _ => crate::solvers::LcpKind::Lemke,
+                },
+                ..*params
+            };
+            &adjusted
+        } else {
+            params
+        };
+        let theta = params.theta;
+        let mut structure = (sys.linearity() != Linearity::Linear).then(|| {
+            Box::new(Structure::new(
+                &sys,
+                params.newton.modified,
+                params.energy_momentum,
+            ))
+        });
+        let factor = match &mut structure {
+            None => factor_step_matrix(
+                &sys,
+                (h * h * theta * theta, h * theta),
+                "iteration matrix M + hθC + h²θ²K",
+            )?,
+            Some(st) => {
+                // the pattern's symbolic analysis, on M̂ⁿ at the initial state (the mass
+                // alone is singular where `mass = "redistributed"` leaves contact nodes
+                // none, issue 34); the first step forms its own values
+                st.evaluate(&sys, (h, theta), (q0, v0), (q0, v0), true)?;
+                st.factor()?
+            }
+        };
+        let n = sys.ndof();
+        let np = sys.prescribed.as_ref().map_or(0, |p| p.dofs.len());
+        let m = contacts.len();
+        let jac = ContactJacobian::for_set(contacts.as_ref());
+        let rows = jac.ncols();
+        let mut off = Vec::with_capacity(m + 1);
+        off.push(0);
+        for a in 0..m {
+            off.push(off[a] + contacts.dim(a));
+        }
+        assert_eq!(off[m], rows, "contact blocks and Jacobian columns disagree");
+        let laws = contacts.laws();
+        let mut e = vec![0.0; rows];
+        let mut normal = vec![false; rows];
+        for a in 0..m {
+            e[off[a]] = laws[a].restitution;
+            normal[off[a]] = true;
+        }
+        let mu: Vec<f64> = laws.iter().map(|l| l.friction).collect();
+        let friction = rows > m;
+        let tangent_dim = if friction {
+            (0..m).map(|a| off[a + 1] - off[a] - 1).max().unwrap_or(0)
+        } else {
+            0
+        };
+        let g_constant = contacts.is_linear();
+        let coordinate_scale = contacts.coordinate_scale();
+        let operators_constant = g_constant && structure.is_none();
+        let state = State::with_layout(q0, v0, m, tangent_dim, rows);
+        let del = Delassus::new(
+            factor,
+            jac,
+            n,
+            (params.delassus, params.delassus_pool),
+            with_projection,
+            params.metric,
+            operators_constant,
+        );
+        // the dense one-step workspaces (module doc of `Workspace`): the gathered block
+        // and the MLCP's three, plus the coupled position problem's matrix
+        // the coupled problem has at most the velocity rows plus one τ per contact,
+        // capped like the dense workspaces (beyond, the decoupled loop runs alone)
+        let ws_cap = Workspace::cap(rows, params);
+        let mut del = del?;
+        del.limit_columns(ws_cap);
+        let coupled_cap =
+            (with_projection && params.projection_feedback).then(|| (rows + m).min(ws_cap));
+        let mut mem = crate::limits::MemoryEstimate::default();
+        workspace_ledger(rows, m, params, (friction, with_projection), &mut mem);
+        mem.check("scheme.max_active_rows", format!("{ws_cap} rows"))?;
+        let k_rows = crate::linalg::TridiagonalRows::new(sys.stiffness.as_ref());
+        let unloaded = crate::linalg::TridiagonalRows::is_positive_zero(&sys.force);
+        let mut core = ThetaCore {
+            sys: std::sync::Arc::new(sys),
+            contacts,
+            h,
+            theta,
+            n,
+            m,
+            rows,
+            off,
+            mu,
+            friction,
+            friction_params: params.friction,
+            normal,
+            del,
+            e,
+            with_projection,
+            feedback: params.projection_feedback,
+            restitution_floor: params
+                .energy_consistent_restitution
+                .then(|| ((1.0 - params.theta) / params.theta, !with_projection)),
+            g_constant,
+            coordinate_scale,
+            operators_constant,
+            structure,
+            at_first_iterate: false,
+            last_converged: false,
+            jac_at_qk: true,
+            w_at_qk: false,
+            newton: params.newton,
+            projection_tolerance: params.projection_tolerance,
+            state,
+            u_rows: vec![0.0; rows],
+            vp_a: vec![0.0; np],
+            vp_b: vec![0.0; np],
+            v_free: vec![0.0; n],
+            work: vec![0.0; n],
+            k_rows,
+            y_ready: false,
+            state_finite: None,
+            unloaded,
+            q_lin: vec![0.0; n],
+            v_new: vec![0.0; n],
+            q_new: vec![0.0; n],
+            g_at_lin: vec![0.0; m],
+            u_k: vec![0.0; rows],
+            u_free: vec![0.0; rows],
+            u_new: vec![0.0; rows],
+            wp: vec![0.0; rows],
+            wt: vec![0.0; rows],
+            coupling: vec![0.0; rows],
+            a: vec![0.0; rows],
+            b: vec![0.0; rows],
+            g_lin: vec![0.0; rows],
+            p: vec![0.0; rows],
+            p_warm: vec![0.0; rows],
+            tau: vec![0.0; rows],
+            tau_prev: vec![0.0; rows],
+            tau_used: vec![0.0; rows],
+            dtau: vec![0.0; rows],
+            vel_mask: vec![false; m],
+            pos_mask: vec![false; m],
+            eq_rows: vec![false; rows],
+            ws: Workspace::new(rows, m, params, friction),
+            coupled: coupled_cap.map(|c| Coupled::new(c, m)),
+            velocity_accuracy: 0.0,
+            zone: Vec::new(),
+            zv: Vec::new(),
+            zq: Vec::new(),
+            zq_new: Vec::new(),
+            zq_lin: Vec::new(),
+            zq_k: Vec::new(),
+        };
+        core.contacts
+            .evaluate(&core.state.q, &mut core.state.gap, &mut core.del.jac);
+        if core.structure.is_none() {
+            if !g_constant && core.contacts.condensed() {
+                let zone = core.contacts.zone();
+                let fixed = fixed_rows(core.contacts.as_ref());
+                core.del
+                    .condense_zone(&zone, fixed, &core.sys.stiffness, true);
+                if let Some(dofs) = core.del.flexibility_zone() {
+                    let z = dofs.len();
+                    core.zone = dofs.to_vec();
+                    for buf in [
+                        &mut core.zv,
+                        &mut core.zq,
+                        &mut core.zq_new,
+                        &mut core.zq_lin,
+                        &mut core.zq_k,
+                    ] {
+                        *buf = vec![0.0; z];
+                    }
+                }
+            }
+            core.del.refresh(&core.sys.stiffness);
+            core.w_at_qk = true;
+            let rows_mf = matrix_free_rows(core.ws.cap, g_constant, core.del.is_dense());
+            if rows_mf < core.ws.cap {
+                core.ws.matrix_free_from(rows_mf, params);
+                core.del.limit_columns(rows_mf);
+                if let Some(cp) = core.coupled.as_mut() {
+                    cp.cap = cp.cap.min(rows_mf);
+                }
+            }
+        } else {
+            // a nonlinear structure condenses with each step's first iteration matrix,
+            // and carries the projection's feedback in F: W_D is never read
+            core.del.without_wd();
+        }
+        core.del.jac.transpose_mul(&core.state.v, &mut core.u_rows);
+        core.scatter_local_velocity();
+        core.del.start_stepping();
+        Ok(core)
+    }
+
+    /// A description of the linear-algebra path, for summaries.
+    pub fn path(&self) -> String {
+        let structure = match &self.structure {
+            None => format!(
+                "M̂ = M + hθC + h²θ²K factored once ({}, n = {})",
+                self.del.factor.backend_name(),
+                self.n
+            ),
+            Some(st) => format!(
+                "nonlinear structure ({}): {} Newton on eq. 41–48{}, M̂ⁿ = M(q) + hθCⁿ + \
+                 h²θ²Kⁿ refactored {} ({}, n = {}){}",
+                self.sys
+                    .nonlinear
+                    .iter()
+                    .map(|f| f.describe())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                if st.modified { "modified" } else { "full" },
+                if st.energy_momentum {
+                    " with discrete-gradient internal forces (energy–momentum)"
+                } else {
+                    ""
+                },
+                if st.modified {
+                    "at each step's first iterate and when the iterates stop contracting"
+                } else {
+                    "at every iterate"
+                },
+                self.del.factor.backend_name(),
+                self.n,
+                if st.symmetric {
+                    ""
+                } else {
+                    "; M̂ⁿ nonsymmetric: projection metric Euclidean, LCPs by Lemke"
+                }
+            ),
+        };
+        format!(
+            "{structure}; {} contact(s){}, {}; {}{}",
+            self.m,
+            if self.friction {
+                format!(
+                    " with Coulomb friction ({} rows; {} on the velocity problem)",
+                    self.rows,
+                    self.friction_params.solver.name()
+                )
+            } else {
+                String::new()
+            },
+            if self.operators_constant {
+                "linear gap: G and W constant (condensed once), one sparse solve per step; \
+                 Newton iterations only re-solve the contact-space problem (eq. 56a)"
+            } else if self.g_constant {
+                "linear gap: G constant, W condensed again with each new M̂ⁿ"
+            } else if !self.zone.is_empty() {
+                "nonlinear gap: G(q) re-linearized every Newton iteration, which iterates on \
+                 the contact zone's dofs (F B P, no sparse solve) and forms the state once"
+            } else {
+                "nonlinear gap: G(q) re-linearized every Newton iteration"
+            },
+            self.del.describe(),
+            if self.with_projection {
+                format!("; projection metric {}", self.del.metric().name())
+            } else {
+                String::new()
+            }
+        ) + &self.ws.describe()
+    }
+
+    /// Accepts `v_new`, `q_new`, `P`, `τ` as the state at `t_{k+1}` and evaluates the
+    /// contacts there (re-condensing for nonlinear contacts).
+    /// Restores a checkpointed state and evaluates again what [`ThetaCore::commit`]
+    /// derives from it: the gaps and Jacobian at `q`, the Delassus data of a nonlinear
+    /// contact set, `U = Gᵀ v`.
+    pub fn restore(
+        &mut self,
+        scheme: &str,
+        s: &crate::integrators::saved::IntegratorState,
+    ) -> Result<(), Error> {
+        self.state.restore(scheme, s)?;
+        self.y_ready = false;
+        self.contacts.restart(&self.state.q);
+        self.contacts
+            .update(&self.state.q)
+            .map_err(|e| step_error(&self.state, self.h, e))?;
+        self.evaluate_at_state();
+        Ok(())
+    }
+
+    /// Brings the contact set's search data up to date at `q_k` ([`ContactSet::update`]);
+    /// when a pairing changed the gaps, Jacobian and Delassus data are evaluated again.
+    pub fn update_contacts(&mut self) -> Result<(), Error> {
+        let changed = self
+            .contacts
+            .update(&self.state.q)
+            .map_err(|e| step_error(&self.state, self.h, e))?;
+        if changed && !self.g_constant {
+            self.evaluate_at_state();
+        }
+        Ok(())
+    }
+
+    /// The gaps and Jacobian at `q`, the Delassus data of a nonlinear contact set, and
+    /// `U = Gᵀ v`: what the next step reads, derived from the state.
+    fn evaluate_at_state(&mut self) {
+        self.contacts
+            .evaluate(&self.state.q, &mut self.state.gap, &mut self.del.jac);
+        if !self.g_constant {
+            if self.structure.is_none() {
+                // (a nonlinear structure condenses at the next step's first iterate)
+                self.del.refresh(&self.sys.stiffness);
+                self.w_at_qk = true;
+            }
+            self.jac_at_qk = true;
+        }
+        self.del.jac.transpose_mul(&self.state.v, &mut self.u_rows);
+    }
+
+    pub fn commit(&mut self, stats: &mut StepStats) {
+        if self.operators_constant || !self.zone.is_empty() {
+            self.form();
+        }
+        self.at_first_iterate = false;
+        std::mem::swap(&mut self.state.q, &mut self.q_new);
+        std::mem::swap(&mut self.state.v, &mut self.v_new);
+        self.state.impulse_rows.copy_from_slice(&self.p);
+        for c in 0..self.m {
+            self.state.impulse[c] = self.p[self.off[c]];
+            self.state.projection[c] = self.tau[self.off[c]];
+        }
+        self.state.step += 1;
+        self.state.time = self.state.step as f64 * self.h;
+        self.evaluate_at_state();
+        self.scatter_local_velocity();
+        stats.max_violation = self.state.gap.iter().fold(0.0_f64, |acc, &g| acc.max(-g));
+    }
+
+    /// Copies the normal and tangential parts of `u_rows` and of the impulse into the
+    /// state and classifies each frictional contact: open without normal impulse, stick
+    /// when `‖U_T‖` is below 1e-9 of the step's velocity scale (or the impulse strictly
+    /// inside the cone), slip otherwise; a closed contact without friction (μ = 0 or a
+    /// one-row block) has its own status, neither stick nor slip.
+    fn scatter_local_velocity(&mut self) {
+        let td = self.state.tangent_dim;
+        let vs = self
+            .u_free
+            .iter()
+            .chain(&self.u_rows)
+            .fold(0.0_f64, |s, x| s.max(x.abs()));
+        for c in 0..self.m {
+            let (o, e) = (self.off[c], self.off[c + 1]);
+            self.state.local_velocity[c] = self.u_rows[o];
+            if td == 0 {
+                continue;
+            }
+            let mut ut2 = 0.0;
+            let mut pt2 = 0.0;
+            for t in 0..td {
+                let (ut, pt) = if o + 1 + t < e {
+                    (self.u_rows[o + 1 + t], self.p[o + 1 + t])
+                } else {
+                    (0.0, 0.0)
+                };
+                self.state.tangent_velocity[c * td + t] = ut;
+                self.state.tangent_impulse[c * td + t] = pt;
+                ut2 += ut * ut;
+                pt2 += pt * pt;
+            }
+            let pn = self.p[o];
+            self.state.status[c] = if pn <= 0.0 {
+                ContactStatus::Open
+            } else if self.mu[c] == 0.0 || e - o == 1 {
+                ContactStatus::Frictionless
+            } else if ut2.sqrt() <= 1e-9 * vs || pt2.sqrt() < (1.0 - 1e-9) * self.mu[c] * pn {
+                ContactStatus::Stick
+            } else {
+                ContactStatus::Slip
+            };
+        }
+    }
+}
+
+/// Per contact row, whether its block of `G` is constant
+/// ([`ContactSet::block_is_linear`]), for the zone condensation.
+pub(crate) fn fixed_rows(contacts: &dyn ContactSet) -> Vec<bool> {
+    (0..contacts.len())
+        .flat_map(|a| std::iter::repeat_n(contacts.block_is_linear(a), contacts.dim(a)))
+        .collect()
+}
+
+/// Refuses a `max_active_rows` that cannot hold one contact block (the dense one-step
+/// workspaces gather whole blocks).
+pub(crate) fn check_block_rows(
+    params: &SchemeParams,
+    contacts: &dyn ContactSet,
+) -> Result<(), Error> {
+    let block = (0..contacts.len())
+        .map(|a| contacts.dim(a))
+        .max()
+        .unwrap_or(1);
+    if params.max_active_rows != 0 && params.max_active_rows < block {
+        // issue 34: accepted before
+        return Err(Error::invalid(
+            "scheme.max_active_rows",
+            params.max_active_rows,
+            &format!(
+                "must hold at least one contact block ({block} rows: the normal and the \
+                 tangents of a frictional contact), or be 0 for the default"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks a user-given vector: length and finiteness.
+pub(crate) fn check_vector(field: &str, x: &[f64], n: usize) -> Result<(), Error> {
+    if x.len() != n {
+        return Err(Error::invalid(
+            field,
+            format!("{} values", x.len()),
+            &format!("needs {n} values (one per dof)"),
+        ));
+    }
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        return Err(Error::invalid(
+            &format!("{field}[{i}]"),
+            x[i],
+            "must be finite",
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fused pass gives the bits of the general path's separate passes (the axpys of
+    /// `Delassus::add_velocity_correction` and `add_position_correction` around the
+    /// update loop) for every combination of terms, and reports a non-finite `q` or `v`
+    /// (the run's checks then skip their own scan: it must not miss one).
+    #[test]
+    fn fused_update_matches_the_separate_passes_and_finds_non_finite_values() {
+        let n = 37;
+        let wave = |k: f64| -> Vec<f64> { (0..n).map(|i| (k * i as f64).sin() * 1e-3).collect() };
+        let (q, v, vf) = (wave(0.3), wave(0.7), wave(1.1));
+        let (cp, cf, ct) = (wave(1.7), wave(2.3), wave(2.9));
+        let (kp, kf, kt, h, th) = (3.7, -1.3e-7, 0.9, 2e-7, 0.5);
+        // the fused pass from q_k = `q`, v_free = `vf`: (q, v, y) and the finiteness
+        let fused = |terms: (bool, bool, bool), q: &[f64], vf: &[f64], kt: f64| {
+            let (mut q2, mut v2, mut y2) = (vec![0.0; n], vf.to_vec(), vec![0.0; n]);
+            let cols = [(&cp[..], kp), (&cf[..], kf), (&ct[..], kt)];
+            let args = (
+                q,
+                &v[..],
+                (&mut q2[..], &mut v2[..], &mut y2[..]),
+                cols,
+                (h, th),
+            );
+            let finite = fused_update_with(terms, args);
+            (q2, v2, y2, finite)
+        };
+        for mask in 0..8 {
+            let (p, f, t) = (mask & 1 != 0, mask & 2 != 0, mask & 4 != 0);
+            // the general path
+            let mut v1 = vf.clone();
+            if p {
+                v1.iter_mut().zip(&cp).for_each(|(y, x)| *y += kp * x);
+            }
+            if f {
+                v1.iter_mut().zip(&cf).for_each(|(y, x)| *y += kf * x);
+            }
+            let mut q1: Vec<f64> = (0..n)
+                .map(|i| q[i] + h * ((1.0 - th) * v[i] + th * v1[i]))
+                .collect();
+            if t {
+                q1.iter_mut().zip(&ct).for_each(|(y, x)| *y += kt * x);
+            }
+            let y1: Vec<f64> = (0..n).map(|i| q1[i] + h * th * v1[i]).collect();
+            // the fused pass
+            let (q2, v2, y2, finite) = fused((p, f, t), &q, &vf, kt);
+            assert!(finite);
+            for (a, b) in [(&q1, &q2), (&v1, &v2), (&y1, &y2)] {
+                assert!(
+                    a.iter()
+                        .zip(b.iter())
+                        .all(|(x, y)| x.to_bits() == y.to_bits())
+                );
+            }
+        }
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            for at in [0, 17, n - 1] {
+                let mut vb = vf.clone();
+                vb[at] = bad;
+                let (.., finite) = fused((false, false, false), &q, &vb, kt);
+                assert!(!finite, "{bad} at {at}");
+            }
+        }
+        // a finite v whose q overflows: reported, or every q finite
+        let mut qb = q.clone();
+        qb[5] = f64::MAX;
+        let (q2, .., finite) = fused((false, false, true), &qb, &vf, 1e300);
+        assert!(!finite || q2.iter().all(|x| x.is_finite()));
+    }
+}

@@ -1,0 +1,535 @@
+//! The one-step problems' workspace (sized once, matrix-free past its cap) and the
+//! dispatch to the LCP, MLCP and friction solvers; the errors a failed solve becomes.
+
+use super::*;
+
+/// Default cap on the rows of the dense one-step workspaces (4096² values = 128 MiB).
+pub const DEFAULT_MAX_ACTIVE_ROWS: usize = 4096;
+
+/// Active rows past which a one-step problem with a nonlinear `G` on the
+/// per-active-column Delassus path is solved matrix-free: its columns would be re-solved
+/// (two solves per row with the projection) at every linearization, where a matrix-free
+/// solve takes a few tens of products (measured 21–25 per solve on the flat impact of
+/// `tests/analytic_flat_impact.rs`); the same threshold as the dense re-forming of
+/// [`crate::delassus::AUTO_DENSE_MAX_CONTACTS`].
+pub const NONLINEAR_COLUMNS_MAX: usize = 64;
+
+/// Active rows past which the θ-method core solves a one-step problem matrix-free: the
+/// workspace rows `ws_cap`, or [`NONLINEAR_COLUMNS_MAX`] for a nonlinear `G` on the
+/// per-active-column path (which would re-solve every stored column at each
+/// linearization, where a matrix-free solve costs a few tens of products). Shared by
+/// [`ThetaCore::new`] and the plan of `signorini check`.
+pub(crate) fn matrix_free_rows(ws_cap: usize, g_constant: bool, dense: bool) -> usize {
+    if !g_constant && !dense {
+        NONLINEAR_COLUMNS_MAX.min(ws_cap)
+    } else {
+        ws_cap
+    }
+}
+
+/// Dense sub-problem workspace: gathers a principal sub-block, solves, scatters. Sized
+/// for `cap` rows (the active rows of a step), not for the candidates.
+#[derive(Debug)]
+pub(crate) struct Workspace {
+    pub(super) cap: usize,
+    pub idx: Vec<usize>,
+    pub(super) sub: Vec<f64>,
+    pub(super) q: Vec<f64>,
+    pub(super) z: Vec<f64>,
+    pub(super) w: Vec<f64>,
+    pub(super) eq: Vec<bool>,
+    pub(super) member: Vec<bool>,
+    pub(super) res: Vec<f64>,
+    pub lcp: LcpSolver,
+    pub(super) mlcp: Mlcp,
+    /// Friction blocks of the gathered problem (offsets in the gathered rows).
+    pub(super) blocks: Vec<Block>,
+    pub(super) friction: FrictionSolver,
+    /// The gathered rows exceed `cap`: the problem is recorded (`gq`, `gz`, `geq`) and
+    /// solved matrix-free ([`crate::solvers::global`]) on products with `del`.
+    pub(super) over: bool,
+    /// Rows past which a problem is solved matrix-free (`cap`, or fewer:
+    /// [`Workspace::matrix_free_from`]).
+    pub(super) mf_from: usize,
+    /// Operator and scale of the recorded problem.
+    pub(super) gop: (Op, f64),
+    pub(super) gq: Vec<f64>,
+    pub(super) gz: Vec<f64>,
+    pub(super) gw: Vec<f64>,
+    pub(super) geq: Vec<bool>,
+    /// Full contact-space vectors for the restricted products.
+    pub(super) gx: Vec<f64>,
+    pub(super) gy: Vec<f64>,
+    pub(super) global: GlobalSolver,
+    /// Tolerance and product cap of the matrix-free solves (the friction solver's).
+    pub(super) gtol: f64,
+    pub(super) gmax: usize,
+}
+
+/// The principal sub-block `scale · op[idx, idx]` of a Delassus operator, applied by
+/// products with the whole operator ([`Delassus::mul_add`]: stored columns, or through
+/// the factor): what the matrix-free solvers of [`crate::solvers::global`] see.
+pub(super) struct Restricted<'a> {
+    pub(super) del: std::cell::RefCell<&'a mut Delassus>,
+    pub(super) stiffness: &'a SparseMatrix,
+    pub(super) op: Op,
+    pub(super) scale: f64,
+    pub(super) idx: &'a [usize],
+    pub(super) x: std::cell::RefCell<&'a mut [f64]>,
+    pub(super) y: std::cell::RefCell<&'a mut [f64]>,
+}
+
+impl DelassusOperator for Restricted<'_> {
+    fn size(&self) -> usize {
+        self.idx.len()
+    }
+    /// One product per entry: for checks, never in the solvers' loops.
+    fn entry(&self, i: usize, j: usize) -> f64 {
+        let (mut xs, mut ys) = (self.x.borrow_mut(), self.y.borrow_mut());
+        xs.iter_mut().for_each(|v| *v = 0.0);
+        ys.iter_mut().for_each(|v| *v = 0.0);
+        xs[self.idx[j]] = 1.0;
+        self.del
+            .borrow_mut()
+            .mul_add(self.op, self.scale, &xs, &mut ys, self.stiffness);
+        ys[self.idx[i]]
+    }
+    fn mul_add(&self, s: f64, x: &[f64], out: &mut [f64]) {
+        let (mut xs, mut ys) = (self.x.borrow_mut(), self.y.borrow_mut());
+        xs.iter_mut().for_each(|v| *v = 0.0);
+        ys.iter_mut().for_each(|v| *v = 0.0);
+        for (&i, &v) in self.idx.iter().zip(x) {
+            xs[i] = v;
+        }
+        self.del
+            .borrow_mut()
+            .mul_add(self.op, s * self.scale, &xs, &mut ys, self.stiffness);
+        for (o, &i) in out.iter_mut().zip(self.idx) {
+            *o += ys[i];
+        }
+    }
+}
+
+impl Workspace {
+    /// Buffers for `rows` contact rows and `contacts` contacts, dense blocks capped at
+    /// `params.max_active_rows` rows (module doc); `friction` adds the friction solver.
+    pub fn new(rows: usize, contacts: usize, params: &SchemeParams, friction: bool) -> Self {
+        let cap = Self::cap(rows, params);
+        Workspace {
+            cap,
+            idx: Vec::with_capacity(rows),
+            sub: vec![0.0; cap * cap],
+            q: vec![0.0; cap],
+            z: vec![0.0; cap],
+            w: vec![0.0; cap],
+            eq: vec![false; cap],
+            member: vec![false; rows],
+            res: vec![0.0; rows],
+            lcp: LcpSolver::new(params.lcp, cap),
+            mlcp: Mlcp::with_capacity(cap),
+            blocks: Vec::with_capacity(if friction { contacts } else { 0 }),
+            friction: FrictionSolver::with_capacity(if friction { cap } else { 0 }),
+            over: false,
+            mf_from: cap,
+            gop: (Op::W, 1.0),
+            gq: vec![0.0; if rows > cap { rows } else { 0 }],
+            gz: vec![0.0; if rows > cap { rows } else { 0 }],
+            gw: vec![0.0; if rows > cap { rows } else { 0 }],
+            geq: vec![false; if rows > cap { rows } else { 0 }],
+            gx: vec![0.0; if rows > cap { rows } else { 0 }],
+            gy: vec![0.0; if rows > cap { rows } else { 0 }],
+            global: GlobalSolver::with_capacity(if rows > cap { rows } else { 0 }),
+            gtol: params.friction.tol,
+            gmax: params.friction.max_iterations,
+        }
+    }
+
+    /// Rows of the dense blocks: `rows`, capped by `params.max_active_rows`.
+    pub(crate) fn cap(rows: usize, params: &SchemeParams) -> usize {
+        match params.max_active_rows {
+            0 => rows.min(DEFAULT_MAX_ACTIVE_ROWS),
+            c => rows.min(c),
+        }
+    }
+
+    /// The matrix-free fallback, for the path line (empty when every row fits).
+    pub fn describe(&self) -> String {
+        if self.global.capacity() == 0 {
+            return String::new();
+        }
+        format!(
+            "; one-step problems of more than {} active rows solved matrix-free on products \
+             W x = Gᵀ(M̂⁻¹(G x)) (MPRGP{})",
+            self.mf_from,
+            if self.friction.capacity() > 0 {
+                ", friction by accelerated projected gradient with the fixed point on ‖u_T‖"
+            } else {
+                ""
+            }
+        )
+    }
+
+    /// True when the rows of `idx` exceed the dense workspaces (or the threshold of
+    /// [`Workspace::matrix_free_from`]): the problem is then solved matrix-free, and its
+    /// Delassus columns need not be stored.
+    pub fn over_cap(&self) -> bool {
+        self.idx.len() > self.mf_from
+    }
+
+    /// Solves the problems of more than `rows` active rows matrix-free (at set-up:
+    /// sizes the matrix-free buffers for every row).
+    pub(super) fn matrix_free_from(&mut self, rows: usize, params: &SchemeParams) {
+        let all = self.member.len();
+        if rows >= self.mf_from || all <= rows {
+            return;
+        }
+        self.mf_from = rows;
+        if self.global.capacity() < all {
+            self.gq = vec![0.0; all];
+            self.gz = vec![0.0; all];
+            self.gw = vec![0.0; all];
+            self.geq = vec![false; all];
+            self.gx = vec![0.0; all];
+            self.gy = vec![0.0; all];
+            self.global = GlobalSolver::with_capacity(all);
+            self.gtol = params.friction.tol;
+            self.gmax = params.friction.max_iterations;
+        }
+    }
+
+    /// Gathers `op[idx, idx]` (scaled by `scale`), `rhs[idx]`, the warm start and the
+    /// equality flags; the columns of `idx` must be available in `del`. Past the dense
+    /// workspaces only `rhs`, the warm start and the flags are gathered (the matrix-free
+    /// solve applies `op` by products).
+    pub fn gather(
+        &mut self,
+        del: &Delassus,
+        op: Op,
+        scale: f64,
+        rhs: &[f64],
+        warm: &[f64],
+        eq: impl Fn(usize) -> bool,
+    ) -> Result<(), SolveError> {
+        let k = self.idx.len();
+        self.over = self.over_cap();
+        if self.over {
+            self.gop = (op, scale);
+            for (b, &j) in self.idx.iter().enumerate() {
+                self.gq[b] = rhs[j];
+                self.gz[b] = warm[j];
+                self.geq[b] = eq(j);
+            }
+            return Ok(());
+        }
+        for (b, &j) in self.idx.iter().enumerate() {
+            for (a, &i) in self.idx.iter().enumerate() {
+                self.sub[a + b * k] = scale * del.entry(op, i, j);
+            }
+            self.q[b] = rhs[j];
+            self.z[b] = warm[j];
+            self.eq[b] = eq(j);
+        }
+        Ok(())
+    }
+
+    /// The restricted operator of the recorded problem over `del`.
+    pub(super) fn restricted<'a>(
+        del: &'a mut Delassus,
+        stiffness: &'a SparseMatrix,
+        (op, scale): (Op, f64),
+        idx: &'a [usize],
+        gx: &'a mut [f64],
+        gy: &'a mut [f64],
+    ) -> Restricted<'a> {
+        Restricted {
+            del: std::cell::RefCell::new(del),
+            stiffness,
+            op,
+            scale,
+            idx,
+            x: std::cell::RefCell::new(gx),
+            y: std::cell::RefCell::new(gy),
+        }
+    }
+
+    /// Solves the gathered problem (an LCP when no row is an equality); past the dense
+    /// workspaces by MPRGP on products with `del` (a cap or a residual above the
+    /// tolerance is an error).
+    pub fn solve(
+        &mut self,
+        del: &mut Delassus,
+        stiffness: &SparseMatrix,
+        stats: &mut StepStats,
+    ) -> Result<SolveInfo, SolveError> {
+        let k = self.idx.len();
+        if self.over {
+            let a = Self::restricted(
+                del,
+                stiffness,
+                self.gop,
+                &self.idx,
+                &mut self.gx,
+                &mut self.gy,
+            );
+            let info = self.global.solve_box(
+                &a,
+                &self.gq[..k],
+                &self.geq[..k],
+                &mut self.gz[..k],
+                &mut self.gw[..k],
+                self.gtol,
+                self.gmax,
+            );
+            stats.global_solves += 1;
+            stats.global_products += info.products;
+            if !info.converged {
+                return Err(SolveError::Cap {
+                    cap: self.gmax,
+                    residual: info.residual,
+                });
+            }
+            return Ok(SolveInfo {
+                iterations: info.products,
+                residual: info.accuracy,
+            });
+        }
+        if self.eq[..k].iter().any(|&e| e) {
+            self.mlcp.solve(
+                &self.sub[..k * k],
+                k,
+                &self.q[..k],
+                &self.eq[..k],
+                &mut self.lcp,
+                &mut self.z[..k],
+                &mut self.w[..k],
+            )
+        } else {
+            self.lcp.solve(
+                &self.sub[..k * k],
+                k,
+                &self.q[..k],
+                &mut self.z[..k],
+                &mut self.w[..k],
+            )
+        }
+    }
+
+    /// Solves the gathered rows as a Coulomb friction problem over `self.blocks`
+    /// (warm start in `z`).
+    pub(super) fn solve_friction(
+        &mut self,
+        params: &FrictionParams,
+        del: &mut Delassus,
+        stiffness: &SparseMatrix,
+        stats: &mut StepStats,
+    ) -> Result<(crate::solvers::friction::FrictionInfo, f64), SolveError> {
+        let k = self.idx.len();
+        if self.over {
+            let a = Self::restricted(
+                del,
+                stiffness,
+                self.gop,
+                &self.idx,
+                &mut self.gx,
+                &mut self.gy,
+            );
+            let info = self.global.solve_friction(
+                &a,
+                &self.gq[..k],
+                &self.blocks,
+                &mut self.gz[..k],
+                &mut self.gw[..k],
+                params.tol,
+                params.max_iterations,
+            );
+            stats.global_solves += 1;
+            stats.global_products += info.products;
+            let fi = crate::solvers::friction::FrictionInfo {
+                iterations: info.products,
+                residual: info.residual,
+                prox_iterations: info.outer,
+                converged: info.converged,
+                // not a fallback: counted in `StepStats::global_solves`
+                solver: FrictionSolverKind::Nsgs,
+                tolerance: params.tol,
+                ..Default::default()
+            };
+            return Ok((fi, info.accuracy));
+        }
+        let op = DenseOperator::new(k, &self.sub[..k * k]);
+        let prob = FrictionProblem {
+            w: &op,
+            q: &self.q[..k],
+            blocks: &self.blocks,
+        };
+        let info = self
+            .friction
+            .solve(prob, params, &mut self.z[..k], &mut self.w[..k])?;
+        let acc =
+            crate::solvers::friction::velocity_error(&op, &self.blocks, &self.z[..k], &self.w[..k]);
+        Ok((info, acc))
+    }
+
+    /// The growth step of `grow_solve` and of Algorithm 2's position problem: appends to
+    /// `idx` every row of `candidates` not in it whose `w = rhs + scale·op·z` at the
+    /// current solution `z` is violated: `w < −tol` for a complementarity row, `|w| > tol`
+    /// (any `w ≠ 0` when `tol = 0`) for a row of `eq`; returns whether any was added.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn add_violated(
+        &mut self,
+        (del, stiffness): (&mut Delassus, &SparseMatrix),
+        (op, scale): (Op, f64),
+        rhs: &[f64],
+        z: &[f64],
+        tol: f64,
+        candidates: impl Iterator<Item = usize>,
+        eq: impl Fn(usize) -> bool,
+    ) -> bool {
+        self.member.iter_mut().for_each(|x| *x = false);
+        for &a in &self.idx {
+            self.member[a] = true;
+        }
+        self.res.copy_from_slice(rhs);
+        del.mul_add(op, scale, z, &mut self.res, stiffness);
+        let before = self.idx.len();
+        for a in candidates {
+            let r = self.res[a];
+            let violated = if eq(a) {
+                r.abs() > tol || (tol == 0.0 && r != 0.0)
+            } else {
+                r < -tol
+            };
+            if !self.member[a] && violated {
+                self.idx.push(a);
+            }
+        }
+        self.idx.len() > before
+    }
+
+    /// `out[idx] = z`, zero elsewhere.
+    pub fn scatter(&self, out: &mut [f64]) {
+        out.iter_mut().for_each(|x| *x = 0.0);
+        let z = if self.over { &self.gz } else { &self.z };
+        for (a, &i) in self.idx.iter().enumerate() {
+            out[i] = z[a];
+        }
+    }
+}
+
+/// A structural failure in the step after `state` (an inverted element, a singular
+/// iteration matrix) as the run's error, naming the step and the time it reached.
+pub(crate) fn step_error(state: &State, h: f64, e: Error) -> Error {
+    Error::RunFailed {
+        step: state.step + 1,
+        time: state.time + h,
+        contact: None,
+        detail: match e {
+            Error::Numerical(m) => m,
+            e => e.to_string(),
+        },
+    }
+}
+
+/// An error for a one-step solve that failed in the step after `state`.
+pub(crate) fn fail(state: &State, what: &str, e: SolveError) -> Error {
+    Error::NotConverged {
+        solver: what.to_string(),
+        step: state.step + 1,
+        time: state.time,
+        detail: e.to_string(),
+    }
+}
+
+/// Solves `0 ≤ rhs + scale·op z ⊥ z ≥ 0` over the rows flagged in `rows` (the normal
+/// rows) by solving on the rows violated at `z = 0` (`rhs < −tol`) and adding any row
+/// the solution leaves violated, until none is: the result then solves the full LCP,
+/// with work (and Delassus columns) proportional to the rows that matter. At most `m`
+/// growth rounds (a cap counted in `stats`).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn grow_solve(
+    ws: &mut Workspace,
+    del: &mut Delassus,
+    (op, stiffness): (Op, &SparseMatrix),
+    scale: f64,
+    rhs: &[f64],
+    warm: &[f64],
+    out: &mut [f64],
+    (tol, rows): (f64, &[bool]),
+    stats: &mut StepStats,
+) -> Result<(), SolveError> {
+    let m = del.len();
+    ws.idx.clear();
+    ws.idx.extend((0..m).filter(|&a| rows[a] && rhs[a] < -tol));
+    out.iter_mut().for_each(|x| *x = 0.0);
+    let mut rounds = 0;
+    while !ws.idx.is_empty() {
+        rounds += 1;
+        if !ws.over_cap() {
+            del.ensure_all(&ws.idx, stiffness)?;
+        }
+        ws.gather(del, op, scale, rhs, warm, |_| false)?;
+        let info = ws.solve(del, stiffness, stats)?;
+        stats.lcp_iterations += info.iterations;
+        stats.lcp_residual = stats.lcp_residual.max(info.residual);
+        ws.scatter(out);
+        let candidates = (0..m).filter(|&a| rows[a]);
+        if !ws.add_violated(
+            (del, stiffness),
+            (op, scale),
+            rhs,
+            out,
+            tol,
+            candidates,
+            |_| false,
+        ) {
+            break;
+        }
+        if rounds > m {
+            stats.caps_hit += 1;
+            break;
+        }
+    }
+    Ok(())
+}
+
+/// The one-step workspaces of the θ-method core in a memory ledger: the dense blocks
+/// (the gathered block and the MLCP's three, `scheme.max_active_rows` rows at most), the
+/// coupled position problem (the velocity rows plus one τ per contact, capped alike),
+/// the matrix-free vectors past the cap, and `auto`'s dense friction Newton fallback.
+/// Shared by [`ThetaCore::new`] and the plan of `signorini check`.
+pub(crate) fn workspace_ledger(
+    rows: usize,
+    m: usize,
+    params: &SchemeParams,
+    (friction, with_projection): (bool, bool),
+    mem: &mut crate::limits::MemoryEstimate,
+) {
+    let ws_cap = Workspace::cap(rows, params);
+    let cap = ws_cap as u64;
+    let cc = if with_projection && params.projection_feedback {
+        (rows + m).min(ws_cap) as u64
+    } else {
+        0
+    };
+    mem.add("dense one-step workspaces (4 × rows²)", cap * cap, 32);
+    mem.add("coupled position problem (unknowns²)", cc * cc, 8);
+    if rows > ws_cap {
+        // the matrix-free solves' vectors (`Workspace::gq`…, `GlobalSolver`)
+        mem.add(
+            "matrix-free one-step vectors (15 × rows)",
+            rows as u64,
+            15 * 8,
+        );
+    }
+    // `auto`'s dense Newton fallback: W and J (solvers::newton::NewtonWork)
+    let fn_rows = if friction {
+        cap.min(crate::solvers::newton::STEP_NEWTON_ROWS as u64)
+    } else {
+        0
+    };
+    mem.add(
+        "friction Newton workspace (2 × rows²)",
+        fn_rows * fn_rows,
+        16,
+    );
+}
