@@ -86,28 +86,8 @@ impl SpdFactor {
         let solve = |block: &mut [f64]| {
             let cols = block.len() / n;
             let mut xp = vec![0.0; n * cols];
-            match perm {
-                Some((fwd, _)) => {
-                    for (dst, src) in xp.chunks_exact_mut(n).zip(block.chunks_exact(n)) {
-                        for (d, &i) in dst.iter_mut().zip(fwd) {
-                            *d = src[i];
-                        }
-                    }
-                }
-                None => xp.copy_from_slice(block),
-            }
             let mut tmp = vec![0.0; widest * cols];
-            sweeps(llt, &mut xp, n, cols, &mut tmp, needed.as_deref());
-            match perm {
-                Some((_, inv)) => {
-                    for (dst, src) in block.chunks_exact_mut(n).zip(xp.chunks_exact(n)) {
-                        for (d, &i) in dst.iter_mut().zip(inv) {
-                            *d = src[i];
-                        }
-                    }
-                }
-                None => block.copy_from_slice(&xp),
-            }
+            permuted_sweeps(llt, perm, block, &mut xp, &mut tmp, needed.as_deref());
         };
         use rayon::prelude::*;
         x.par_chunks_mut(n * SOLVE_CHUNK).for_each(solve);
@@ -158,28 +138,43 @@ impl SpdFactor {
         let llt = SupernodalLltRef::<usize, f64>::new(sym, &f.values);
         let perm = f.symbolic.perm().map(|p| p.arrays());
         let (xp, tmp) = (&mut f.sparse.0[..n * k], &mut f.sparse.1[..]);
-        match perm {
-            Some((fwd, _)) => {
-                for (dst, src) in xp.chunks_exact_mut(n).zip(x.chunks_exact(n)) {
-                    for (d, &i) in dst.iter_mut().zip(fwd) {
-                        *d = src[i];
-                    }
-                }
-            }
-            None => xp.copy_from_slice(x),
-        }
         let width = tmp.len() / k;
-        sweeps(llt, xp, n, k, &mut tmp[..width * k], None);
-        match perm {
-            Some((_, inv)) => {
-                for (dst, src) in x.chunks_exact_mut(n).zip(xp.chunks_exact(n)) {
-                    for (d, &i) in dst.iter_mut().zip(inv) {
-                        *d = src[i];
-                    }
+        permuted_sweeps(llt, perm, x, xp, &mut tmp[..width * k], None);
+    }
+}
+
+/// `x = A⁻¹ x` for the block `x` (`n`-columns) through the permuted scratch `xp` (as long
+/// as `x`): the factor's permutation, [`sweeps`], and back.
+fn permuted_sweeps(
+    llt: SupernodalLltRef<'_, usize, f64>,
+    perm: Option<(&[usize], &[usize])>,
+    x: &mut [f64],
+    xp: &mut [f64],
+    tmp: &mut [f64],
+    needed: Option<&[bool]>,
+) {
+    let n = llt.symbolic().nrows();
+    let k = x.len() / n;
+    match perm {
+        Some((fwd, _)) => {
+            for (dst, src) in xp.chunks_exact_mut(n).zip(x.chunks_exact(n)) {
+                for (d, &i) in dst.iter_mut().zip(fwd) {
+                    *d = src[i];
                 }
             }
-            None => x.copy_from_slice(xp),
         }
+        None => xp.copy_from_slice(x),
+    }
+    sweeps(llt, xp, n, k, tmp, needed);
+    match perm {
+        Some((_, inv)) => {
+            for (dst, src) in x.chunks_exact_mut(n).zip(xp.chunks_exact(n)) {
+                for (d, &i) in dst.iter_mut().zip(inv) {
+                    *d = src[i];
+                }
+            }
+        }
+        None => x.copy_from_slice(xp),
     }
 }
 
