@@ -1,0 +1,598 @@
+//! Building a scene: meshes, materials and fixed dofs to the assembled structure, the
+//! contact sets, loads, probes and the initial state, handed down as one
+//! [`crate::integrators::Problem`] inside a [`Model`].
+
+use super::*;
+
+impl Scene {
+    /// Meshes and assembles every body, eliminates fixed dofs, and builds the contacts.
+    pub fn build(&self) -> Result<(Model, ModelReport), Error> {
+        if let Some(x) = &self.example {
+            let model = x.build()?;
+            let report = ModelReport {
+                dofs: model.problem.system.ndof(),
+                cells: 0,
+                contacts: model.problem.contacts.len(),
+                linear_contacts: model.problem.contacts.is_linear(),
+                max_friction: model
+                    .problem
+                    .contacts
+                    .laws()
+                    .iter()
+                    .map(|l| l.friction)
+                    .fold(0.0, f64::max),
+                damping: model.problem.system.damping.is_some(),
+                gravity: model.problem.system.force.iter().any(|&f| f != 0.0)
+                    || matches!(x, super::super::example::ExampleSpec::SliderCrank { mechanism, .. }
+                        if mechanism.gravity > 0.0),
+                fixed_dofs: 0,
+                linear_structure: model.problem.system.nonlinear.is_empty(),
+                interfaces: Vec::new(),
+            };
+            return Ok((model, report));
+        }
+        self.validate()?;
+        let mut systems = Vec::new();
+        let mut v0 = Vec::new();
+        let mut fixed = Vec::new();
+        let mut cells = 0;
+        let dim = self.bodies[0].dim();
+        let mut geometry = Geometry {
+            dim,
+            ..Geometry::default()
+        };
+        // each contact's nodes, found once with its body's mesh: they take no mass under
+        // the redistributed mass, then become the contact set below
+        let mut nodes_of: Vec<Vec<usize>> = vec![Vec::new(); self.contacts.len()];
+        // every mesh first: a contact between bodies needs both sides' meshes
+        let mut all_meshes = Vec::with_capacity(self.bodies.len());
+        for (bi, b) in self.bodies.iter().enumerate() {
+            let at = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
+            if b.dim() != dim {
+                return Err(at(Error::invalid(
+                    "formulation",
+                    b.dim(),
+                    "all bodies need one dimension",
+                )));
+            }
+            let mesh = b.mesh(&self.base_dir).map_err(at)?;
+            // the mesh against the formulation before anything reads its cells as such
+            if !matches!(b.mesh, MeshSpec::Rod { .. }) {
+                crate::model::solid::check_mesh(&mesh, b.formulation).map_err(at)?;
+            }
+            all_meshes.push(mesh);
+        }
+        // the probes' node sets, before any assembly: a misspelt set is refused at once
+        let point_base = starts(all_meshes.iter().map(|m| m.points.len()));
+        let probes = self.probes(&all_meshes, &point_base)?;
+        // the master surface of each contact between bodies (facets over its body's
+        // node numbers, outward)
+        let mut facets_of: Vec<Vec<Vec<usize>>> = vec![Vec::new(); self.contacts.len()];
+        let mut axis_facets = vec![0; self.contacts.len()];
+        for (ci, c) in self.contacts.iter().enumerate() {
+            if let Some(t) = &c.target {
+                let ti = self.body_index(&t.body);
+                (facets_of[ci], axis_facets[ci]) =
+                    target_facets(&all_meshes[ti], &self.bodies[ti], t)
+                        .map_err(|e| prefix(&format!("contacts[{ci}].target"), e))?;
+            }
+        }
+        for (bi, b) in self.bodies.iter().enumerate() {
+            let at = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
+            let mesh = &all_meshes[bi];
+            cells += mesh.cells.len().max(match b.mesh {
+                MeshSpec::Rod { elements, .. } => elements,
+                _ => 0,
+            });
+            // contact nodes of this body (for the redistributed mass): the same nodes
+            // as the contacts below, `boundary`, `all` and `within` included
+            let mut contact_nodes = Vec::new();
+            // (obstacle, node) → the contact that first listed it
+            let mut first_of = std::collections::HashMap::new();
+            for (ci, c) in self
+                .contacts
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.body == b.name)
+            {
+                nodes_of[ci] = self
+                    .contact_nodes(mesh, c, dim, &facets_of[ci], &all_meshes)
+                    .map_err(|e| prefix(&format!("contacts[{ci}]"), e))?;
+                let other = match (&c.obstacle, &c.target) {
+                    (Some(o), _) => format!("obstacle \"{o}\""),
+                    (_, Some(t)) => format!("body \"{}\"", t.body),
+                    _ => unreachable!("validated"),
+                };
+                for &v in &nodes_of[ci] {
+                    // the same constraint twice makes two equal rows of G: a singular
+                    // contact problem that the solvers report only as a breakdown
+                    if let Some(first) = first_of.insert((other.clone(), v), ci) {
+                        return Err(prefix(
+                            &format!("contacts[{ci}]"),
+                            Error::invalid(
+                                "nodes",
+                                mesh.node_label(v),
+                                &format!(
+                                    "already meets {other} through contacts[{first}]; \
+                                     list each node once per obstacle or body",
+                                ),
+                            ),
+                        ));
+                    }
+                }
+                contact_nodes.extend_from_slice(&nodes_of[ci]);
+            }
+            // the master surfaces on this body take no mass either (both sides of an
+            // interface, as Khenous–Laborde–Renard redistribute it)
+            for (ci, c) in self.contacts.iter().enumerate() {
+                if c.target.as_ref().is_some_and(|t| t.body == b.name) {
+                    contact_nodes.extend(facets_of[ci].iter().flatten().copied());
+                }
+            }
+            contact_nodes.sort_unstable();
+            contact_nodes.dedup();
+            let mut sys = match &b.mesh {
+                MeshSpec::Rod {
+                    elements,
+                    length,
+                    area,
+                    ..
+                } => Rod {
+                    length: *length,
+                    area: *area,
+                    young: b.material.young,
+                    density: b.material.density,
+                    elements: *elements,
+                    mass: b.mass,
+                }
+                .assemble()
+                .map_err(at)?,
+                _ => {
+                    assemble_with_contacts(mesh, &b.material, b.formulation, b.mass, &contact_nodes)
+                        .map_err(at)?
+                }
+            };
+            if let Some(r) = b.damping {
+                sys = sys.with_rayleigh(r.alpha, r.beta).map_err(at)?;
+            }
+            if let Some(g) = &self.loads.gravity {
+                sys.add_gravity(g).map_err(|e| prefix("loads", e))?;
+            }
+            let n = sys.ndof();
+            let vel = b.velocity.clone().unwrap_or_else(|| vec![0.0; dim]);
+            if vel.len() != dim || vel.iter().any(|x| !x.is_finite()) {
+                return Err(at(Error::invalid(
+                    "velocity",
+                    format!("{vel:?}"),
+                    &format!("needs {dim} finite values"),
+                )));
+            }
+            v0.extend((0..n).map(|i| vel[i % dim]));
+            let mut fx = vec![false; n];
+            for name in &b.fixed {
+                let set = node_set(mesh, name).map_err(|e| at(prefix("fixed", e)))?;
+                for &v in &set {
+                    for i in 0..dim {
+                        fx[v * dim + i] = true;
+                    }
+                }
+            }
+            fixed.extend(fx);
+            let base = geometry.points.len();
+            match &b.mesh {
+                MeshSpec::Rod { elements, .. } => {
+                    geometry.cells.extend(
+                        (0..*elements).map(|e| (GeomCell::Line, vec![base + e, base + e + 1], bi)),
+                    );
+                }
+                _ => geometry.cells.extend(mesh.cells.iter().map(|(k, c)| {
+                    (
+                        GeomCell::Solid(*k),
+                        c.iter().map(|v| base + v).collect(),
+                        bi,
+                    )
+                })),
+            }
+            geometry.node_ids.extend(
+                (0..mesh.points.len()).map(|k| mesh.node_ids.get(k).copied().unwrap_or(k as u64)),
+            );
+            geometry.points.extend_from_slice(&mesh.points);
+            geometry.bodies.push((b.material, b.formulation));
+            systems.push(sys);
+        }
+        let meshes = all_meshes;
+        let offsets = starts(systems.iter().map(LinearSystem::ndof));
+        let full = LinearSystem::block_diagonal(systems)?;
+        let fixed_dofs = fixed.iter().filter(|&&f| f).count();
+        // prescribed velocities: eliminated with their coupling blocks
+        let mut prescribed = vec![None; full.ndof()];
+        let mut functions = Vec::new();
+        for (pi, p) in self.prescribed.iter().enumerate() {
+            let at = |e: Error| prefix(&format!("prescribed[{pi}]"), e);
+            let bi = self
+                .bodies
+                .iter()
+                .position(|b| b.name == p.body)
+                .expect("validated");
+            let dim = self.bodies[bi].dim();
+            let nodes = node_set(&meshes[bi], &p.nodes).map_err(at)?;
+            let comps: Vec<usize> = p.components.clone().unwrap_or_else(|| (0..dim).collect());
+            functions.push(time_function(&format!("prescribed[{pi}].time"), &p.time)?);
+            for &v in &nodes {
+                for &c in &comps {
+                    let d = offsets[bi] + v * dim + c;
+                    if fixed[d] || prescribed[d].is_some() {
+                        return Err(at(Error::invalid(
+                            "nodes",
+                            format!("{} component {c}", meshes[bi].node_label(v)),
+                            "is already fixed or prescribed",
+                        )));
+                    }
+                    prescribed[d] = Some((p.velocity[c], functions.len() - 1));
+                }
+            }
+        }
+        geometry.prescribed = (0..full.ndof())
+            .filter_map(|d| match prescribed[d] {
+                Some((w, f)) if !fixed[d] => Some((d, w, f)),
+                _ => None,
+            })
+            .collect();
+        geometry.prescribed_functions = functions.clone();
+        let (mut system, map) = full.restrict_prescribed(&fixed, &prescribed, functions);
+        // large-deformation bodies: their internal forces on the kept dofs
+        for (bi, b) in self.bodies.iter().enumerate() {
+            let law = match b.material.model {
+                MaterialModel::Linear => continue,
+                MaterialModel::Svk => Hyperelastic::svk(&b.material),
+                MaterialModel::NeoHookean => Hyperelastic::neo_hookean(&b.material),
+            };
+            let at = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
+            let mesh = &meshes[bi];
+            let n = b.dim() * mesh.points.len();
+            let dofs: Vec<Option<usize>> = (0..n).map(|i| map[offsets[bi] + i]).collect();
+            if let Some(i) = (0..n).find(|&i| prescribed[offsets[bi] + i].is_some()) {
+                return Err(at(Error::invalid(
+                    "material.model",
+                    b.material.model.name(),
+                    &format!(
+                        "takes no prescribed velocities yet (node {} is in a [[prescribed]] \
+                         set); hold it with `fixed`, or use model = \"linear\"",
+                        i / b.dim()
+                    ),
+                )));
+            }
+            let body = HyperBody::new(mesh, law).map_err(|e| at(prefix("mesh", e)))?;
+            let part =
+                HyperelasticPart::new(&b.name, body, dofs, mesh.cell_ids.clone()).map_err(at)?;
+            system.add_nonlinear_part(std::sync::Arc::new(part));
+        }
+        geometry.dof_of = map.clone();
+        let v0: Vec<f64> = v0
+            .iter()
+            .zip(&map)
+            .filter(|(_, m)| m.is_some())
+            .map(|(v, _)| *v)
+            .collect();
+        // forces on node sets (after the elimination: loads on fixed dofs are dropped,
+        // the supports carry them)
+        for (fi, f) in self.forces.iter().enumerate() {
+            let at = |e: Error| prefix(&format!("forces[{fi}]"), e);
+            let bi = self
+                .bodies
+                .iter()
+                .position(|b| b.name == f.body)
+                .expect("validated");
+            let mesh = &meshes[bi];
+            let nodes = node_set(mesh, &f.nodes).map_err(at)?;
+            if nodes.is_empty() {
+                return Err(at(Error::invalid(
+                    "nodes",
+                    &f.nodes,
+                    "the node set is empty",
+                )));
+            }
+            let dim = self.bodies[bi].dim();
+            let share = 1.0 / nodes.len() as f64;
+            let (mut dofs, mut values) = (Vec::new(), Vec::new());
+            for &v in &nodes {
+                for (i, &t) in f.total.iter().enumerate() {
+                    if let Some(d) = map[offsets[bi] + v * dim + i] {
+                        dofs.push(d);
+                        values.push(t * share);
+                    }
+                }
+            }
+            let time = time_function(&format!("forces[{fi}].time"), &f.time)?;
+            system
+                .loads
+                .push(crate::model::NodalLoad { dofs, values, time });
+        }
+        // contacts
+        let mut sets: Vec<Box<dyn ContactSet>> = Vec::new();
+        let mut interfaces = Vec::new();
+        for (ci, c) in self.contacts.iter().enumerate() {
+            let at = |e: Error| prefix(&format!("contacts[{ci}]"), e);
+            let bi = self
+                .bodies
+                .iter()
+                .position(|b| b.name == c.body)
+                .expect("validated");
+            let mesh = &meshes[bi];
+            let nodes = std::mem::take(&mut nodes_of[ci]);
+            if let Some(t) = &c.target {
+                let ti = self.body_index(&t.body);
+                let node_dofs = |body: usize, v: usize| -> [Option<usize>; 3] {
+                    let mut d = [None; 3];
+                    for (i, di) in d.iter_mut().enumerate().take(dim) {
+                        *di = map[offsets[body] + v * dim + i];
+                    }
+                    d
+                };
+                let set = crate::contact::bodies::build(
+                    crate::contact::bodies::Interface {
+                        dim,
+                        slave: &nodes,
+                        slave_points: &mesh.points,
+                        slave_dofs: &|v| node_dofs(bi, v),
+                        facets: &facets_of[ci],
+                        master_points: &meshes[ti].points,
+                        master_dofs: &|v| node_dofs(ti, v),
+                        names: Some((&c.body, &t.body, &|v| mesh.node_label(v))),
+                    },
+                    t.pairing == Pairing::NodeToNode,
+                    (c.restitution, c.friction),
+                    t.search,
+                    t.capacity
+                        .unwrap_or(crate::contact::bodies::DEFAULT_CAPACITY),
+                )
+                .map_err(at)?;
+                check_starting_gaps(
+                    set.0.as_ref(),
+                    system.ndof(),
+                    c,
+                    mesh,
+                    &nodes,
+                    &format!("body \"{}\" (surface `{}`)", t.body, t.surface),
+                )
+                .map_err(at)?;
+                interfaces.push(format!(
+                    "contacts[{ci}]: {} nodes of \"{}\" against {}{}",
+                    set.0.len(),
+                    c.body,
+                    set.1,
+                    match axis_facets[ci] {
+                        0 => String::new(),
+                        k => format!(
+                            " ({k} facet(s) of \"{}\" on the axis r = 0 left out: not \
+                             surfaces of the revolved solid)",
+                            t.body
+                        ),
+                    }
+                ));
+                sets.push(set.0);
+                continue;
+            }
+            let obstacle = self.obstacle(c);
+            let mut dofs = Vec::new();
+            let mut refs = Vec::new();
+            for &v in &nodes {
+                let d: Option<Vec<usize>> =
+                    (0..dim).map(|i| map[offsets[bi] + v * dim + i]).collect();
+                let Some(d) = d else {
+                    return Err(at(Error::invalid(
+                        "nodes",
+                        mesh.node_label(v),
+                        "is fixed and cannot be a contact node",
+                    )));
+                };
+                dofs.push(d);
+                refs.push(mesh.points[v][..dim].to_vec());
+            }
+            let set = self
+                .obstacle_set(obstacle, dofs, refs, (c.restitution, c.friction))
+                .map_err(at)?;
+            check_starting_gaps(
+                set.as_ref(),
+                system.ndof(),
+                c,
+                mesh,
+                &nodes,
+                &format!("obstacle \"{}\"", obstacle.name()),
+            )
+            .map_err(at)?;
+            sets.push(set);
+        }
+        geometry.outlines = self
+            .obstacles
+            .iter()
+            .map(|o| outline(o, &geometry.points, dim))
+            .collect();
+        let contacts: Box<dyn ContactSet> = if sets.len() == 1 {
+            sets.pop().expect("one set")
+        } else {
+            Box::new(Composite::new(sets))
+        };
+        let report = ModelReport {
+            dofs: system.ndof(),
+            cells,
+            contacts: contacts.len(),
+            linear_contacts: contacts.is_linear(),
+            max_friction: contacts
+                .laws()
+                .iter()
+                .map(|l| l.friction)
+                .fold(0.0, f64::max),
+            damping: system.damping.is_some(),
+            gravity: self.loads.gravity.is_some(),
+            fixed_dofs,
+            linear_structure: system.nonlinear.is_empty(),
+            interfaces,
+        };
+        let n = system.ndof();
+        if crate::model::ordering::worth_ordering(&geometry) {
+            system.ordering = Some(crate::model::ordering::nested_dissection(&geometry, n));
+        }
+        Ok((
+            Model {
+                problem: Problem {
+                    system,
+                    contacts,
+                    q0: vec![0.0; n],
+                    v0,
+                },
+                geometry,
+                probes,
+            },
+            report,
+        ))
+    }
+
+    /// The `[[probes]]` on the built meshes: each set's points in the geometry, and a
+    /// rod's abscissae from its end of smallest `x`.
+    pub(super) fn probes(
+        &self,
+        meshes: &[Mesh],
+        point_base: &[usize],
+    ) -> Result<Vec<Probe>, Error> {
+        let mut out = Vec::with_capacity(self.probes.len());
+        for (i, p) in self.probes.iter().enumerate() {
+            let bi = self.body_index(&p.body);
+            let mesh = &meshes[bi];
+            let nodes = node_set(mesh, &p.nodes).map_err(|e| prefix(&format!("probes[{i}]"), e))?;
+            if nodes.is_empty() {
+                return Err(Error::invalid(
+                    &format!("probes[{i}].nodes"),
+                    &p.nodes,
+                    "the node set is empty",
+                ));
+            }
+            let rod_abscissa = matches!(self.bodies[bi].mesh, MeshSpec::Rod { .. }).then(|| {
+                let x0 = mesh
+                    .points
+                    .iter()
+                    .map(|x| x[0])
+                    .fold(f64::INFINITY, f64::min);
+                nodes.iter().map(|&v| mesh.points[v][0] - x0).collect()
+            });
+            out.push(Probe {
+                name: p.name.clone(),
+                body: p.body.clone(),
+                nodes: p.nodes.clone(),
+                points: nodes.iter().map(|&v| point_base[bi] + v).collect(),
+                times: p.times.clone(),
+                rod_abscissa,
+            });
+        }
+        Ok(out)
+    }
+
+    /// The nodes of contact `c` on `mesh`: its node set (`boundary` and `all`
+    /// included), kept where the initial gap to the obstacle is at most `within`.
+    pub(super) fn contact_nodes(
+        &self,
+        mesh: &Mesh,
+        c: &ContactSpec,
+        dim: usize,
+        facets: &[Vec<usize>],
+        meshes: &[Mesh],
+    ) -> Result<Vec<usize>, Error> {
+        let nodes = node_set(mesh, &c.nodes)?;
+        let Some(d) = c.within else {
+            return Ok(nodes);
+        };
+        require_positive("within", d)?;
+        if let Some(t) = &c.target {
+            // the distance to the nearest facet's box (a lower bound of the distance to
+            // the surface: keeps every node within `d`, and a few more)
+            let master = &meshes[self.body_index(&t.body)];
+            let dist = crate::contact::bodies::box_distances(
+                nodes.iter().map(|&v| mesh.points[v]),
+                facets,
+                &master.points,
+            );
+            let kept: Vec<usize> = nodes
+                .iter()
+                .zip(&dist)
+                .filter(|(_, x)| **x <= d)
+                .map(|(&v, _)| v)
+                .collect();
+            if kept.is_empty() {
+                return Err(Error::invalid(
+                    "within",
+                    crate::error::num(d),
+                    &format!(
+                        "no node of `{}` lies that close to the target surface (the nearest \
+                         is {:.3e} m away)",
+                        c.nodes,
+                        dist.iter().copied().fold(f64::INFINITY, f64::min)
+                    ),
+                ));
+            }
+            return Ok(kept);
+        }
+        let obstacle = self.obstacle(c);
+        // the gaps at the reference positions, through the obstacle's own gap function
+        // (node-local dofs: q = 0 there)
+        let dofs: Vec<Vec<usize>> = (0..nodes.len())
+            .map(|k| (0..dim).map(|i| k * dim + i).collect())
+            .collect();
+        let refs: Vec<Vec<f64>> = nodes
+            .iter()
+            .map(|&v| mesh.points[v][..dim].to_vec())
+            .collect();
+        let set = self.obstacle_set(obstacle, dofs, refs, (c.restitution, c.friction))?;
+        let mut jac = crate::contact::ContactJacobian::for_set(set.as_ref());
+        let mut gap = vec![0.0; set.len()];
+        set.evaluate(&vec![0.0; nodes.len() * dim], &mut gap, &mut jac);
+        let kept: Vec<usize> = nodes
+            .iter()
+            .zip(&gap)
+            .filter(|(_, g)| **g <= d)
+            .map(|(&v, _)| v)
+            .collect();
+        if kept.is_empty() {
+            return Err(Error::invalid(
+                "within",
+                crate::error::num(d),
+                &format!(
+                    "no node of `{}` lies that close to the obstacle (the nearest is {:.3e} m away)",
+                    c.nodes,
+                    gap.iter().copied().fold(f64::INFINITY, f64::min)
+                ),
+            ));
+        }
+        Ok(kept)
+    }
+
+    /// The index of the body named `name` (validated to exist).
+    pub(super) fn body_index(&self, name: &str) -> usize {
+        self.bodies
+            .iter()
+            .position(|b| b.name == name)
+            .expect("validated body name")
+    }
+}
+
+/// Where each of consecutive blocks of `sizes` starts (the exclusive prefix sums): the
+/// bodies' first point and first dof.
+pub(super) fn starts(sizes: impl Iterator<Item = usize>) -> Vec<usize> {
+    sizes
+        .scan(0, |acc, n| {
+            let start = *acc;
+            *acc += n;
+            Some(start)
+        })
+        .collect()
+}
+
+/// The time function of a `[[forces]]` / `[[prescribed]]` entry (1 when absent).
+pub(super) fn time_function(
+    field: &str,
+    t: &Option<Vec<[f64; 2]>>,
+) -> Result<crate::model::TimeFunction, Error> {
+    match t {
+        Some(t) => crate::model::TimeFunction::new(field, t.iter().map(|p| (p[0], p[1])).collect()),
+        None => Ok(crate::model::TimeFunction::one()),
+    }
+}

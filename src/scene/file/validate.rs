@@ -1,0 +1,467 @@
+//! Checking a scene before anything is built: every key's range and cross-reference
+//! (the error names the key path), the mesh generators' arguments, and, once the meshes
+//! exist, the starting gaps (no body starts inside an obstacle or another body).
+
+use super::*;
+
+impl Scene {
+    /// Range checks that serde cannot express.
+    pub fn validate(&self) -> Result<(), Error> {
+        crate::limits::step_count(self.time.t_end, self.time.dt, "time.t_end", "time.dt")?;
+        self.scheme.validate().map_err(|e| prefix("scheme", e))?;
+        self.output.validate().map_err(|e| prefix("output", e))?;
+        if self.example.is_some() {
+            // the examples carry their own loads (the paper's f = −2, the oscillator's
+            // forcing); tables that would be silently ignored are refused, by name
+            let extra = [
+                (!self.bodies.is_empty(), "bodies"),
+                (!self.obstacles.is_empty(), "obstacles"),
+                (!self.contacts.is_empty(), "contacts"),
+                (!self.forces.is_empty(), "forces"),
+                (!self.prescribed.is_empty(), "prescribed"),
+                (!self.probes.is_empty(), "probes"),
+                (self.loads.gravity.is_some(), "loads"),
+                (self.reference.is_some(), "reference"),
+            ];
+            if let Some((_, key)) = extra.iter().find(|(present, _)| *present) {
+                return Err(Error::invalid(
+                    key,
+                    "in an [example] scene",
+                    "an example scene holds only [example], [time], [scheme] and [output]: \
+                     its loads are the example's own parameters (`signorini example --help`)",
+                ));
+            }
+            return Ok(());
+        }
+        if self.bodies.is_empty() {
+            return Err(Error::invalid(
+                "bodies",
+                "[]",
+                "a scene needs at least one body (or an [example])",
+            ));
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            if b.name.trim().is_empty() {
+                return Err(Error::invalid(
+                    &format!("bodies[{i}].name"),
+                    "\"\"",
+                    "a body needs a name",
+                ));
+            }
+            if let Some(j) = self.bodies[..i].iter().position(|o| o.name == b.name) {
+                return Err(Error::invalid(
+                    &format!("bodies[{i}].name"),
+                    &b.name,
+                    &format!("bodies[{j}] has that name already; names must be unique"),
+                ));
+            }
+            b.material
+                .validate()
+                .map_err(|e| prefix(&format!("bodies[{i}].material"), e))?;
+            let rod = matches!(b.mesh, MeshSpec::Rod { .. });
+            if b.material.model != MaterialModel::Linear
+                && (rod
+                    || matches!(
+                        b.formulation,
+                        Formulation::PlaneStress { .. } | Formulation::Axisymmetric
+                    ))
+            {
+                return Err(Error::invalid(
+                    &format!("bodies[{i}].material.model"),
+                    b.material.model.name(),
+                    "large-deformation laws take solid bodies (tet4, hex8) and plane-strain \
+                     bodies (tri3, quad4); rods, plane-stress and axisymmetric bodies are \
+                     linear only (model = \"linear\")",
+                ));
+            }
+            if let Some(r) = b.damping {
+                crate::error::require_in(
+                    &format!("bodies[{i}].damping.alpha"),
+                    r.alpha,
+                    0.0,
+                    f64::MAX,
+                )?;
+                crate::error::require_in(
+                    &format!("bodies[{i}].damping.beta"),
+                    r.beta,
+                    0.0,
+                    f64::MAX,
+                )?;
+            }
+        }
+        let dim = self.bodies[0].dim();
+        for (j, o) in self.obstacles.iter().enumerate() {
+            if let Some(k) = self.obstacles[..j]
+                .iter()
+                .position(|p| p.name() == o.name())
+            {
+                return Err(Error::invalid(
+                    &format!("obstacles[{j}].name"),
+                    o.name(),
+                    &format!("obstacles[{k}] has that name already; names must be unique"),
+                ));
+            }
+            // say where the dimension comes from: a 3-D mesh given a 2-D formulation
+            // reads as an obstacle's fault otherwise (issue 34)
+            let origin = match self.bodies[0].mesh {
+                MeshSpec::Rod { .. } => "bodies[0] is a rod".to_string(),
+                _ => format!(
+                    "bodies[0] has formulation = \"{}\"",
+                    self.bodies[0].formulation.name()
+                ),
+            };
+            o.validate(dim).map_err(|e| {
+                prefix(
+                    &format!("obstacles[{j}]"),
+                    e.context(&format!("a {dim}-D scene: {origin}")),
+                )
+            })?;
+        }
+        if let Some(g) = &self.loads.gravity
+            && (g.len() != dim || g.iter().any(|x| !x.is_finite()))
+        {
+            return Err(Error::invalid(
+                "loads.gravity",
+                format!("{g:?}"),
+                &format!("needs {dim} finite components (m/s²)"),
+            ));
+        }
+        self.validate_axisymmetric()?;
+        for (i, c) in self.contacts.iter().enumerate() {
+            if !self.bodies.iter().any(|b| b.name == c.body) {
+                return Err(Error::invalid(
+                    &format!("contacts[{i}].body"),
+                    &c.body,
+                    "names no body",
+                ));
+            }
+            match (&c.obstacle, &c.target) {
+                (Some(o), None) => {
+                    if !self.obstacles.iter().any(|x| x.name() == o) {
+                        return Err(Error::invalid(
+                            &format!("contacts[{i}].obstacle"),
+                            o,
+                            "names no obstacle",
+                        ));
+                    }
+                }
+                (None, Some(t)) => {
+                    if !self.bodies.iter().any(|b| b.name == t.body) {
+                        return Err(Error::invalid(
+                            &format!("contacts[{i}].target.body"),
+                            &t.body,
+                            "names no body",
+                        ));
+                    }
+                    if t.body == c.body {
+                        return Err(Error::invalid(
+                            &format!("contacts[{i}].target.body"),
+                            &t.body,
+                            "is the contact's own body: self-contact is not modelled",
+                        ));
+                    }
+                    if let Some(sd) = t.search {
+                        require_positive(&format!("contacts[{i}].target.search"), sd)?;
+                    }
+                    if let Some(k) = t.capacity
+                        && !(1..=4096).contains(&k)
+                    {
+                        return Err(Error::invalid(
+                            &format!("contacts[{i}].target.capacity"),
+                            k,
+                            "must lie in 1..=4096",
+                        ));
+                    }
+                }
+                (Some(_), Some(_)) => {
+                    return Err(Error::invalid(
+                        &format!("contacts[{i}]"),
+                        "obstacle and target",
+                        "give one: `obstacle` (a rigid obstacle) or `target` (another body)",
+                    ));
+                }
+                (None, None) => {
+                    return Err(Error::invalid(
+                        &format!("contacts[{i}]"),
+                        "neither obstacle nor target",
+                        "give `obstacle = \"name\"` or `target = { body = \"name\", surface = \"set\" }`",
+                    ));
+                }
+            }
+            crate::contact::check_restitution(
+                &format!("contacts[{i}].restitution"),
+                c.restitution,
+            )?;
+            crate::contact::check_friction(&format!("contacts[{i}].friction"), c.friction)?;
+        }
+        for (i, p) in self.prescribed.iter().enumerate() {
+            let at = format!("prescribed[{i}]");
+            let b = self.driven_body(&at, &p.body, ("velocity", &p.velocity, "m/s"), &p.time)?;
+            if let Some(c) = &p.components
+                && (c.is_empty() || c.iter().any(|&k| k >= b.dim()))
+            {
+                return Err(Error::invalid(
+                    &format!("prescribed[{i}].components"),
+                    format!("{c:?}"),
+                    &format!("expected components in 0..{}", b.dim()),
+                ));
+            }
+        }
+        for (i, f) in self.forces.iter().enumerate() {
+            let at = format!("forces[{i}]");
+            self.driven_body(&at, &f.body, ("total", &f.total, "N"), &f.time)?;
+        }
+        self.validate_probes()
+    }
+
+    /// Checks the `[[probes]]`: unique non-empty names, existing bodies, increasing
+    /// finite times within `[0, time.t_end]`, at most [`MAX_PROBE_TIMES`] each.
+    pub(super) fn validate_probes(&self) -> Result<(), Error> {
+        for (i, p) in self.probes.iter().enumerate() {
+            let key = |k: &str| format!("probes[{i}].{k}");
+            if p.name.trim().is_empty() {
+                return Err(Error::invalid(&key("name"), "\"\"", "a probe needs a name"));
+            }
+            if let Some(j) = self.probes[..i].iter().position(|o| o.name == p.name) {
+                return Err(Error::invalid(
+                    &key("name"),
+                    &p.name,
+                    &format!("probes[{j}] has that name already; names must be unique"),
+                ));
+            }
+            if !self.bodies.iter().any(|b| b.name == p.body) {
+                return Err(Error::invalid(&key("body"), &p.body, "names no body"));
+            }
+            if p.times.is_empty() || p.times.len() > MAX_PROBE_TIMES {
+                return Err(Error::invalid(
+                    &key("times"),
+                    format!("{} times", p.times.len()),
+                    &format!("expected 1 to {MAX_PROBE_TIMES} times"),
+                ));
+            }
+            for (k, &t) in p.times.iter().enumerate() {
+                if !(0.0..=self.time.t_end).contains(&t) {
+                    return Err(Error::invalid(
+                        &format!("probes[{i}].times[{k}]"),
+                        t,
+                        &format!("expected a time in [0, time.t_end = {}] s", self.time.t_end),
+                    ));
+                }
+                if k > 0 && t <= p.times[k - 1] {
+                    return Err(Error::invalid(
+                        &format!("probes[{i}].times[{k}]"),
+                        t,
+                        &format!(
+                            "times must increase (times[{}] = {})",
+                            k - 1,
+                            p.times[k - 1]
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks a `[[forces]]` or `[[prescribed]]` entry at `at`: its body exists, its
+    /// vector has one finite component per dimension, its time function is valid.
+    pub(super) fn driven_body(
+        &self,
+        at: &str,
+        body: &str,
+        (key, v, unit): (&str, &[f64], &str),
+        time: &Option<Vec<[f64; 2]>>,
+    ) -> Result<&BodySpec, Error> {
+        let Some(b) = self.bodies.iter().find(|b| b.name == body) else {
+            return Err(Error::invalid(&format!("{at}.body"), body, "names no body"));
+        };
+        if v.len() != b.dim() || v.iter().any(|x| !x.is_finite()) {
+            return Err(Error::invalid(
+                &format!("{at}.{key}"),
+                format!("{v:?}"),
+                &format!("needs {} finite components ({unit})", b.dim()),
+            ));
+        }
+        time_function(&format!("{at}.time"), time)?;
+        Ok(b)
+    }
+
+    /// An axisymmetric scene is a solid of revolution about the y axis: every body
+    /// axisymmetric (a plane-strain body beside one is an extrusion, which the revolved
+    /// solid cannot touch), gravity along the axis, planes normal to it and spheres
+    /// centred on it (issue 34: gravity along r and a plane-strain neighbour were
+    /// accepted).
+    pub(super) fn validate_axisymmetric(&self) -> Result<(), Error> {
+        let axi = |b: &BodySpec| matches!(b.formulation, Formulation::Axisymmetric);
+        let Some(first) = self.bodies.iter().position(axi) else {
+            return Ok(());
+        };
+        if let Some((i, b)) = self.bodies.iter().enumerate().find(|(_, b)| !axi(b)) {
+            return Err(Error::invalid(
+                &format!("bodies[{i}].formulation"),
+                b.formulation.name(),
+                &format!(
+                    "must be axisymmetric like bodies[{first}] (\"{}\"): a scene is one \
+                     solid of revolution, and a {} body is no part of it",
+                    self.bodies[first].name,
+                    b.formulation.name()
+                ),
+            ));
+        }
+        if let Some(g) = &self.loads.gravity
+            && g.first().is_some_and(|&gr| gr != 0.0)
+        {
+            return Err(Error::invalid(
+                "loads.gravity",
+                format!("{g:?}"),
+                "must lie along the axis of revolution (y) in an axisymmetric scene: \
+                 gravity along r would pull every ring outward alike, which no body of \
+                 revolution feels; give [0.0, g]",
+            ));
+        }
+        for (j, o) in self.obstacles.iter().enumerate() {
+            let (key, value, bad, what) = match o {
+                ObstacleSpec::Plane { normal, .. } => (
+                    "normal",
+                    format!("{normal:?}"),
+                    normal.first().is_some_and(|&n| n != 0.0),
+                    "a plane of revolution is normal to the axis: give [0.0, ±1.0]",
+                ),
+                ObstacleSpec::Sphere { center, .. } => (
+                    "center",
+                    format!("{center:?}"),
+                    center.first().is_some_and(|&c| c != 0.0),
+                    "a sphere of revolution is centred on the axis: give [0.0, y]",
+                ),
+                ObstacleSpec::Cylinder { .. } => (
+                    "type",
+                    "cylinder".to_string(),
+                    true,
+                    "a cylinder is a 3-D obstacle; an axisymmetric scene takes planes and \
+                     spheres",
+                ),
+            };
+            if bad {
+                return Err(Error::invalid(
+                    &format!("obstacles[{j}].{key}"),
+                    value,
+                    &format!("(obstacle \"{}\") {what}", o.name()),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Refuses contact `c` when one of its nodes starts inside `against` deeper than its
+/// `overlap_tolerance` ([`ContactSpec::overlap_tolerance`]), naming the deepest node by
+/// its file tag, its depth and how many start inside.
+pub(super) fn check_starting_gaps(
+    set: &dyn ContactSet,
+    ndof: usize,
+    c: &ContactSpec,
+    mesh: &Mesh,
+    nodes: &[usize],
+    against: &str,
+) -> Result<(), Error> {
+    let size = mesh_size(mesh);
+    let tol = match c.overlap_tolerance {
+        Some(t) => crate::error::require_in("overlap_tolerance", t, 0.0, f64::MAX)?,
+        None => 1e-9 * size,
+    };
+    let mut gap = vec![0.0; set.len()];
+    set.starting_gaps(&vec![0.0; ndof], &mut gap);
+    let inside = gap.iter().filter(|&&g| g < -tol).count();
+    let Some((k, &g)) = gap
+        .iter()
+        .enumerate()
+        .filter(|(_, g)| **g < -tol)
+        .min_by(|a, b| a.1.total_cmp(b.1))
+    else {
+        return Ok(());
+    };
+    let node = nodes
+        .get(k)
+        .map_or_else(|| format!("contact {k}"), |&v| mesh.node_label(v));
+    Err(Error::invalid(
+        "nodes",
+        &c.nodes,
+        &format!(
+            "{node} of body \"{}\" starts {:.3e} m inside {against} ({inside} node(s) start \
+             inside; the deepest is named), expected at most overlap_tolerance = {tol:.3e} m: \
+             move the bodies apart, or raise overlap_tolerance where curved non-matching \
+             meshes cut into each other",
+            c.body, -g
+        ),
+    ))
+}
+
+/// The diagonal of a mesh's bounding box (m).
+pub(super) fn mesh_size(mesh: &Mesh) -> f64 {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in &mesh.points {
+        for j in 0..3 {
+            lo[j] = lo[j].min(p[j]);
+            hi[j] = hi[j].max(p[j]);
+        }
+    }
+    (0..3)
+        .map(|j| (hi[j] - lo[j]).max(0.0).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Checks a generator's request before anything is generated: the cell kind is one it
+/// makes, the counts are positive and their products fit the memory limit, the sizes
+/// are positive and finite, the origin is finite.
+pub(super) fn generator_checks(
+    generator: &str,
+    cell: CellKind,
+    cells: &[usize],
+    size: &[f64],
+    origin: &[f64],
+) -> Result<(), Error> {
+    let (kinds, per_box): (&[CellKind], u64) = match (generator, cell) {
+        ("box", CellKind::Tet4) => (&[CellKind::Hex8, CellKind::Tet4], 6),
+        ("box", _) => (&[CellKind::Hex8, CellKind::Tet4], 1),
+        (_, CellKind::Tri3) => (&[CellKind::Quad4, CellKind::Tri3], 2),
+        _ => (&[CellKind::Quad4, CellKind::Tri3], 1),
+    };
+    if !kinds.contains(&cell) {
+        return Err(Error::invalid(
+            "mesh.cell",
+            cell.name(),
+            &format!(
+                "the `{generator}` generator makes {} cells",
+                kinds
+                    .iter()
+                    .map(|k| k.name())
+                    .collect::<Vec<_>>()
+                    .join(" or ")
+            ),
+        ));
+    }
+    if cells.contains(&0) {
+        return Err(Error::invalid(
+            "mesh.cells",
+            format!("{cells:?}"),
+            "needs counts of at least 1",
+        ));
+    }
+    for (i, s) in size.iter().enumerate() {
+        require_positive(&format!("mesh.size[{i}]"), *s)?;
+    }
+    for (i, o) in origin.iter().enumerate() {
+        crate::error::require_finite(&format!("mesh.origin[{i}]"), *o)?;
+    }
+    let prod = |extra: u64| {
+        cells
+            .iter()
+            .try_fold(1u64, |a, &c| a.checked_mul(c as u64 + extra))
+            .unwrap_or(u64::MAX)
+    };
+    let n_cells = prod(0).saturating_mul(per_box);
+    let dim = cells.len() as u64;
+    crate::limits::mesh_memory(prod(1), n_cells, cell.nodes() as u64, dim)
+        .check("mesh.cells", format!("{cells:?}"))
+}
