@@ -33,7 +33,7 @@ const MAT: Material = Material {
     young: 1e7,
     poisson: 0.0,
     density: 1000.0,
-    model: MaterialModel::Linear,
+    model: MaterialModel::LINEAR,
 };
 
 /// The mean length over `periods` periods T₁ for `law` (`None`: linear solid) spinning
@@ -97,7 +97,7 @@ fn a_spinning_bar_keeps_the_steady_elongation_with_large_deformation_laws() {
     for law in [Hyperelastic::svk(&MAT), Hyperelastic::neo_hookean(&MAT)] {
         let rel = deviation(law, omega);
         assert!(rel.abs() <= 0.01, "{law:?}: {rel:e}");
-        if matches!(law, Hyperelastic::Svk { .. }) {
+        if law.law().name() == "svk" {
             // an effect of order δ/L: doubles with δ/L
             let ratio = deviation(law, omega * 2f64.sqrt()) / rel;
             assert!((1.5..=2.5).contains(&ratio), "deviation ratio {ratio}");

@@ -25,7 +25,7 @@ const MAT: Material = Material {
     young: 1e6,
     poisson: 0.3,
     density: 1000.0,
-    model: signorini::model::solid::MaterialModel::Linear,
+    model: signorini::model::solid::MaterialModel::LINEAR,
 };
 
 /// What one run measured: the largest relative energy error over the run, its value

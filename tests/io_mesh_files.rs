@@ -127,7 +127,7 @@ fn ball_mesh_has_the_mass_of_its_polyhedron() {
         young: 1e7,
         poisson: 0.3,
         density: 1000.0,
-        model: signorini::model::solid::MaterialModel::Linear,
+        model: signorini::model::solid::MaterialModel::LINEAR,
     };
     let sys = assemble(&m, &mat, Formulation::Solid, MassKind::Lumped).unwrap();
     // Every tet has positive orientation (assembly checks it); the inscribed
@@ -212,7 +212,7 @@ fn bad_meshes_are_rejected_with_what_is_wrong() {
         young: 1e7,
         poisson: 0.3,
         density: 1000.0,
-        model: signorini::model::solid::MaterialModel::Linear,
+        model: signorini::model::solid::MaterialModel::LINEAR,
     };
     let e = assemble(&m, &mat, Formulation::Solid, MassKind::Consistent)
         .unwrap_err()

@@ -368,7 +368,7 @@ fn hyperelastic_assembly_does_not_allocate() {
         young: 1e7,
         poisson: 0.3,
         density: 1000.0,
-        model: signorini::model::solid::MaterialModel::Linear,
+        model: signorini::model::solid::MaterialModel::LINEAR,
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)

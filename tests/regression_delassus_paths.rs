@@ -21,7 +21,7 @@ const MAT: Material = Material {
     young: 1e7,
     poisson: 0.3,
     density: 1000.0,
-    model: signorini::model::solid::MaterialModel::Linear,
+    model: signorini::model::solid::MaterialModel::LINEAR,
 };
 
 fn box_system() -> (LinearSystem, Vec<[f64; 3]>, Vec<usize>) {

@@ -12,7 +12,7 @@ const STEEL: Material = Material {
     young: 210e9,
     poisson: 0.3,
     density: 7800.0,
-    model: signorini::model::solid::MaterialModel::Linear,
+    model: signorini::model::solid::MaterialModel::LINEAR,
 };
 
 /// Moves interior nodes so the patch is irregular (boundary nodes stay put).

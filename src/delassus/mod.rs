@@ -817,7 +817,7 @@ mod tests {
             young: 210e9,
             poisson: 0.3,
             density: 7800.0,
-            model: crate::model::solid::MaterialModel::Linear,
+            model: crate::model::solid::MaterialModel::LINEAR,
         };
         let sys = assemble(&mesh, &mat, Formulation::Solid, MassKind::Consistent).unwrap();
         let n = sys.ndof();

@@ -11,7 +11,7 @@
 //! matrix `B_a` (rows `F_{i1} ∂₁N_a`, …, `F_{i1} ∂₂N_a + F_{i2} ∂₁N_a`); tangent
 //! `K_ab = ∫ (B_aᵀ ℂ B_b + (∇N_a · S ∇N_b) I) dV₀` (material plus geometric part).
 //!
-//! Materials ([`Hyperelastic`]), both reducing to linear isotropic elasticity with the
+//! Materials ([`Hyperelastic`]: a law of the registry [`crate::model::material::LAWS`]), each reducing to linear isotropic elasticity with the
 //! same Lamé parameters at small strain:
 //! - St. Venant–Kirchhoff: `W = λ/2 (tr E)² + μ E:E`, `S = λ tr E I + 2μ E`, constant `ℂ`;
 //! - compressible neo-Hookean `W = μ/2 (I₁ − 3) − μ ln J + λ/2 (ln J)²` (the form FEBio,
@@ -32,211 +32,11 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::assembly::AssemblyPlan;
 
-use super::solid::{CellKind, Material, Point, hex8_points};
+use super::solid::{CellKind, Point, hex8_points};
 
-/// A hyperelastic law with its Lamé parameters `λ`, `μ` (Pa).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Hyperelastic {
-    /// St. Venant–Kirchhoff.
-    Svk {
-        /// `λ` (Pa).
-        lambda: f64,
-        /// `μ` (Pa).
-        mu: f64,
-    },
-    /// Compressible neo-Hookean (module doc).
-    NeoHookean {
-        /// `λ` (Pa).
-        lambda: f64,
-        /// `μ` (Pa).
-        mu: f64,
-    },
-}
-
-/// Stress and tangent at one point: `S` (Voigt) and `ℂ` (6 × 6).
-pub type StressTangent = (SMatrix<f64, 6, 1>, SMatrix<f64, 6, 6>);
-
-/// A deformation the law cannot take: `det F ≤ 0` (an inverted element) or not finite.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Inverted {
-    /// `det F` met (or of the reference Jacobian, for a cell inverted in its mesh).
-    pub det: f64,
-}
-
-impl Hyperelastic {
-    /// St. Venant–Kirchhoff with the Lamé parameters of `mat`.
-    pub fn svk(mat: &Material) -> Self {
-        let (lambda, mu) = mat.lame();
-        Hyperelastic::Svk { lambda, mu }
-    }
-
-    /// Neo-Hookean with the Lamé parameters of `mat`.
-    pub fn neo_hookean(mat: &Material) -> Self {
-        let (lambda, mu) = mat.lame();
-        Hyperelastic::NeoHookean { lambda, mu }
-    }
-
-    /// Strain energy density `W` (J/m³) at `F`.
-    pub fn energy(&self, f: &Matrix3<f64>) -> Result<f64, Inverted> {
-        let c = f.transpose() * f;
-        match *self {
-            Hyperelastic::Svk { lambda, mu } => {
-                // defined for any F, but a cell with det F ≤ 0 is turned inside out: the
-                // law's energy has a spurious minimum there (issue 34: an SVK cube
-                // pushed with 5 E A ran on with its top 0.39 m below its base)
-                positive_det(f)?;
-                let e = 0.5 * (c - Matrix3::identity());
-                Ok(0.5 * lambda * e.trace().powi(2) + mu * e.component_mul(&e).sum())
-            }
-            Hyperelastic::NeoHookean { lambda, mu } => {
-                let j = positive_det(f)?;
-                let lnj = j.ln();
-                Ok(0.5 * mu * (c.trace() - 3.0) - mu * lnj + 0.5 * lambda * lnj * lnj)
-            }
-        }
-    }
-
-    /// `S` (Voigt) at `F`, without the tangent.
-    pub fn stress(&self, f: &Matrix3<f64>) -> Result<SMatrix<f64, 6, 1>, Inverted> {
-        let c = f.transpose() * f;
-        Ok(match *self {
-            Hyperelastic::Svk { lambda, mu } => {
-                positive_det(f)?;
-                let e = 0.5 * (c - Matrix3::identity());
-                voigt(&(lambda * e.trace() * Matrix3::identity() + 2.0 * mu * e))
-            }
-            Hyperelastic::NeoHookean { lambda, mu } => {
-                let j = positive_det(f)?;
-                let ci = c.try_inverse().ok_or(Inverted { det: j })?;
-                voigt(&(mu * (Matrix3::identity() - ci) + lambda * j.ln() * ci))
-            }
-        })
-    }
-
-    /// `S` (as a matrix) at a right Cauchy–Green tensor `C` (positive definite): the
-    /// stress at the midpoint `C` of Gonzalez's discrete gradient.
-    fn stress_of_c(&self, c: &Matrix3<f64>) -> Result<Matrix3<f64>, Inverted> {
-        Ok(match *self {
-            Hyperelastic::Svk { lambda, mu } => {
-                let e = 0.5 * (c - Matrix3::identity());
-                lambda * e.trace() * Matrix3::identity() + 2.0 * mu * e
-            }
-            Hyperelastic::NeoHookean { lambda, mu } => {
-                let det = c.determinant();
-                if det.is_nan() || det <= 0.0 {
-                    return Err(Inverted { det });
-                }
-                let ci = c.try_inverse().ok_or(Inverted { det })?;
-                mu * (Matrix3::identity() - ci) + lambda * (0.5 * det.ln()) * ci
-            }
-        })
-    }
-
-    /// Gonzalez's discrete gradient of `W` between `F₀` and `F₁` (Voigt): the stress
-    /// `S_alg = S(C_m) + α ΔC`, `C_m = (C₀ + C₁)/2`, `ΔC = C₁ − C₀`, with `α` such that
-    /// `½ S_alg : ΔC = W(F₁) − W(F₀)` exactly (`α = 0` when `ΔC` vanishes). With the
-    /// force `∫ Bᵀ(F_m) S_alg` at `F_m = (F₀ + F₁)/2`, the work of the internal force over
-    /// a step is the change of strain energy, and the force, a stress divergence with a
-    /// symmetric `S_alg`, keeps linear and angular momentum (Gonzalez, CMAME 190, 2000).
-    pub fn discrete_gradient(
-        &self,
-        f0: &Matrix3<f64>,
-        f1: &Matrix3<f64>,
-    ) -> Result<SMatrix<f64, 6, 1>, Inverted> {
-        let (w0, w1) = (self.energy(f0)?, self.energy(f1)?);
-        let (c0, c1) = (f0.transpose() * f0, f1.transpose() * f1);
-        let dc = c1 - c0;
-        let sm = self.stress_of_c(&(0.5 * (c0 + c1)))?;
-        let dd = dc.component_mul(&dc).sum();
-        let scale = c0.component_mul(&c0).sum();
-        let alpha = if dd > 1e-28 * scale {
-            (2.0 * (w1 - w0) - sm.component_mul(&dc).sum()) / dd
-        } else {
-            0.0
-        };
-        Ok(voigt(&(sm + alpha * dc)))
-    }
-
-    /// `S` and `ℂ` at `F` (module doc).
-    pub fn stress_tangent(&self, f: &Matrix3<f64>) -> Result<StressTangent, Inverted> {
-        let c = f.transpose() * f;
-        let s;
-        let mut d = SMatrix::<f64, 6, 6>::zeros();
-        match *self {
-            Hyperelastic::Svk { lambda, mu } => {
-                positive_det(f)?;
-                let e = 0.5 * (c - Matrix3::identity());
-                let tr = e.trace();
-                let sm = lambda * tr * Matrix3::identity() + 2.0 * mu * e;
-                s = voigt(&sm);
-                for i in 0..3 {
-                    for j in 0..3 {
-                        d[(i, j)] = lambda;
-                    }
-                    d[(i, i)] = lambda + 2.0 * mu;
-                    d[(i + 3, i + 3)] = mu;
-                }
-            }
-            Hyperelastic::NeoHookean { lambda, mu } => {
-                let j = positive_det(f)?;
-                let lnj = j.ln();
-                let ci = c.try_inverse().ok_or(Inverted { det: j })?;
-                let sm = mu * (Matrix3::identity() - ci) + lambda * lnj * ci;
-                s = voigt(&sm);
-                let k = mu - lambda * lnj;
-                for (a, &(i, jj)) in VOIGT.iter().enumerate() {
-                    for (b, &(kk, l)) in VOIGT.iter().enumerate() {
-                        d[(a, b)] = lambda * ci[(i, jj)] * ci[(kk, l)]
-                            + k * (ci[(i, kk)] * ci[(jj, l)] + ci[(i, l)] * ci[(jj, kk)]);
-                    }
-                }
-            }
-        }
-        Ok((s, d))
-    }
-}
-
-/// Green–Lagrange strain `E = (FᵀF − I)/2` and Cauchy stress `σ = F S Fᵀ / J` for the
-/// displacement gradient `grad` (`F = I + grad`), both in ParaView's order
-/// `XX, YY, ZZ, XY, YZ, XZ` (tensor components); `None` where `det F ≤ 0`.
-pub fn green_lagrange_and_cauchy(
-    law: &Hyperelastic,
-    grad: &Matrix3<f64>,
-) -> Option<([f64; 6], [f64; 6])> {
-    let f = Matrix3::identity() + grad;
-    let s = law.stress(&f).ok()?;
-    let j = f.determinant();
-    let e = 0.5 * (f.transpose() * f - Matrix3::identity());
-    let sm = Matrix3::new(s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2]);
-    let sigma = f * sm * f.transpose() / j;
-    let order = |m: &Matrix3<f64>| {
-        [
-            m[(0, 0)],
-            m[(1, 1)],
-            m[(2, 2)],
-            m[(0, 1)],
-            m[(1, 2)],
-            m[(0, 2)],
-        ]
-    };
-    Some((order(&e), order(&sigma)))
-}
-
-/// Voigt index pairs `(11, 22, 33, 23, 13, 12)`.
-const VOIGT: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)];
-
-fn voigt(m: &Matrix3<f64>) -> SMatrix<f64, 6, 1> {
-    SMatrix::<f64, 6, 1>::from_fn(|a, _| m[VOIGT[a]])
-}
-
-fn positive_det(f: &Matrix3<f64>) -> Result<f64, Inverted> {
-    let j = f.determinant();
-    if j.is_finite() && j > 0.0 {
-        Ok(j)
-    } else {
-        Err(Inverted { det: j })
-    }
-}
+pub use super::material::{
+    Hyperelastic, HyperelasticLaw, Inverted, StressTangent, green_lagrange_and_cauchy,
+};
 
 /// Internal force `f_int` (`3 NN` values) and tangent `K_t` of one total-Lagrangian
 /// cell: reference coordinates `x`, nodal displacements `u` (node-major, 3 per node).
@@ -539,12 +339,9 @@ impl HyperBody {
         })
     }
 
-    /// The law's name (`svk` or `neo-hookean`).
+    /// The law's name in prose ("St. Venant–Kirchhoff", "neo-Hookean").
     pub fn law_name(&self) -> &'static str {
-        match self.law {
-            Hyperelastic::Svk { .. } => "St. Venant–Kirchhoff",
-            Hyperelastic::NeoHookean { .. } => "neo-Hookean",
-        }
+        self.law.law().title()
     }
 
     /// Displacement components per node: 3, or 2 in plane strain.
@@ -749,13 +546,14 @@ impl HyperBody {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::solid::{Formulation, element_matrices};
+    use crate::model::material::VOIGT;
+    use crate::model::solid::{Formulation, Material, element_matrices};
 
     const MAT: Material = Material {
         young: 1e7,
         poisson: 0.3,
         density: 1000.0,
-        model: crate::model::solid::MaterialModel::Linear,
+        model: crate::model::solid::MaterialModel::LINEAR,
     };
 
     /// A reproducible pseudo-random sequence in [−1, 1] (no dependency).
@@ -769,8 +567,15 @@ mod tests {
     /// An element evaluation: force, tangent (column-major), energy.
     type Eval<'a> = dyn Fn(&[f64]) -> (Vec<f64>, Vec<f64>, f64) + 'a;
 
-    fn laws() -> [Hyperelastic; 2] {
-        [Hyperelastic::svk(&MAT), Hyperelastic::neo_hookean(&MAT)]
+    /// Every registered law ([`crate::model::material::LAWS`]): a new law is checked by
+    /// every test below without being named here.
+    fn laws() -> Vec<Hyperelastic> {
+        let laws: Vec<_> = crate::model::material::LAWS
+            .iter()
+            .map(|&l| Hyperelastic::new(l, &MAT))
+            .collect();
+        assert!(laws.len() >= 2, "the registry lost a law");
+        laws
     }
 
     /// A deformation gradient with stretches up to ±30 % and a rotation.
@@ -1016,9 +821,7 @@ mod tests {
     #[test]
     fn green_lagrange_and_cauchy_of_a_stretch_and_a_rotation() {
         let law = Hyperelastic::neo_hookean(&MAT);
-        let Hyperelastic::NeoHookean { lambda, mu } = law else {
-            unreachable!()
-        };
+        let (lambda, mu) = (law.lambda, law.mu);
         let s = 1.3_f64;
         let grad = Matrix3::new(s - 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
         let (e, sig) = green_lagrange_and_cauchy(&law, &grad).unwrap();

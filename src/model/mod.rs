@@ -14,6 +14,7 @@ pub mod energy;
 pub mod generate;
 pub mod geometry;
 pub mod hyperelastic;
+pub mod material;
 pub mod multibody;
 pub mod ordering;
 pub mod point_mass;

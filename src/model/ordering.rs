@@ -155,7 +155,7 @@ mod tests {
             young: 1.0,
             poisson: 0.3,
             density: 1.0,
-            model: crate::model::solid::MaterialModel::Linear,
+            model: crate::model::solid::MaterialModel::LINEAR,
         };
         Geometry {
             dim: 3,
@@ -219,7 +219,7 @@ mod tests {
             young: 210e9,
             poisson: 0.3,
             density: 7800.0,
-            model: crate::model::solid::MaterialModel::Linear,
+            model: crate::model::solid::MaterialModel::LINEAR,
         };
         let sys =
             crate::model::solid::assemble(&mesh, &mat, Formulation::Solid, MassKind::Consistent)

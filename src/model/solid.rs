@@ -31,30 +31,7 @@ pub struct Material {
     pub model: MaterialModel,
 }
 
-/// Constitutive law of a [`Material`]; every law has the same small-strain limit, the
-/// isotropic linear elasticity of `young` and `poisson`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum MaterialModel {
-    /// Linear elasticity, small strain: the structure stays linear (`M̂` factored once).
-    #[default]
-    Linear,
-    /// St. Venant–Kirchhoff, total-Lagrangian ([`super::hyperelastic`]).
-    Svk,
-    /// Compressible neo-Hookean, total-Lagrangian ([`super::hyperelastic`]).
-    NeoHookean,
-}
-
-impl MaterialModel {
-    /// The name used in scene files.
-    pub fn name(self) -> &'static str {
-        match self {
-            MaterialModel::Linear => "linear",
-            MaterialModel::Svk => "svk",
-            MaterialModel::NeoHookean => "neo-hookean",
-        }
-    }
-}
+pub use super::material::MaterialModel;
 
 impl Material {
     /// Checks the ranges; the error names the field.

@@ -62,7 +62,7 @@ impl Default for SolidBarScene {
                 young: 210e9,
                 poisson: 0.0,
                 density: 7800.0,
-                model: crate::model::solid::MaterialModel::Linear,
+                model: crate::model::solid::MaterialModel::LINEAR,
             },
             velocity: -0.1,
             gap: 0.0,

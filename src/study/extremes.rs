@@ -172,10 +172,7 @@ pub fn run_cell(base: &Scene, extreme: Extreme, scheme: SchemeKind) -> Outcome {
             o.excess = sm.energy_balance.map_or(0.0, |b| b.excess_max);
             o.violation = sm.max_violation;
             o.newton = sm.iterations.newton.mean;
-            let linear = s
-                .bodies
-                .iter()
-                .all(|b| matches!(b.material.model, crate::model::solid::MaterialModel::Linear));
+            let linear = s.bodies.iter().all(|b| b.material.model.is_linear());
             if sm.caps_hit > 0 {
                 o.verdict = Verdict::Cap;
             } else if linear && o.excess > DEFAULT_MAX_ENERGY_EXCESS {

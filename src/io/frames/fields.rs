@@ -15,7 +15,7 @@ impl FrameWriter {
             .geom
             .bodies
             .iter()
-            .any(|(m, _)| m.model != MaterialModel::Linear)
+            .any(|(m, _)| m.model != MaterialModel::LINEAR)
         {
             NONLINEAR_CELL_ARRAYS
         } else {
@@ -86,11 +86,7 @@ impl FrameWriter {
                         x[j] = g.points[p];
                         u[j] = [self.disp[3 * p], self.disp[3 * p + 1], self.disp[3 * p + 2]];
                     }
-                    let law = match mat.model {
-                        MaterialModel::Linear => None,
-                        MaterialModel::Svk => Some(Hyperelastic::svk(mat)),
-                        MaterialModel::NeoHookean => Some(Hyperelastic::neo_hookean(mat)),
-                    };
+                    let law = mat.model.hyperelastic(mat);
                     match law {
                         None => {
                             eps = centre_strain(*k, &x, &u, mat, *form);

@@ -53,7 +53,7 @@ use base64::engine::general_purpose::STANDARD as B64;
 use crate::contact::ContactJacobian;
 use crate::error::Error;
 use crate::integrators::State;
-use crate::model::hyperelastic::{Hyperelastic, green_lagrange_and_cauchy};
+use crate::model::hyperelastic::green_lagrange_and_cauchy;
 use crate::model::solid::{
     CellKind, Formulation, Material, MaterialModel, centre_gradient, centre_strain, hooke,
     von_mises,

@@ -80,7 +80,7 @@ impl Geometry {
                     young,
                     poisson: 0.0,
                     density,
-                    model: crate::model::solid::MaterialModel::Linear,
+                    model: crate::model::solid::MaterialModel::LINEAR,
                 },
                 Formulation::Solid,
             )],

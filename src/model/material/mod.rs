@@ -48,8 +48,7 @@ pub trait HyperelasticLaw: Sync + std::fmt::Debug {
     /// Strain energy density `W` (J/m³) at `F`.
     fn energy(&self, lame: (f64, f64), f: &Matrix3<f64>) -> Result<f64, Inverted>;
     /// `S` (Voigt) at `F`.
-    fn stress(&self, lame: (f64, f64), f: &Matrix3<f64>)
-    -> Result<SMatrix<f64, 6, 1>, Inverted>;
+    fn stress(&self, lame: (f64, f64), f: &Matrix3<f64>) -> Result<SMatrix<f64, 6, 1>, Inverted>;
     /// `S` (as a matrix) at a positive definite `C`: the midpoint stress of
     /// Gonzalez's discrete gradient ([`Hyperelastic::discrete_gradient`]).
     fn stress_of_c(&self, lame: (f64, f64), c: &Matrix3<f64>) -> Result<Matrix3<f64>, Inverted>;
@@ -218,5 +217,99 @@ impl Hyperelastic {
             0.0
         };
         Ok(voigt(&(sm + alpha * dc)))
+    }
+}
+
+/// Green–Lagrange strain `E = (FᵀF − I)/2` and Cauchy stress `σ = F S Fᵀ / J` for the
+/// displacement gradient `grad` (`F = I + grad`), both in ParaView's order
+/// `XX, YY, ZZ, XY, YZ, XZ` (tensor components); `None` where `det F ≤ 0`.
+pub fn green_lagrange_and_cauchy(
+    law: &Hyperelastic,
+    grad: &Matrix3<f64>,
+) -> Option<([f64; 6], [f64; 6])> {
+    let f = Matrix3::identity() + grad;
+    let s = law.stress(&f).ok()?;
+    let j = f.determinant();
+    let e = 0.5 * (f.transpose() * f - Matrix3::identity());
+    let sm = Matrix3::new(s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2]);
+    let sigma = f * sm * f.transpose() / j;
+    let order = |m: &Matrix3<f64>| {
+        [
+            m[(0, 0)],
+            m[(1, 1)],
+            m[(2, 2)],
+            m[(0, 1)],
+            m[(1, 2)],
+            m[(0, 2)],
+        ]
+    };
+    Some((order(&e), order(&sigma)))
+}
+
+/// Voigt index pairs `(11, 22, 33, 23, 13, 12)`.
+pub(crate) const VOIGT: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1)];
+
+pub(super) fn voigt(m: &Matrix3<f64>) -> SMatrix<f64, 6, 1> {
+    SMatrix::<f64, 6, 1>::from_fn(|a, _| m[VOIGT[a]])
+}
+
+pub(super) fn positive_det(f: &Matrix3<f64>) -> Result<f64, Inverted> {
+    let j = f.determinant();
+    if j.is_finite() && j > 0.0 {
+        Ok(j)
+    } else {
+        Err(Inverted { det: j })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The registry: names unique and not `linear`; every name round-trips through the
+    /// scene key (serde), and an unknown name is refused with the list of names.
+    #[test]
+    fn registry_names_round_trip_and_unknown_names_are_listed() {
+        let names = model_names();
+        assert_eq!(names, ["linear", "svk", "neo-hookean"]);
+        for (i, a) in names.iter().enumerate() {
+            assert!(!names[i + 1..].contains(a), "{a} registered twice");
+            let m = MaterialModel::named(a).unwrap();
+            assert_eq!(m.name(), *a);
+            assert_eq!(m.is_linear(), *a == "linear");
+            let v: MaterialModel = toml::Value::String(a.to_string()).try_into().unwrap();
+            assert_eq!(v, m);
+        }
+        let e = toml::Value::String("mooney".into())
+            .try_into::<MaterialModel>()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("unknown variant `mooney`") && e.contains("`neo-hookean`"),
+            "{e}"
+        );
+    }
+
+    /// Each law at small strain is the linear isotropic law of the same `λ`, `μ`: the
+    /// tangent at `F = I` is Hooke's matrix to round-off.
+    #[test]
+    fn every_law_reduces_to_hooke_at_small_strain() {
+        let (lambda, mu) = (5.77e6, 3.85e6);
+        for law in LAWS {
+            let (_, d) = law
+                .stress_tangent((lambda, mu), &Matrix3::identity())
+                .unwrap();
+            for a in 0..6 {
+                for b in 0..6 {
+                    let hooke = match (a < 3, b < 3) {
+                        (true, true) if a == b => lambda + 2.0 * mu,
+                        (true, true) => lambda,
+                        _ if a == b => mu,
+                        _ => 0.0,
+                    };
+                    assert!((d[(a, b)] - hooke).abs() <= 1e-9 * mu, "{}", law.name());
+                }
+            }
+        }
     }
 }

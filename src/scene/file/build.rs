@@ -242,10 +242,8 @@ impl Scene {
         let (mut system, map) = full.restrict_prescribed(&fixed, &prescribed, functions);
         // large-deformation bodies: their internal forces on the kept dofs
         for (bi, b) in self.bodies.iter().enumerate() {
-            let law = match b.material.model {
-                MaterialModel::Linear => continue,
-                MaterialModel::Svk => Hyperelastic::svk(&b.material),
-                MaterialModel::NeoHookean => Hyperelastic::neo_hookean(&b.material),
+            let Some(law) = b.material.model.hyperelastic(&b.material) else {
+                continue;
             };
             let at = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
             let mesh = &meshes[bi];

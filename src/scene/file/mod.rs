@@ -68,7 +68,7 @@ use crate::integrators::SchemeParams;
 use crate::io::frames::{GeomCell, Geometry, Outline, orthonormal};
 use crate::model::generate::{box_mesh, rectangle_mesh};
 use crate::model::geometry::Probe;
-use crate::model::hyperelastic::{HyperBody, Hyperelastic};
+use crate::model::hyperelastic::HyperBody;
 use crate::model::rod::Rod;
 use crate::model::solid::{
     CellKind, Formulation, Material, MaterialModel, Mesh, assemble_with_contacts,

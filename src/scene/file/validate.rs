@@ -59,7 +59,7 @@ impl Scene {
                 .validate()
                 .map_err(|e| prefix(&format!("bodies[{i}].material"), e))?;
             let rod = matches!(b.mesh, MeshSpec::Rod { .. });
-            if b.material.model != MaterialModel::Linear
+            if b.material.model != MaterialModel::LINEAR
                 && (rod
                     || matches!(
                         b.formulation,
