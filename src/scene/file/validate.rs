@@ -110,7 +110,7 @@ impl Scene {
                     self.bodies[0].formulation.name()
                 ),
             };
-            o.validate(dim).map_err(|e| {
+            o.shape().validate(dim).map_err(|e| {
                 prefix(
                     &format!("obstacles[{j}]"),
                     e.context(&format!("a {dim}-D scene: {origin}")),
@@ -320,34 +320,14 @@ impl Scene {
             ));
         }
         for (j, o) in self.obstacles.iter().enumerate() {
-            let (key, value, bad, what) = match o {
-                ObstacleSpec::Plane { normal, .. } => (
-                    "normal",
-                    format!("{normal:?}"),
-                    normal.first().is_some_and(|&n| n != 0.0),
-                    "a plane of revolution is normal to the axis: give [0.0, ±1.0]",
-                ),
-                ObstacleSpec::Sphere { center, .. } => (
-                    "center",
-                    format!("{center:?}"),
-                    center.first().is_some_and(|&c| c != 0.0),
-                    "a sphere of revolution is centred on the axis: give [0.0, y]",
-                ),
-                ObstacleSpec::Cylinder { .. } => (
-                    "type",
-                    "cylinder".to_string(),
-                    true,
-                    "a cylinder is a 3-D obstacle; an axisymmetric scene takes planes and \
-                     spheres",
-                ),
+            let Some((key, value, what)) = o.shape().axisymmetric_problem() else {
+                continue;
             };
-            if bad {
-                return Err(Error::invalid(
-                    &format!("obstacles[{j}].{key}"),
-                    value,
-                    &format!("(obstacle \"{}\") {what}", o.name()),
-                ));
-            }
+            return Err(Error::invalid(
+                &format!("obstacles[{j}].{key}"),
+                value,
+                &format!("(obstacle \"{}\") {what}", o.name()),
+            ));
         }
         Ok(())
     }
