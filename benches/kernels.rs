@@ -61,7 +61,7 @@ fn block_solves(c: &mut Criterion) {
         young: 210e9,
         poisson: 0.3,
         density: 7800.0,
-        model: signorini::model::solid::MaterialModel::Linear,
+        model: signorini::model::solid::MaterialModel::LINEAR,
     };
     for cells in [14usize, 31] {
         let mesh = box_mesh(CellKind::Hex8, [cells; 3], [1.0; 3]);

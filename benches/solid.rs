@@ -20,7 +20,7 @@ const MAT: Material = Material {
     young: 210e9,
     poisson: 0.3,
     density: 7800.0,
-    model: signorini::model::solid::MaterialModel::Linear,
+    model: signorini::model::solid::MaterialModel::LINEAR,
 };
 
 /// Box sizes: (n, n, n) hex8 cells → 3 (n+1)³ dofs: n = 14 → 10 125, n = 31 → 98 304.
