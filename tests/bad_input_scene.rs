@@ -344,6 +344,21 @@ const CASES: &[Case] = &[
         &["scheme.kind", "schatzman-paoli", "linear structures only"],
     ),
     (
+        "Schatzman–Paoli with a prescribed velocity",
+        &[
+            ("[time]\n", "[scheme]\nkind = \"schatzman-paoli\"\n[time]\n"),
+            (
+                "[[contacts]]",
+                "[[prescribed]]\nbody = \"b\"\nnodes = \"z1\"\nvelocity = [0.0, 0.0, -1.0]\n[[contacts]]",
+            ),
+        ],
+        &[
+            "scheme.kind",
+            "schatzman-paoli",
+            "does not take prescribed velocities",
+        ],
+    ),
+    (
         "prescribed velocity on a hyperelastic body",
         &[
             (

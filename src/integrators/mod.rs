@@ -353,6 +353,45 @@ impl SchemeKind {
     pub fn parse(s: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|k| k.name() == s)
     }
+
+    /// What the scheme can integrate and what it adds: the rules validation, the plan,
+    /// the driver and the studies read instead of matching on the kind.
+    pub fn capabilities(self) -> Capabilities {
+        let theta = self != SchemeKind::SchatzmanPaoli;
+        Capabilities {
+            projection: matches!(
+                self,
+                SchemeKind::DirectProjection | SchemeKind::CombinedProjection
+            ),
+            // Schatzman–Paoli (eq. 20–22) and the position-level trapezoid state the
+            // contact at position level, where Coulomb's law (a velocity-level law, eq.
+            // 12–15) has no discrete counterpart in the paper
+            friction: !matches!(
+                self,
+                SchemeKind::SchatzmanPaoli | SchemeKind::TrapezoidPosition
+            ),
+            prescribed: theta,
+            nonlinear: theta,
+            theta_energy: theta,
+        }
+    }
+}
+
+/// What a scheme supports ([`SchemeKind::capabilities`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Capabilities {
+    /// A position projection after the velocity problem (Algorithms 1 and 2): the
+    /// projection problems, `W_D`, and no penetration beyond round-off.
+    pub projection: bool,
+    /// Coulomb friction (eq. 12–15: a velocity-level law).
+    pub friction: bool,
+    /// Prescribed velocities (`[[prescribed]]`).
+    pub prescribed: bool,
+    /// Nonlinear structures (the θ-method Newton loop of eq. 41–48).
+    pub nonlinear: bool,
+    /// The θ-method's discrete energy balance holds (Schatzman–Paoli's velocity is a
+    /// central difference, whose energy is not the θ-method's).
+    pub theta_energy: bool,
 }
 
 /// Activation forecast `ḡ_{k+1}` for the velocity-level schemes (sec. 4.4).

@@ -90,10 +90,7 @@ pub fn plan(
     let friction = rows > m;
     let th = params.theta;
     let sp = params.kind == SchemeKind::SchatzmanPaoli;
-    let with_projection = matches!(
-        params.kind,
-        SchemeKind::DirectProjection | SchemeKind::CombinedProjection
-    );
+    let with_projection = params.kind.capabilities().projection;
     let (a, b) = if sp {
         (h * h * th, h * th / 2.0)
     } else {

@@ -3,7 +3,7 @@
 //! the scheme's constructor by value (issue 36: one type where six arguments travelled
 //! through ten signatures).
 
-use super::{SchemeKind, SchemeParams};
+use super::SchemeParams;
 use crate::contact::ContactSet;
 use crate::error::Error;
 use crate::model::LinearSystem;
@@ -58,9 +58,8 @@ impl Problem {
                  nodes of `fixed`, or drop the [[prescribed]] entries that cover every node)",
             ));
         }
-        if system.linearity() != crate::model::system::Linearity::Linear
-            && params.kind == SchemeKind::SchatzmanPaoli
-        {
+        let caps = params.kind.capabilities();
+        if system.linearity() != crate::model::system::Linearity::Linear && !caps.nonlinear {
             return Err(Error::invalid(
                 "scheme.kind",
                 params.kind.name(),
@@ -68,22 +67,14 @@ impl Problem {
                  θ-method scheme (moreau-jean, direct-projection, combined-projection)",
             ));
         }
-        if system.prescribed.is_some() && params.kind == SchemeKind::SchatzmanPaoli {
+        if system.prescribed.is_some() && !caps.prescribed {
             return Err(Error::invalid(
                 "scheme.kind",
                 params.kind.name(),
                 "does not take prescribed velocities ([[prescribed]]); use a θ-method scheme",
             ));
         }
-        if contacts.has_friction()
-            && matches!(
-                params.kind,
-                SchemeKind::SchatzmanPaoli | SchemeKind::TrapezoidPosition
-            )
-        {
-            // Schatzman–Paoli (eq. 20–22) and the position-level trapezoid state the contact
-            // at position level, where Coulomb's law (a velocity-level law, eq. 12–15) has
-            // no discrete counterpart in the paper.
+        if contacts.has_friction() && !caps.friction {
             return Err(Error::invalid(
                 "scheme.kind",
                 params.kind.name(),

@@ -251,17 +251,24 @@ pub fn run_checkpointed(
         probes: probes::ProbeSet::default(),
         // Schatzman–Paoli's velocity is a central difference: its discrete energy is
         // not the θ-method's, whose balance the check reads
-        energy: (integ.name() != "schatzman-paoli").then(|| {
-            let s = integ.state();
-            EnergyCheck {
-                audit: crate::model::energy::EnergyAudit::new(integ.system(), s.time, &s.q, &s.v),
-                theta,
-                max: checks.energy_excess_limit(
-                    integ.system().linearity() == crate::model::system::Linearity::Linear,
-                ),
-                caps_allowed: checks.allow_caps,
-            }
-        }),
+        energy: crate::integrators::SchemeKind::parse(integ.name())
+            .is_none_or(|k| k.capabilities().theta_energy)
+            .then(|| {
+                let s = integ.state();
+                EnergyCheck {
+                    audit: crate::model::energy::EnergyAudit::new(
+                        integ.system(),
+                        s.time,
+                        &s.q,
+                        &s.v,
+                    ),
+                    theta,
+                    max: checks.energy_excess_limit(
+                        integ.system().linearity() == crate::model::system::Linearity::Linear,
+                    ),
+                    caps_allowed: checks.allow_caps,
+                }
+            }),
     };
     {
         let s = integ.state();

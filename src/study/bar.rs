@@ -355,11 +355,7 @@ pub fn extreme_failure(kind: SchemeKind, s: &Summary, force: &[f64]) -> Option<S
     if !(e1.is_finite() && e1 <= e0 * (1.0 + 1e-6)) {
         bad.push(format!("energy {e0:.6e} -> {e1:.6e} J"));
     }
-    if matches!(
-        kind,
-        SchemeKind::DirectProjection | SchemeKind::CombinedProjection
-    ) && s.max_violation > 1e-14
-    {
+    if kind.capabilities().projection && s.max_violation > 1e-14 {
         bad.push(format!("penetration {:.2e} m", s.max_violation));
     }
     (!bad.is_empty()).then(|| bad.join(", "))
