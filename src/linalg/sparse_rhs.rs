@@ -245,9 +245,13 @@ fn sweeps(
             1.0,
             Par::Seq,
         );
-        for j in 0..k {
-            for (idx, &i) in pattern.iter().enumerate() {
-                x[j * n + i] -= tmp[j * p + idx];
+        // (a root's pattern is empty: nothing to scatter)
+        for (xc, tc) in x
+            .chunks_exact_mut(n)
+            .zip(tmp[..p * k].chunks_exact(p.max(1)))
+        {
+            for (&i, &t) in pattern.iter().zip(tc) {
+                xc[i] -= t;
             }
         }
     }
@@ -259,9 +263,12 @@ fn sweeps(
         let (start, pattern, ls) = (sn.start(), sn.pattern(), sn.val());
         let size = ls.ncols();
         let p = pattern.len();
-        for j in 0..k {
-            for (idx, &i) in pattern.iter().enumerate() {
-                tmp[j * p + idx] = x[j * n + i];
+        for (tc, xc) in tmp[..p * k]
+            .chunks_exact_mut(p.max(1))
+            .zip(x.chunks_exact(n))
+        {
+            for (t, &i) in tc.iter_mut().zip(pattern) {
+                *t = xc[i];
             }
         }
         if rows_zero(x, n, k, start, size) && tmp[..p * k].iter().all(|&v| v == 0.0) {
