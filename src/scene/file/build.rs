@@ -387,8 +387,9 @@ impl Scene {
                 dofs.push(d);
                 refs.push(mesh.points[v][..dim].to_vec());
             }
-            let set = self
-                .obstacle_set(obstacle, dofs, refs, (c.restitution, c.friction))
+            let set = obstacle
+                .shape()
+                .contact_set(dofs, refs, c.restitution, c.friction)
                 .map_err(at)?;
             check_starting_gaps(
                 set.as_ref(),
@@ -509,25 +510,7 @@ impl Scene {
                 facets,
                 &master.points,
             );
-            let kept: Vec<usize> = nodes
-                .iter()
-                .zip(&dist)
-                .filter(|(_, x)| **x <= d)
-                .map(|(&v, _)| v)
-                .collect();
-            if kept.is_empty() {
-                return Err(Error::invalid(
-                    "within",
-                    crate::error::num(d),
-                    &format!(
-                        "no node of `{}` lies that close to the target surface (the nearest \
-                         is {:.3e} m away)",
-                        c.nodes,
-                        dist.iter().copied().fold(f64::INFINITY, f64::min)
-                    ),
-                ));
-            }
-            return Ok(kept);
+            return keep_within(&nodes, &dist, d, &c.nodes, "the target surface");
         }
         let obstacle = self.obstacle(c);
         // the gaps at the reference positions, through the obstacle's own gap function
@@ -539,28 +522,13 @@ impl Scene {
             .iter()
             .map(|&v| mesh.points[v][..dim].to_vec())
             .collect();
-        let set = self.obstacle_set(obstacle, dofs, refs, (c.restitution, c.friction))?;
+        let set = obstacle
+            .shape()
+            .contact_set(dofs, refs, c.restitution, c.friction)?;
         let mut jac = crate::contact::ContactJacobian::for_set(set.as_ref());
         let mut gap = vec![0.0; set.len()];
         set.evaluate(&vec![0.0; nodes.len() * dim], &mut gap, &mut jac);
-        let kept: Vec<usize> = nodes
-            .iter()
-            .zip(&gap)
-            .filter(|(_, g)| **g <= d)
-            .map(|(&v, _)| v)
-            .collect();
-        if kept.is_empty() {
-            return Err(Error::invalid(
-                "within",
-                crate::error::num(d),
-                &format!(
-                    "no node of `{}` lies that close to the obstacle (the nearest is {:.3e} m away)",
-                    c.nodes,
-                    gap.iter().copied().fold(f64::INFINITY, f64::min)
-                ),
-            ));
-        }
-        Ok(kept)
+        keep_within(&nodes, &gap, d, &c.nodes, "the obstacle")
     }
 
     /// The index of the body named `name` (validated to exist).
@@ -593,4 +561,32 @@ pub(super) fn time_function(
         Some(t) => crate::model::TimeFunction::new(field, t.iter().map(|p| (p[0], p[1])).collect()),
         None => Ok(crate::model::TimeFunction::one()),
     }
+}
+
+/// The `nodes` whose initial distance `dist` to `what` is at most `within = d`; an error
+/// naming the node set and the nearest distance when none is.
+fn keep_within(
+    nodes: &[usize],
+    dist: &[f64],
+    d: f64,
+    set: &str,
+    what: &str,
+) -> Result<Vec<usize>, Error> {
+    let kept: Vec<usize> = nodes
+        .iter()
+        .zip(dist)
+        .filter(|(_, x)| **x <= d)
+        .map(|(&v, _)| v)
+        .collect();
+    if kept.is_empty() {
+        return Err(Error::invalid(
+            "within",
+            crate::error::num(d),
+            &format!(
+                "no node of `{set}` lies that close to {what} (the nearest is {:.3e} m away)",
+                dist.iter().copied().fold(f64::INFINITY, f64::min)
+            ),
+        ));
+    }
+    Ok(kept)
 }

@@ -54,18 +54,13 @@ impl ObstacleShape for CylinderSpec {
         e: f64,
         mu: f64,
     ) -> Result<Box<dyn ContactSet>, Error> {
-        Ok(Box::new(
-            RoundObstacle::general(
-                dofs,
-                refs,
-                self.point.clone(),
-                Some(self.axis.clone()),
-                self.radius,
-                self.side,
-                e,
-            )?
-            .with_friction(mu)?,
-        ))
+        round_set(
+            dofs,
+            refs,
+            (&self.point, Some(&self.axis)),
+            (self.radius, self.side),
+            (e, mu),
+        )
     }
 
     /// The two end circles and eight generators over the box's extent along the axis.

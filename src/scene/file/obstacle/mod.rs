@@ -99,16 +99,6 @@ impl Scene {
             .find(|o| Some(o.name()) == c.obstacle.as_deref())
             .expect("validated obstacle name")
     }
-
-    pub(super) fn obstacle_set(
-        &self,
-        o: &ObstacleSpec,
-        dofs: Vec<Vec<usize>>,
-        refs: Vec<Vec<f64>>,
-        (e, mu): (f64, f64),
-    ) -> Result<Box<dyn ContactSet>, Error> {
-        o.shape().contact_set(dofs, refs, e, mu)
-    }
 }
 
 pub(super) fn outside() -> Side {
@@ -133,6 +123,21 @@ pub(super) fn check_vector(key: &str, v: &[f64], n: usize, nonzero: bool) -> Res
         ));
     }
     Ok(())
+}
+
+/// The contact set of a sphere (`axis = None`) or cylinder through `centre` of `radius`,
+/// admissible on `side`, with restitution `e` and friction `mu`.
+pub(super) fn round_set(
+    dofs: Vec<Vec<usize>>,
+    refs: Vec<Vec<f64>>,
+    (centre, axis): (&[f64], Option<&Vec<f64>>),
+    (radius, side): (f64, Side),
+    (e, mu): (f64, f64),
+) -> Result<Box<dyn ContactSet>, Error> {
+    Ok(Box::new(
+        RoundObstacle::general(dofs, refs, centre.to_vec(), axis.cloned(), radius, side, e)?
+            .with_friction(mu)?,
+    ))
 }
 
 /// A vector key as three components (missing ones zero).

@@ -44,18 +44,13 @@ impl ObstacleShape for SphereSpec {
         e: f64,
         mu: f64,
     ) -> Result<Box<dyn ContactSet>, Error> {
-        Ok(Box::new(
-            RoundObstacle::general(
-                dofs,
-                refs,
-                self.center.clone(),
-                None,
-                self.radius,
-                self.side,
-                e,
-            )?
-            .with_friction(mu)?,
-        ))
+        round_set(
+            dofs,
+            refs,
+            (&self.center, None),
+            (self.radius, self.side),
+            (e, mu),
+        )
     }
 
     /// Three great circles (one circle in 2-D).
