@@ -51,7 +51,8 @@ fn planned_paths_are_the_built_ones() {
             None => {}
         }
         let (model, _) = s.build().unwrap();
-        let plan = model.plan(&s.scheme, s.time.dt).unwrap();
+        // planned on its own (`plan_only` keeps nothing): the build analyses again
+        let plan = model.plan_only(&s.scheme, s.time.dt).unwrap();
         let path = model.into_integrator(&s.scheme, s.time.dt).unwrap().path();
         assert!(
             path.contains(&plan.factor.backend),
@@ -75,6 +76,121 @@ fn planned_paths_are_the_built_ones() {
             "{file}: the ledger counts the process"
         );
     }
+}
+
+/// Issue 36 §2: a run plans, then builds, and the build takes the plan's validation and
+/// its step matrix (formed and analysed once). The integrator built after a plan steps
+/// bit for bit as one built without (the same matrix, the same symbolic analysis), on a
+/// tridiagonal rod (no analysis kept), a supernodal hex8 factor with nested dissection,
+/// Schatzman–Paoli's own matrix, and a nonlinear structure (which keeps none).
+#[test]
+fn a_planned_build_steps_as_an_unplanned_one() {
+    for (file, kind) in [
+        ("bar.toml", None),
+        ("hex_bars.toml", None),
+        ("hex_bars.toml", Some("schatzman-paoli")),
+        ("ball_crush.toml", None),
+    ] {
+        let mut s = scene(file);
+        if let Some(k) = kind {
+            s.scheme.kind = signorini::integrators::SchemeKind::parse(k).unwrap();
+        }
+        let run = |plan_first: bool| {
+            let (mut model, _) = s.build().unwrap();
+            if plan_first {
+                model.plan(&s.scheme, s.time.dt).unwrap();
+            }
+            let mut integ = model.into_integrator(&s.scheme, s.time.dt).unwrap();
+            for _ in 0..30 {
+                integ.step().unwrap();
+            }
+            let st = integ.state();
+            (integ.path(), st.q.clone(), st.v.clone(), st.impulse.clone())
+        };
+        let (planned, unplanned) = (run(true), run(false));
+        assert_eq!(planned.0, unplanned.0, "{file} {kind:?}: paths");
+        let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        for (name, a, b) in [
+            ("q", &planned.1, &unplanned.1),
+            ("v", &planned.2, &unplanned.2),
+            ("impulse", &planned.3, &unplanned.3),
+        ] {
+            assert_eq!(bits(a), bits(b), "{file} {kind:?}: {name} after 30 steps");
+        }
+    }
+}
+
+/// What a plan established holds for the problem as planned only: changed after it (a
+/// NaN in the initial velocity, a stiffer structure, another step), the build validates
+/// and forms its matrix afresh, so a plan can never carry a wrong matrix or a stale check
+/// into a run.
+#[test]
+fn a_problem_changed_after_its_plan_is_built_afresh() {
+    let s = scene("hex_bars.toml");
+    let (dt, p) = (s.time.dt, &s.scheme);
+    // a NaN initial velocity after the plan: refused as without a plan
+    let (mut model, _) = s.build().unwrap();
+    model.plan(p, dt).unwrap();
+    model.problem.v0[3] = f64::NAN;
+    let err = model
+        .into_integrator(p, dt)
+        .err()
+        .expect("a NaN v0 is refused");
+    assert!(
+        err.to_string().contains("initial velocity"),
+        "the validation names the field: {err}"
+    );
+    // the stiffness doubled after the plan: steps as the same problem built unplanned
+    let stiffer = |plan: bool| {
+        let (mut model, _) = s.build().unwrap();
+        if plan {
+            model.plan(p, dt).unwrap();
+        }
+        model
+            .problem
+            .system
+            .stiffness
+            .val_mut()
+            .iter_mut()
+            .for_each(|k| *k *= 2.0);
+        let mut integ = model.into_integrator(p, dt).unwrap();
+        for _ in 0..20 {
+            integ.step().unwrap();
+        }
+        integ
+            .state()
+            .q
+            .iter()
+            .map(|x| x.to_bits())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        stiffer(true),
+        stiffer(false),
+        "stiffness changed after the plan"
+    );
+    // planned at dt, built at dt/2: the matrix of dt/2
+    let halved = |plan: bool| {
+        let (mut model, _) = s.build().unwrap();
+        if plan {
+            model.plan(p, dt).unwrap();
+        }
+        let mut integ = model.into_integrator(p, dt / 2.0).unwrap();
+        for _ in 0..20 {
+            integ.step().unwrap();
+        }
+        integ
+            .state()
+            .q
+            .iter()
+            .map(|x| x.to_bits())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(
+        halved(true),
+        halved(false),
+        "built at another step than planned"
+    );
 }
 
 /// `check` on the wide block (90 000 dofs, 30 000 contact rows) prints the planned

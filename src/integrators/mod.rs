@@ -702,7 +702,10 @@ pub fn build_problem(
     problem: Problem,
     h: f64,
 ) -> Result<Box<dyn Integrator>, Error> {
-    problem.validate(params, h)?;
+    // validated once: by the plan of this problem, or here
+    if !problem.planned_for(params, h) {
+        problem.validate(params, h)?;
+    }
     Ok(match params.kind {
         SchemeKind::MoreauJean => Box::new(moreau_jean::MoreauJean::new(params, problem, h)?),
         SchemeKind::DirectProjection => Box::new(direct_projection::DirectProjection::new(

@@ -15,9 +15,8 @@
 //! structure's step matrix is planned on the pattern of `M`, `K` and `C` (its tangents
 //! share it for the shipped bodies).
 
-use super::structure::DENSE_MAX;
+use super::structure::{DENSE_MAX, StepMatrix};
 use super::{SchemeKind, SchemeParams};
-use crate::assembly::linear_combination;
 use crate::contact::ContactSet;
 use crate::delassus::{Delassus, DelassusPlan};
 use crate::error::Error;
@@ -83,6 +82,17 @@ pub fn plan(
     contacts: &dyn ContactSet,
     h: f64,
 ) -> Result<Plan, Error> {
+    plan_kept(params, system, contacts, h).map(|(plan, _)| plan)
+}
+
+/// [`plan`], keeping the step matrix it formed and analysed (linear structures, whose
+/// factor is the SPD one) for the build ([`super::problem::Problem::plan`]).
+pub fn plan_kept(
+    params: &SchemeParams,
+    system: &LinearSystem,
+    contacts: &dyn ContactSet,
+    h: f64,
+) -> Result<(Plan, Option<StepMatrix>), Error> {
     super::core::check_block_rows(params, contacts)?;
     let n = system.ndof();
     let m = contacts.len();
@@ -96,16 +106,17 @@ pub fn plan(
     } else {
         (h * h * th * th, h * th)
     };
-    let mut terms = vec![(1.0, &system.mass), (a, &system.stiffness)];
-    if let Some(c) = &system.damping {
-        terms.push((b, c));
-    }
-    let step = linear_combination(&terms);
+    let mut kept = StepMatrix::form(system, (a, b));
+    let step = kept.matrix();
     let linear = system.linearity() == Linearity::Linear;
     let what = "iteration matrix M + hθC + h²θ²K";
-    // the backends of `core::factor_step_matrix` and `structure::Structure::factor`
+    // the backends of `structure::factor_step_matrix` and `NonlinearStructure::factor`
+    let mut analysis = None;
     let factor = if linear {
-        crate::linalg::analyse_spd(step.as_ref(), what, system.ordering.as_deref())?
+        let (f, an) =
+            crate::linalg::analyse_spd_kept(step.as_ref(), what, system.ordering.as_deref())?;
+        analysis = an;
+        f
     } else if system.symmetric() {
         crate::linalg::analyse_ldlt(step.as_ref(), what)?
     } else if n <= DENSE_MAX {
@@ -163,7 +174,7 @@ pub fn plan(
     let nnz = |s: &crate::linalg::SparseMatrix| s.val().len() as u64;
     let model = nnz(&system.mass) + nnz(&system.stiffness) + system.damping.as_ref().map_or(0, nnz);
     ledger.add("mass, stiffness and damping matrices", model, 16);
-    ledger.add("step matrix M̂ (for its factorization)", nnz(&step), 16);
+    ledger.add("step matrix M̂ (for its factorization)", nnz(step), 16);
     ledger.add("factor of M̂", factor.entries, 8);
     ledger.add("factorization scratch", factor.scratch_bytes, 1);
     ledger.add("Delassus data", delassus.bytes, 1);
@@ -202,10 +213,18 @@ pub fn plan(
     } else {
         format!("one-step problems in dense workspaces of {ws_cap} rows")
     };
-    Ok(Plan {
+    let plan = Plan {
         factor,
         delassus,
         workspaces,
         ledger,
-    })
+    };
+    // a nonlinear structure forms its own M̂ⁿ on the union pattern of its parts
+    Ok((
+        plan,
+        linear.then(|| {
+            kept.keep_analysis(analysis);
+            kept
+        }),
+    ))
 }

@@ -16,8 +16,9 @@
 //! when `M` is singular, as with the redistributed mass).
 //! The reported impulse is `P/h` (N·s), comparable with the velocity-level schemes.
 
-use super::core::{Workspace, factor_step_matrix, fail, grow_solve, newton_change};
+use super::core::{Workspace, fail, grow_solve, newton_change};
 use super::problem::Problem;
+use super::structure::factor_step_matrix;
 use super::{Integrator, Metric, NewtonParams, SchemeParams, State, StepStats};
 use crate::contact::{ContactJacobian, ContactSet};
 use crate::delassus::{Delassus, Op};
@@ -60,6 +61,8 @@ pub struct SchatzmanPaoli {
 impl SchatzmanPaoli {
     /// Factors `M_SP` and condenses `W_SP = Gᵀ M_SP⁻¹ G` once.
     pub fn new(params: &SchemeParams, problem: Problem, h: f64) -> Result<Self, Error> {
+        let mut problem = problem;
+        let planned = problem.take_step_matrix();
         let (sys, contacts, q0, v0) = problem.into_parts();
         let (q0, v0) = (&q0[..], &v0[..]);
         let theta = params.theta;
@@ -67,6 +70,7 @@ impl SchatzmanPaoli {
             &sys,
             (h * h * theta, 0.5 * h * theta),
             "Schatzman–Paoli matrix M + h²θK + (hθ/2)C",
+            planned,
         )?;
         let n = sys.ndof();
         let m = contacts.len();

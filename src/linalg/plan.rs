@@ -66,15 +66,27 @@ pub fn analyse_spd(
     what: &str,
     ordering: Option<&[usize]>,
 ) -> Result<FactorPlan, Error> {
+    analyse_spd_kept(a, what, ordering).map(|(plan, _)| plan)
+}
+
+/// [`analyse_spd`], keeping the symbolic analysis for [`SpdFactor::with_analysis`]
+/// (`None` for a tridiagonal matrix, which needs none): a run that plans then builds
+/// analyses its step matrix once (issue 36 §2).
+pub fn analyse_spd_kept(
+    a: SparseColMatRef<'_, usize, f64>,
+    what: &str,
+    ordering: Option<&[usize]>,
+) -> Result<(FactorPlan, Option<SpdAnalysis>), Error> {
     if Tridiagonal::is_tridiagonal(a) {
-        return Ok(FactorPlan {
+        let plan = FactorPlan {
             backend: "tridiagonal LDLᵀ".to_string(),
             entries: 2 * a.nrows() as u64,
             scratch_bytes: 0,
-        });
+        };
+        return Ok((plan, None));
     }
     let (symbolic, name) = symbolic_choice(a, what, ordering)?;
-    Ok(FactorPlan {
+    let plan = FactorPlan {
         backend: format!(
             "faer {} LLᵀ, {name}, nnz(L) = {}",
             if matches!(symbolic.raw(), SymbolicCholeskyRaw::Simplicial(_)) {
@@ -86,7 +98,22 @@ pub fn analyse_spd(
         ),
         entries: symbolic.len_val() as u64,
         scratch_bytes: factor_scratch(&symbolic).unaligned_bytes_required() as u64,
-    })
+    };
+    Ok((
+        plan,
+        Some(SpdAnalysis {
+            symbolic,
+            ordering: name,
+        }),
+    ))
+}
+
+/// The symbolic Cholesky analysis of an SPD pattern and the name of its ordering
+/// ([`analyse_spd_kept`]), which [`SpdFactor::with_analysis`] factors on.
+#[derive(Debug)]
+pub struct SpdAnalysis {
+    pub(super) symbolic: SymbolicCholesky<usize>,
+    pub(super) ordering: &'static str,
 }
 
 /// What [`solver::SparseLdlt::new`] would build for `a` (AMD, no pivoting), from the

@@ -183,6 +183,24 @@ pub fn factor(
     })
 }
 
+/// [`factor`] of the SPD `a` ([`SolverKind::Cholesky`]) on the symbolic analysis of its
+/// pattern made when the run was planned ([`super::analyse_spd_kept`]), where the
+/// backend is faer's.
+pub fn factor_spd_analysed(
+    a: SparseColMatRef<'_, usize, f64>,
+    what: &str,
+    ordering: Option<&[usize]>,
+    analysis: Option<super::SpdAnalysis>,
+) -> Result<Box<dyn LinearSolver>, Error> {
+    #[cfg(feature = "mumps")]
+    if let Some(f) = super::mumps::factor_if_active(a, what, SolverKind::Cholesky) {
+        return f;
+    }
+    Ok(Box::new(SpdFactor::with_analysis(
+        a, what, analysis, ordering,
+    )?))
+}
+
 fn square(a: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<usize, Error> {
     if a.nrows() != a.ncols() {
         return Err(Error::Numerical(format!(

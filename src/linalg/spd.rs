@@ -284,8 +284,36 @@ impl SpdFactor {
         what: &str,
         ordering: Option<&[usize]>,
     ) -> Result<Self, Error> {
+        let (symbolic, ordering) = symbolic_choice(a, what, ordering)?;
+        Self::factor_on(a, what, SpdAnalysis { symbolic, ordering })
+    }
+
+    /// [`SpdFactor::with_ordering`] on the symbolic analysis of `a`'s pattern made
+    /// before ([`super::analyse_spd_kept`] on the same matrix; `None`: `a` is
+    /// tridiagonal, or analyse it now).
+    pub fn with_analysis(
+        a: SparseColMatRef<'_, usize, f64>,
+        what: &str,
+        analysis: Option<SpdAnalysis>,
+        ordering: Option<&[usize]>,
+    ) -> Result<Self, Error> {
+        match analysis {
+            Some(an) if an.symbolic.nrows() == a.nrows() => Self::factor_on(a, what, an),
+            _ => Self::with_ordering(a, what, ordering),
+        }
+    }
+
+    /// The numeric factorization of `a` on its symbolic analysis.
+    fn factor_on(
+        a: SparseColMatRef<'_, usize, f64>,
+        what: &str,
+        analysis: SpdAnalysis,
+    ) -> Result<Self, Error> {
         let n = a.nrows();
-        let (symbolic, ordering_name) = symbolic_choice(a, what, ordering)?;
+        let SpdAnalysis {
+            symbolic,
+            ordering: ordering_name,
+        } = analysis;
         let req = factor_scratch(&symbolic);
         // the factor's size is known now: check it (and the scratch) before allocating
         let mut mem = crate::limits::MemoryEstimate::default();

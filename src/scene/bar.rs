@@ -129,12 +129,12 @@ impl BarScene {
             self.restitution,
         )?;
         Ok(Model {
-            problem: Problem {
+            problem: Problem::new(
                 system,
-                contacts: Box::new(contacts),
-                q0: vec![0.0; n],
-                v0: vec![self.velocity; n],
-            },
+                Box::new(contacts),
+                vec![0.0; n],
+                vec![self.velocity; n],
+            ),
             geometry: Geometry {
                 outlines: vec![wall(-self.gap, 0.2 * self.length)],
                 ..Geometry::rod(self.length, self.elements, self.young, self.density)

@@ -213,12 +213,12 @@ impl ExampleSpec {
                     q0,
                     v0,
                 } => Model {
-                    problem: Problem {
-                        system: rigid_block(mass, length, thickness, gravity)?,
-                        contacts: Box::new(BlockCorners::new(length, thickness, restitution)?),
-                        q0: q0.to_vec(),
-                        v0: v0.to_vec(),
-                    },
+                    problem: Problem::new(
+                        rigid_block(mass, length, thickness, gravity)?,
+                        Box::new(BlockCorners::new(length, thickness, restitution)?),
+                        q0.to_vec(),
+                        v0.to_vec(),
+                    ),
                     geometry: Geometry::default(),
                     probes: Vec::new(),
                 },
@@ -237,12 +237,12 @@ impl ExampleSpec {
                     }
                     let corners = SliderCorners::new(&mechanism, restitution, friction)?;
                     Model {
-                        problem: Problem {
-                            system: mechanism.system()?,
-                            contacts: Box::new(corners),
-                            q0: q0.to_vec(),
-                            v0: v0.to_vec(),
-                        },
+                        problem: Problem::new(
+                            mechanism.system()?,
+                            Box::new(corners),
+                            q0.to_vec(),
+                            v0.to_vec(),
+                        ),
                         geometry: Geometry::default(),
                         probes: Vec::new(),
                     }
@@ -306,12 +306,7 @@ fn on_the_line(
     crate::error::require_in("q0", q0, 0.0, f64::MAX)?;
     let contact = NodesOnPlane::new(vec![vec![0]], vec![vec![0.0]], vec![1.0], 0.0, restitution)?;
     Ok(Model {
-        problem: Problem {
-            system,
-            contacts: Box::new(contact),
-            q0: vec![q0],
-            v0: vec![v0],
-        },
+        problem: Problem::new(system, Box::new(contact), vec![q0], vec![v0]),
         geometry: Geometry::default(),
         probes: Vec::new(),
     })

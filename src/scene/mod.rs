@@ -37,8 +37,23 @@ impl Model {
 
     /// Validates the run of `params` at step `dt` as [`Model::into_integrator`] would and
     /// plans it ([`integrators::plan::plan`]: paths and memory ledger) without building
-    /// it: what `signorini check` costs.
-    pub fn plan(&self, params: &SchemeParams, dt: f64) -> Result<integrators::plan::Plan, Error> {
+    /// it, keeping the validation and the step matrix for [`Model::into_integrator`]
+    /// ([`integrators::Problem::plan`]).
+    pub fn plan(
+        &mut self,
+        params: &SchemeParams,
+        dt: f64,
+    ) -> Result<integrators::plan::Plan, Error> {
+        self.problem.plan(params, dt)
+    }
+
+    /// [`Model::plan`] for a model that will not be built (what `signorini check`
+    /// costs): nothing is kept.
+    pub fn plan_only(
+        &self,
+        params: &SchemeParams,
+        dt: f64,
+    ) -> Result<integrators::plan::Plan, Error> {
         self.problem.validate(params, dt)?;
         let p = &self.problem;
         integrators::plan::plan(params, &p.system, p.contacts.as_ref(), dt)

@@ -146,12 +146,7 @@ impl SolidBarScene {
         let mut system = system;
         system.ordering = Some(crate::model::ordering::nested_dissection(&geometry, n));
         Ok(Model {
-            problem: Problem {
-                system,
-                contacts: Box::new(contacts),
-                q0: vec![0.0; n],
-                v0,
-            },
+            problem: Problem::new(system, Box::new(contacts), vec![0.0; n], v0),
             geometry,
             probes: Vec::new(),
         })

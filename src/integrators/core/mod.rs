@@ -95,15 +95,13 @@ use position::*;
 pub use workspace::*;
 
 use super::problem::Problem;
-use super::structure::Structure;
+use super::structure::{StepData, StructureModel};
 use super::{Forecast, NewtonParams, ProjectionRule, SchemeParams, State, StepStats};
-use crate::assembly::linear_combination;
 use crate::contact::{ContactJacobian, ContactSet, ContactStatus};
 use crate::delassus::{Delassus, Op};
 use crate::error::Error;
-use crate::linalg::{LinearSolver, SolverKind, SparseMatrix, spmv_add, sym_spmv_add};
+use crate::linalg::SparseMatrix;
 use crate::model::LinearSystem;
-use crate::model::system::Linearity;
 use crate::solvers::friction::{
     Block, FrictionParams, FrictionProblem, FrictionSolver, FrictionSolverKind,
 };
@@ -138,25 +136,6 @@ pub enum VelocityLaw {
     /// `0 ≤ g(q_{k+1}) ⊥ P ≥ 0` with `q_{k+1} = q_k + h v_{k+θ}` (the trapezoidal rule of
     /// sec. 6.2, Fig. 11 when θ = 1/2).
     PositionLevel,
-}
-
-/// Forms and factors `M + a·K + b·C` (the step matrix of a scheme), naming it `what` in
-/// errors; the inputs were checked once by [`Problem::validate`].
-pub(crate) fn factor_step_matrix(
-    sys: &LinearSystem,
-    (a, b): (f64, f64),
-    what: &str,
-) -> Result<Box<dyn LinearSolver>, Error> {
-    let mut terms = vec![(1.0, &sys.mass), (a, &sys.stiffness)];
-    if let Some(c) = &sys.damping {
-        terms.push((b, c));
-    }
-    crate::linalg::solver::factor(
-        linear_combination(&terms).as_ref(),
-        what,
-        SolverKind::Cholesky,
-        sys.ordering.as_deref(),
-    )
 }
 
 /// The [`Integrator`](super::Integrator) accessors of a scheme built on a `core:
@@ -240,11 +219,9 @@ pub struct ThetaCore {
     /// `G` constant and the structure linear: `M̂`, `W` are condensed once and the
     /// Newton loop only re-solves the contact-space problem (eq. 56a).
     pub(crate) operators_constant: bool,
-    /// A nonlinear structure's Newton data ([`super::structure`]); `None` when linear.
-    structure: Option<Box<Structure>>,
-    /// The structure is linearized at the step's first iterate (`v = v_k`, `τ = 0`):
-    /// a Newton loop starting now needs no new evaluation.
-    at_first_iterate: bool,
+    /// The structure's side of the step ([`super::structure`]): the free velocity, the
+    /// linearization of each iterate, eq. 41's residual.
+    structure: Box<dyn StructureModel>,
     /// The last Newton loop of the step converged: a later round of Algorithm 2 starts
     /// from its velocity ([`ThetaCore::restart_iterate`]).
     last_converged: bool,
@@ -263,18 +240,12 @@ pub struct ThetaCore {
     // n-vectors
     pub(crate) v_free: Vec<f64>,
     work: Vec<f64>,
-    /// `K` as its three diagonals when it is a rod's ([`crate::linalg::TridiagonalRows`]): the free
-    /// velocity's `K (q + hθ v)` without a gather per row.
-    k_rows: Option<crate::linalg::TridiagonalRows>,
     /// `q_lin` holds `y = q + hθ v` of the state, written by [`ThetaCore::form_fused`]
     /// and read (once) by [`ThetaCore::begin_step`] instead of another pass.
     y_ready: bool,
     /// Whether the state's `q` and `v` are all finite, when [`ThetaCore::form_fused`]
     /// formed them ([`super::Integrator::state_finite`]).
     pub(crate) state_finite: Option<bool>,
-    /// The structure's constant load is `+0.0` everywhere (the bar): `begin_step` reads
-    /// it as the constant.
-    unloaded: bool,
     q_lin: Vec<f64>,
     pub(crate) v_new: Vec<f64>,
     pub(crate) q_new: Vec<f64>,
@@ -335,6 +306,8 @@ impl ThetaCore {
         h: f64,
         with_projection: bool,
     ) -> Result<Self, Error> {
+        let mut problem = problem;
+        let planned = problem.take_step_matrix();
         let (sys, contacts, q0, v0) = problem.into_parts();
         let (q0, v0) = (&q0[..], &v0[..]);
         check_block_rows(params, contacts.as_ref())?;
@@ -357,27 +330,9 @@ impl ThetaCore {
             params
         };
         let theta = params.theta;
-        let mut structure = (sys.linearity() != Linearity::Linear).then(|| {
-            Box::new(Structure::new(
-                &sys,
-                params.newton.modified,
-                params.energy_momentum,
-            ))
-        });
-        let factor = match &mut structure {
-            None => factor_step_matrix(
-                &sys,
-                (h * h * theta * theta, h * theta),
-                "iteration matrix M + hθC + h²θ²K",
-            )?,
-            Some(st) => {
-                // the pattern's symbolic analysis, on M̂ⁿ at the initial state (the mass
-                // alone is singular where `mass = "redistributed"` leaves contact nodes
-                // none, issue 34); the first step forms its own values
-                st.evaluate(&sys, (h, theta), (q0, v0), (q0, v0), true)?;
-                st.factor()?
-            }
-        };
+        let mut structure =
+            super::structure::for_system(&sys, &params.newton, params.energy_momentum);
+        let factor = structure.factor(&sys, (h, theta), (q0, v0), planned)?;
         let n = sys.ndof();
         let np = sys.prescribed.as_ref().map_or(0, |p| p.dofs.len());
         let m = contacts.len();
@@ -405,7 +360,7 @@ impl ThetaCore {
         };
         let g_constant = contacts.is_linear();
         let coordinate_scale = contacts.coordinate_scale();
-        let operators_constant = g_constant && structure.is_none();
+        let operators_constant = g_constant && structure.step_matrix_constant();
         let state = State::with_layout(q0, v0, m, tangent_dim, rows);
         let del = Delassus::new(
             factor,
@@ -428,8 +383,6 @@ impl ThetaCore {
         let mut mem = crate::limits::MemoryEstimate::default();
         workspace_ledger(rows, m, params, (friction, with_projection), &mut mem);
         mem.check("scheme.max_active_rows", format!("{ws_cap} rows"))?;
-        let k_rows = crate::linalg::TridiagonalRows::new(sys.stiffness.as_ref());
-        let unloaded = crate::linalg::TridiagonalRows::is_positive_zero(&sys.force);
         let mut core = ThetaCore {
             sys: std::sync::Arc::new(sys),
             contacts,
@@ -454,7 +407,6 @@ impl ThetaCore {
             coordinate_scale,
             operators_constant,
             structure,
-            at_first_iterate: false,
             last_converged: false,
             jac_at_qk: true,
             w_at_qk: false,
@@ -466,10 +418,8 @@ impl ThetaCore {
             vp_b: vec![0.0; np],
             v_free: vec![0.0; n],
             work: vec![0.0; n],
-            k_rows,
             y_ready: false,
             state_finite: None,
-            unloaded,
             q_lin: vec![0.0; n],
             v_new: vec![0.0; n],
             q_new: vec![0.0; n],
@@ -504,7 +454,7 @@ impl ThetaCore {
         };
         core.contacts
             .evaluate(&core.state.q, &mut core.state.gap, &mut core.del.jac);
-        if core.structure.is_none() {
+        if core.structure.step_matrix_constant() {
             if !g_constant && core.contacts.condensed() {
                 let zone = core.contacts.zone();
                 let fixed = fixed_rows(core.contacts.as_ref());
@@ -547,41 +497,9 @@ impl ThetaCore {
 
     /// A description of the linear-algebra path, for summaries.
     pub fn path(&self) -> String {
-        let structure = match &self.structure {
-            None => format!(
-                "M̂ = M + hθC + h²θ²K factored once ({}, n = {})",
-                self.del.factor.backend_name(),
-                self.n
-            ),
-            Some(st) => format!(
-                "nonlinear structure ({}): {} Newton on eq. 41–48{}, M̂ⁿ = M(q) + hθCⁿ + \
-                 h²θ²Kⁿ refactored {} ({}, n = {}){}",
-                self.sys
-                    .nonlinear
-                    .iter()
-                    .map(|f| f.describe())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                if st.modified { "modified" } else { "full" },
-                if st.energy_momentum {
-                    " with discrete-gradient internal forces (energy–momentum)"
-                } else {
-                    ""
-                },
-                if st.modified {
-                    "at each step's first iterate and when the iterates stop contracting"
-                } else {
-                    "at every iterate"
-                },
-                self.del.factor.backend_name(),
-                self.n,
-                if st.symmetric {
-                    ""
-                } else {
-                    "; M̂ⁿ nonsymmetric: projection metric Euclidean, LCPs by Lemke"
-                }
-            ),
-        };
+        let structure = self
+            .structure
+            .describe(&self.sys, &self.del.factor.backend_name(), self.n);
         format!(
             "{structure}; {} contact(s){}, {}; {}{}",
             self.m,
@@ -653,7 +571,7 @@ impl ThetaCore {
         self.contacts
             .evaluate(&self.state.q, &mut self.state.gap, &mut self.del.jac);
         if !self.g_constant {
-            if self.structure.is_none() {
+            if self.structure.step_matrix_constant() {
                 // (a nonlinear structure condenses at the next step's first iterate)
                 self.del.refresh(&self.sys.stiffness);
                 self.w_at_qk = true;
@@ -667,7 +585,6 @@ impl ThetaCore {
         if self.operators_constant || !self.zone.is_empty() {
             self.form();
         }
-        self.at_first_iterate = false;
         std::mem::swap(&mut self.state.q, &mut self.q_new);
         std::mem::swap(&mut self.state.v, &mut self.v_new);
         self.state.impulse_rows.copy_from_slice(&self.p);

@@ -143,7 +143,7 @@ impl ThetaCore {
         if !self.g_constant && !self.jac_at_qk {
             self.contacts
                 .evaluate(&self.state.q, &mut self.g_at_lin, &mut self.del.jac);
-            if self.structure.is_none() {
+            if self.structure.step_matrix_constant() {
                 if !self.w_at_qk {
                     self.del.refresh(&self.sys.stiffness);
                     self.w_at_qk = true;
@@ -156,21 +156,16 @@ impl ThetaCore {
         // re-linearizations evaluate the gaps and G (for the activation test) and leave
         // the operators as they are (formed at q_k, or re-formed by the next round)
         let empty_round = law == VelocityLaw::Impact
-            && self.structure.is_none()
+            && self.structure.step_matrix_constant()
             && !self.vel_mask.iter().any(|&x| x)
             && match rule {
                 PositionRule::None => true,
                 PositionRule::Combined { .. } => !self.pos_mask.iter().any(|&x| x),
                 PositionRule::AllComplementarity => false,
             };
-        if self.structure.is_some() && !self.at_first_iterate {
-            // a later round of Algorithm 2 (or its complementarity redo)
-            if self.last_converged {
-                self.restart_iterate(stats)?;
-            } else {
-                self.first_iterate(stats)?;
-            }
-        }
+        // a later round of Algorithm 2 (or its complementarity redo) on a nonlinear
+        // structure starts from a new iterate
+        self.restart_structure(stats)?;
         // modified Newton: the last two changes of the iterate, for its contraction test
         let (mut change, mut change_before) = (f64::INFINITY, f64::INFINITY);
         self.tau_prev.iter_mut().for_each(|x| *x = 0.0);
@@ -205,27 +200,18 @@ impl ThetaCore {
                 // a nonlinear structure: the next iterate's M̂ⁿ (full Newton, or modified
                 // Newton when the last change was not at most half the one before) and
                 // free velocity
-                let refactored = match self.structure.as_ref().map(|s| s.modified) {
-                    None => false,
-                    Some(modified) => {
-                        let tangent = !modified || change > 0.5 * change_before;
-                        self.linearize_structure(tangent, stats)?;
-                        tangent
-                    }
-                };
+                let refactored = self.relinearize_structure((change, change_before), stats)?;
                 if (!self.g_constant || refactored) && !empty_round {
-                    let k = match &self.structure {
-                        Some(st) => &st.tangent,
-                        None => &self.sys.stiffness,
-                    };
-                    self.del.refresh(k);
+                    self.del.refresh(self.structure.tangent(&self.sys));
                     self.w_at_qk = false;
                 }
                 self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
             }
             // coupling hθ W_D τⁿ (zero without projection)
             self.coupling.iter_mut().for_each(|x| *x = 0.0);
-            if self.feedback && self.structure.is_none() && self.tau_prev.iter().any(|&t| t != 0.0)
+            if self.feedback
+                && self.structure.step_matrix_constant()
+                && self.tau_prev.iter().any(|&t| t != 0.0)
             {
                 // with a constant G the columns stay and serve every later step; with a
                 // nonlinear G they are forgotten at the next linearization, and the
@@ -407,15 +393,15 @@ impl ThetaCore {
                 );
                 configuration_change = relative_change(&self.q_new, &self.q_lin);
                 self.q_lin.copy_from_slice(&self.q_new);
-                if self.structure.is_some() {
+                match self.structure_residual(stats)? {
                     // eq. 41 at the new iterate; with a constant G the gaps are exact
                     // (eq. 49 holds identically) and R alone decides
-                    let rs = self.structure_residual(stats)?;
-                    let r = if self.g_constant { rs } else { r.max(rs) };
-                    (change_before, change) = (change, r);
-                    r
-                } else {
-                    r
+                    Some(rs) => {
+                        let r = if self.g_constant { rs } else { r.max(rs) };
+                        (change_before, change) = (change, r);
+                        r
+                    }
+                    None => r,
                 }
             };
             stats.newton_residual = r;
@@ -463,7 +449,7 @@ impl ThetaCore {
             coupled_last = false;
             if it >= COUPLED_AFTER
                 && helped
-                && self.structure.is_none()
+                && self.structure.step_matrix_constant()
                 && law == VelocityLaw::Impact
                 && rule != PositionRule::None
                 && self.coupled_correction(rule)?
@@ -629,7 +615,7 @@ impl ThetaCore {
         }
         // a nonlinear structure has the projection's feedback in F(q_θ) (module doc of
         // `structure`)
-        let kfac = if self.feedback && self.structure.is_none() {
+        let kfac = if self.feedback && self.structure.step_matrix_constant() {
             -h * th
         } else {
             0.0

@@ -434,12 +434,7 @@ impl Scene {
         }
         Ok((
             Model {
-                problem: Problem {
-                    system,
-                    contacts,
-                    q0: vec![0.0; n],
-                    v0,
-                },
+                problem: Problem::new(system, contacts, vec![0.0; n], v0),
                 geometry,
                 probes,
             },
