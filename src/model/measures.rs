@@ -1,0 +1,158 @@
+//! What a state of the structure measures: kinetic and potential energy (prescribed dofs
+//! and nonlinear parts included), total energy, momentum and mass.
+
+use super::*;
+
+impl LinearSystem {
+    /// Number of degrees of freedom.
+    pub fn ndof(&self) -> usize {
+        self.mass.nrows()
+    }
+
+    /// The whole structure's kinetic and potential energy at `(t, q, v)` (J): those of
+    /// the kept dofs ([`LinearSystem::kinetic_energy`], [`LinearSystem::potential_energy`])
+    /// plus what the prescribed dofs add ([`Prescribed::energy`]). `scratch` holds at
+    /// least twice [`LinearSystem::prescribed_dofs`] values.
+    pub fn energies(&self, t: f64, q: &[f64], v: &[f64], scratch: &mut [f64]) -> (f64, f64) {
+        let (k, u) = self.prescribed_energy(t, q, v, scratch);
+        (self.kinetic_energy(q, v) + k, self.potential_energy(q) + u)
+    }
+
+    /// What the prescribed dofs add to the kept dofs' kinetic and potential energy at
+    /// `(t, q, v)` ([`Prescribed::energy`]; `(0, 0)` without them). `scratch` as for
+    /// [`LinearSystem::energies`].
+    pub fn prescribed_energy(
+        &self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        scratch: &mut [f64],
+    ) -> (f64, f64) {
+        match &self.prescribed {
+            Some(p) => {
+                let (vp, up) = scratch[..2 * p.velocity.len()].split_at_mut(p.velocity.len());
+                p.energy(t, q, v, vp, up)
+            }
+            None => (0.0, 0.0),
+        }
+    }
+
+    /// [`LinearSystem::energies`] summed, with its own scratch (allocates: for the start
+    /// and end of a run, not per step).
+    pub fn total_energy(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        let (ke, pe) = self.energies(t, q, v, &mut vec![0.0; 2 * self.prescribed_dofs()]);
+        ke + pe
+    }
+
+    /// Number of prescribed (eliminated) dofs.
+    pub fn prescribed_dofs(&self) -> usize {
+        self.prescribed.as_ref().map_or(0, |p| p.velocity.len())
+    }
+
+    /// The layouts of `M` and `K` read once, for [`LinearSystem::energies_with`].
+    pub fn energy_forms(&self) -> EnergyForms {
+        EnergyForms {
+            mass: QuadraticForm::new(self.mass.as_ref()),
+            stiffness: QuadraticForm::new(self.stiffness.as_ref()),
+            unloaded: self.force.iter().all(|&f| f == 0.0),
+        }
+    }
+
+    /// [`LinearSystem::energies`] through `forms` (from [`LinearSystem::energy_forms`]
+    /// of this system): the same energies, their sums reordered for speed (they differ
+    /// by round-off). Does not allocate; what each history row calls.
+    pub fn energies_with(
+        &self,
+        forms: &EnergyForms,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        scratch: &mut [f64],
+    ) -> (f64, f64) {
+        let (k, u) = self.prescribed_energy(t, q, v, scratch);
+        let kinetic = 0.5 * forms.mass.eval(self.mass.as_ref(), v) + self.parts_kinetic(q, v);
+        let mut potential = 0.5 * forms.stiffness.eval(self.stiffness.as_ref(), q);
+        if !forms.unloaded {
+            potential -= crate::linalg::dot_lanes(&self.force, q);
+        }
+        (kinetic + k, potential + self.parts_potential(q) + u)
+    }
+
+    /// The nonlinear parts' kinetic energy (0 without them).
+    pub(super) fn parts_kinetic(&self, q: &[f64], v: &[f64]) -> f64 {
+        self.nonlinear
+            .iter()
+            .map(|p| p.kinetic_energy(q, v))
+            .sum::<f64>()
+    }
+
+    /// The nonlinear parts' internal energy (0 without them; NaN where a cell is
+    /// inverted).
+    pub(super) fn parts_potential(&self, q: &[f64]) -> f64 {
+        if self.nonlinear.is_empty() {
+            return 0.0;
+        }
+        self.nonlinear
+            .iter()
+            .map(|r| r.energy(q).unwrap_or(f64::NAN))
+            .sum::<f64>()
+    }
+
+    /// Kinetic energy of the kept dofs `½ vᵀ M(q) v` (J; `q` matters only with a mass
+    /// part, [`system::NonlinearPart::mass_entries`]).
+    pub fn kinetic_energy(&self, q: &[f64], v: &[f64]) -> f64 {
+        // without parts the sum is a zero, which keeps the constant term bit for bit
+        0.5 * quadratic_form(self.mass.as_ref(), v)
+            + self
+                .nonlinear
+                .iter()
+                .map(|p| p.kinetic_energy(q, v))
+                .sum::<f64>()
+    }
+
+    /// Potential energy of the kept dofs `½ qᵀ K q − fᵀ q` (J): elastic energy plus the
+    /// potential of the constant external force, plus the energies of the nonlinear
+    /// internal forces ([`system::NonlinearPart::energy`]; NaN where a cell is inverted).
+    pub fn potential_energy(&self, q: &[f64]) -> f64 {
+        let linear = 0.5 * quadratic_form(self.stiffness.as_ref(), q)
+            - self.force.iter().zip(q).map(|(f, x)| f * x).sum::<f64>();
+        if self.nonlinear.is_empty() {
+            return linear;
+        }
+        linear
+            + self
+                .nonlinear
+                .iter()
+                .map(|r| r.energy(q).unwrap_or(f64::NAN))
+                .sum::<f64>()
+    }
+
+    /// Linear momentum along the first axis, `e_xᵀ M v` (kg·m/s), where `e_x` is 1 on
+    /// every x-component dof.
+    pub fn momentum(&self, v: &[f64]) -> f64 {
+        let m = self.mass.as_ref();
+        let mut s = 0.0;
+        for (j, &vj) in v.iter().enumerate() {
+            for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
+                if self.component[m.row_idx()[k]] == 0 {
+                    s += m.val()[k] * vj;
+                }
+            }
+        }
+        s
+    }
+
+    /// Total mass `e_xᵀ M e_x` (kg).
+    pub fn total_mass(&self) -> f64 {
+        let m = self.mass.as_ref();
+        let mut s = 0.0;
+        for j in (0..m.ncols()).filter(|&j| self.component[j] == 0) {
+            for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
+                if self.component[m.row_idx()[k]] == 0 {
+                    s += m.val()[k];
+                }
+            }
+        }
+        s
+    }
+}

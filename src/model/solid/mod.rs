@@ -1,0 +1,321 @@
+//! Isotropic linear elastic solids: element kernels (tri3, quad4, tet4, hex8) and their
+//! parallel assembly into the global `M` and `K` of a [`LinearSystem`].
+//!
+//! Kernels use nalgebra fixed-size matrices; quadrilaterals and hexahedra are
+//! integrated with 2×2 (×2) Gauss points, triangles and tetrahedra exactly with their
+//! constant strain. Consistent mass is `∫ ρ Nᵀ N`; lumped mass is its row sum
+//! (positive for these four linear elements). Stress is written in Voigt order
+//! `(xx, yy, zz, yz, xz, xy)` in 3-D and `(xx, yy, xy)` in 2-D, with engineering shear
+//! strains. An element whose Jacobian determinant is not positive at any integration
+//! point is reported as inverted, with its index.
+//!
+//! By role: the material, the formulation, the cell kinds and the mesh here;
+//! `quadrature` the integration points, `kernels` the element matrices,
+//! `assemble` the global assembly and the mesh checks, `stress` the cell-centre
+//! strains and stresses of the frames.
+
+use nalgebra::{Matrix2, Matrix3, SMatrix, Vector3};
+
+use super::{LinearSystem, MassKind};
+use crate::assembly::{Accumulate, PatternAssembler};
+use crate::error::{Error, require_in, require_positive};
+
+/// An isotropic elastic material: its small-strain constants and the law that holds at
+/// large strain.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// Young's modulus `E` (Pa).
+    pub young: f64,
+    /// Poisson's ratio `ν`, in [0, 0.5).
+    pub poisson: f64,
+    /// Density `ρ` (kg/m³).
+    pub density: f64,
+    /// The constitutive law (default `linear`).
+    #[serde(default)]
+    pub model: MaterialModel,
+}
+
+pub use super::material::MaterialModel;
+
+mod assemble;
+mod kernels;
+mod quadrature;
+mod stress;
+
+pub use assemble::*;
+pub use kernels::*;
+pub(in crate::model) use quadrature::*;
+pub use stress::*;
+
+impl Material {
+    /// Checks the ranges; the error names the field.
+    pub fn validate(&self) -> Result<(), Error> {
+        require_positive("young", self.young)?;
+        require_positive("density", self.density)?;
+        require_in("poisson", self.poisson, 0.0, 0.4999999)?;
+        Ok(())
+    }
+
+    /// Lamé parameters `(λ, μ)`.
+    pub fn lame(&self) -> (f64, f64) {
+        let (e, nu) = (self.young, self.poisson);
+        (
+            e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+            e / (2.0 * (1.0 + nu)),
+        )
+    }
+
+    /// 3-D elasticity matrix (Voigt, engineering shear).
+    pub fn d3(&self) -> SMatrix<f64, 6, 6> {
+        let (l, m) = self.lame();
+        let mut d = SMatrix::<f64, 6, 6>::zeros();
+        for i in 0..3 {
+            for j in 0..3 {
+                d[(i, j)] = l;
+            }
+            d[(i, i)] = l + 2.0 * m;
+            d[(i + 3, i + 3)] = m;
+        }
+        d
+    }
+
+    /// 2-D elasticity matrix for plane strain or plane stress.
+    pub fn d2(&self, f: Formulation) -> Matrix3<f64> {
+        let (e, nu) = (self.young, self.poisson);
+        match f {
+            Formulation::PlaneStress { .. } => {
+                let c = e / (1.0 - nu * nu);
+                Matrix3::new(
+                    c,
+                    c * nu,
+                    0.0,
+                    c * nu,
+                    c,
+                    0.0,
+                    0.0,
+                    0.0,
+                    c * (1.0 - nu) / 2.0,
+                )
+            }
+            _ => {
+                let (l, m) = self.lame();
+                Matrix3::new(l + 2.0 * m, l, 0.0, l, l + 2.0 * m, 0.0, 0.0, 0.0, m)
+            }
+        }
+    }
+}
+
+/// Kinematic assumption of the body.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Formulation {
+    /// 3-D solid (tet4, hex8).
+    Solid,
+    /// 2-D plane strain, unit thickness (tri3, quad4).
+    PlaneStrain,
+    /// 2-D plane stress with a thickness (m).
+    PlaneStress {
+        /// Out-of-plane thickness (m).
+        thickness: f64,
+    },
+    /// Axisymmetric about the y axis (tri3, quad4 in the half plane x = r ≥ 0, y = z):
+    /// the hoop strain `u_r / r` joins the in-plane strains and every integral carries
+    /// `2π r`; the body is the solid of revolution of its mesh,
+    /// so forces and masses are those of the whole ring.
+    Axisymmetric,
+}
+
+impl Formulation {
+    /// The scene file's spelling (`solid`, `plane-strain`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Formulation::Solid => "solid",
+            Formulation::PlaneStrain => "plane-strain",
+            Formulation::PlaneStress { .. } => "plane-stress",
+            Formulation::Axisymmetric => "axisymmetric",
+        }
+    }
+
+    /// Space dimension (dofs per node).
+    pub fn dim(self) -> usize {
+        match self {
+            Formulation::Solid => 3,
+            _ => 2,
+        }
+    }
+    fn thickness(self) -> f64 {
+        match self {
+            Formulation::PlaneStress { thickness } => thickness,
+            _ => 1.0,
+        }
+    }
+}
+
+/// Linear cell kinds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CellKind {
+    /// 3-node triangle.
+    Tri3,
+    /// 4-node quadrilateral (counter-clockwise).
+    Quad4,
+    /// 4-node tetrahedron (positive volume ordering).
+    Tet4,
+    /// 8-node hexahedron (VTK / Gmsh ordering).
+    Hex8,
+}
+
+impl CellKind {
+    /// Nodes per cell.
+    pub fn nodes(self) -> usize {
+        match self {
+            CellKind::Tri3 => 3,
+            CellKind::Quad4 | CellKind::Tet4 => 4,
+            CellKind::Hex8 => 8,
+        }
+    }
+    /// Space dimension of the cell.
+    pub fn dim(self) -> usize {
+        match self {
+            CellKind::Tri3 | CellKind::Quad4 => 2,
+            _ => 3,
+        }
+    }
+    /// Name as in meshes and messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            CellKind::Tri3 => "tri3",
+            CellKind::Quad4 => "quad4",
+            CellKind::Tet4 => "tet4",
+            CellKind::Hex8 => "hex8",
+        }
+    }
+}
+
+/// A mesh of one cell kind: points (always 3 coordinates; z = 0 in 2-D) and cells.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Node coordinates (m).
+    pub points: Vec<[f64; 3]>,
+    /// Cells: kind and node indices.
+    pub cells: Vec<(CellKind, Vec<usize>)>,
+    /// Named node sets (physical groups, point-data flags).
+    pub node_sets: std::collections::BTreeMap<String, Vec<usize>>,
+    /// The file's id of each point (Gmsh node tag, VTK point index); empty for generated
+    /// meshes, whose ids are the indices. Readers drop the nodes no cell uses and number
+    /// the rest in the order the cells first use them; the frames write these ids as
+    /// the `node_id` point array, to map results back to the input file.
+    pub node_ids: Vec<u64>,
+    /// The file's id of each cell (Gmsh element number, VTK cell index); empty for
+    /// generated meshes. Errors about a cell name it.
+    pub cell_ids: Vec<u64>,
+    /// The file the mesh was read from (errors about its cells name it).
+    pub source: Option<std::path::PathBuf>,
+}
+
+impl Mesh {
+    /// How errors name node `v`: its file tag and file for a mesh read from a file,
+    /// its index for a generated one.
+    pub fn node_label(&self, v: usize) -> String {
+        match (self.node_ids.get(v), &self.source) {
+            (Some(tag), Some(file)) => {
+                let f = file.file_name().map_or_else(
+                    || file.display().to_string(),
+                    |f| f.to_string_lossy().into_owned(),
+                );
+                format!("node {tag} (tag in {f})")
+            }
+            (Some(tag), None) => format!("node {tag} (file tag)"),
+            _ => format!("node {v} (index in the generated mesh)"),
+        }
+    }
+
+    /// Nodes on the boundary: those of the faces (edges in 2-D) that belong to exactly
+    /// one cell.
+    pub fn boundary_nodes(&self) -> Vec<usize> {
+        let all: Vec<usize> = (0..self.points.len()).collect();
+        let mut nodes: Vec<usize> = self.boundary_facets(&all).into_iter().flatten().collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        nodes
+    }
+
+    /// The boundary facets (edges in 2-D, faces in 3-D: those of exactly one cell) whose
+    /// nodes all lie in `set`, each ordered so that its normal points out of its cell:
+    /// an edge `(a, b)` has the body on its left (outward normal `(b − a)` turned by
+    /// −90°), a face is counter-clockwise seen from outside (outward normal
+    /// `(x₁ − x₀) × (x₂ − x₀)`, or `x_ξ × x_η` for a quadrilateral). The orientation is
+    /// taken from the cell's centroid, so it holds for any node order of the cells.
+    pub fn boundary_facets(&self, set: &[usize]) -> Vec<Vec<usize>> {
+        let mut inside = vec![false; self.points.len()];
+        for &v in set {
+            if let Some(f) = inside.get_mut(v) {
+                *f = true;
+            }
+        }
+        // sorted nodes → (oriented facet, count)
+        let mut seen: std::collections::BTreeMap<Vec<usize>, (Vec<usize>, usize)> =
+            Default::default();
+        for (kind, c) in &self.cells {
+            let faces: &[&[usize]] = match kind {
+                CellKind::Tri3 => &[&[0, 1], &[1, 2], &[2, 0]],
+                CellKind::Quad4 => &[&[0, 1], &[1, 2], &[2, 3], &[3, 0]],
+                CellKind::Tet4 => &[&[0, 1, 2], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]],
+                CellKind::Hex8 => &[
+                    &[0, 1, 2, 3],
+                    &[4, 5, 6, 7],
+                    &[0, 1, 5, 4],
+                    &[1, 2, 6, 5],
+                    &[2, 3, 7, 6],
+                    &[3, 0, 4, 7],
+                ],
+            };
+            let centroid = mean(c.iter().map(|&v| self.points[v]));
+            for f in faces {
+                let mut nodes: Vec<usize> = f.iter().map(|&a| c[a]).collect();
+                let mut key = nodes.clone();
+                key.sort_unstable();
+                if let Some(e) = seen.get_mut(&key) {
+                    e.1 += 1;
+                    continue;
+                }
+                let x: Vec<Vector3<f64>> = nodes
+                    .iter()
+                    .map(|&v| Vector3::from(self.points[v]))
+                    .collect();
+                let out = mean(x.iter().map(|p| (*p).into())) - centroid;
+                let normal = match x.len() {
+                    2 => {
+                        let t = x[1] - x[0];
+                        Vector3::new(t[1], -t[0], 0.0)
+                    }
+                    3 => (x[1] - x[0]).cross(&(x[2] - x[0])),
+                    _ => (x[2] - x[0]).cross(&(x[3] - x[1])),
+                };
+                if normal.dot(&out) < 0.0 {
+                    nodes.reverse();
+                    if nodes.len() == 4 {
+                        // keep the first node first (a cyclic order either way)
+                        nodes.rotate_right(1);
+                    }
+                }
+                seen.insert(key, (nodes, 1));
+            }
+        }
+        seen.into_values()
+            .filter(|(f, n)| *n == 1 && f.iter().all(|&v| inside[v]))
+            .map(|(f, _)| f)
+            .collect()
+    }
+}
+
+/// The centroid of `points`.
+fn mean(points: impl Iterator<Item = [f64; 3]>) -> Vector3<f64> {
+    let (mut s, mut n) = (Vector3::zeros(), 0.0);
+    for p in points {
+        s += Vector3::from(p);
+        n += 1.0;
+    }
+    s / n
+}
