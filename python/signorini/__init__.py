@@ -32,6 +32,7 @@ from ._signorini import __version__
 __all__ = [
     "Scene",
     "Simulation",
+    "Mesh",
     "SignoriniError",
     "BadInput",
     "RunFailed",
@@ -42,8 +43,24 @@ __all__ = [
 PathLike = Union[str, "os.PathLike[str]"]
 
 
+def _plain(value: Any) -> Any:
+    """``value`` with numpy scalars and arrays turned into Python numbers and lists
+    (recursively through dicts, lists and tuples), so that a number or a list may come
+    from numpy wherever one is accepted."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
 def _toml_value(value: Any, key: str) -> str:
     """A Python value as a TOML value for a ``--set`` override."""
+    value = _plain(value)
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, int):
@@ -67,7 +84,7 @@ def _overrides(set: Optional[Mapping[str, Any]]) -> List[str]:
 
 def _json(data: Any, what: str) -> str:
     try:
-        return json.dumps(data, allow_nan=False)
+        return json.dumps(_plain(data), allow_nan=False)
     except ValueError as e:
         raise BadInput(f"{what}: {e} (finite numbers are expected)") from None
     except TypeError as e:
@@ -203,15 +220,86 @@ class Scene:
         return f"<signorini.Scene ({kind}, {self.steps} steps)>"
 
 
+class Mesh:
+    """The mesh of a simulation's model and its dof map (``Simulation.mesh``).
+
+    - ``points``: ``(N, 3)`` reference coordinates (m);
+    - ``node_ids``: ``(N,)`` the input's id of each point (the mesh file's node tag, or
+      the index within its body for a generated mesh);
+    - ``point_body``: ``(N,)`` the body of each point (index into ``bodies``; −1 for a
+      point no cell uses);
+    - ``bodies``: the bodies' names, in the scene's order;
+    - ``cells``: ``{kind: (n, nodes) int64}`` connectivity by cell kind (``line``,
+      ``tri3``, ``quad4``, ``tet4``, ``hex8``; indices into ``points``), and
+      ``cell_bodies``: ``{kind: (n,)}`` the body of each of those cells;
+    - ``dim``: displacement components per point (1 for rods, 2 or 3 for solids);
+    - ``dof_map``: ``(N, dim)`` where each component is in ``q`` and ``v`` (−1: fixed
+      or moved at a prescribed velocity, so not an unknown).
+
+    ``nodal(x)`` turns a dof vector (``sim.q``, ``sim.v``) into ``(N, dim)`` nodal values,
+    NaN where a component is not an unknown."""
+
+    __slots__ = ("points", "node_ids", "point_body", "bodies", "cells", "cell_bodies", "dim", "dof_map")
+
+    def __init__(self, raw: Any):
+        points, node_ids, point_body, cells, dim, dof_map, bodies = raw
+        self.points: np.ndarray = points
+        self.node_ids: np.ndarray = node_ids
+        self.point_body: np.ndarray = point_body
+        self.bodies: List[str] = list(bodies)
+        self.dim: int = dim
+        self.dof_map: np.ndarray = dof_map
+        by_kind: Dict[str, List[List[int]]] = {}
+        body_of: Dict[str, List[int]] = {}
+        for kind, body, nodes in cells:
+            by_kind.setdefault(kind, []).append(nodes)
+            body_of.setdefault(kind, []).append(body)
+        self.cells: Dict[str, np.ndarray] = {
+            k: np.asarray(v, dtype=np.int64) for k, v in by_kind.items()
+        }
+        self.cell_bodies: Dict[str, np.ndarray] = {
+            k: np.asarray(v, dtype=np.int64) for k, v in body_of.items()
+        }
+
+    def nodal(self, x: Any) -> np.ndarray:
+        """The dof vector ``x`` (one value per unknown, as ``sim.q``) as ``(N, dim)``
+        nodal values, NaN where a component is fixed or prescribed."""
+        x = np.asarray(x, dtype=np.float64)
+        n_dofs = int(self.dof_map.max()) + 1 if self.dof_map.size else 0
+        if x.ndim != 1 or x.shape[0] != n_dofs:
+            raise BadInput(
+                f"invalid value for `x`: an array of shape {x.shape} (expected one value per "
+                f"unknown: shape ({n_dofs},), as `Simulation.q`)"
+            )
+        out = np.full(self.dof_map.shape, np.nan)
+        known = self.dof_map >= 0
+        out[known] = x[self.dof_map[known]]
+        return out
+
+    def __repr__(self) -> str:
+        kinds = ", ".join(f"{len(v)} {k}" for k, v in self.cells.items())
+        return f"<signorini.Mesh ({len(self.points)} points, {kinds}; {len(self.bodies)} bodies, dim {self.dim})>"
+
+
 class Simulation:
     """One run of a scene: :meth:`run` for the whole run as the CLI makes it (files
     included), or :meth:`step` for step-by-step control. Not both."""
 
-    __slots__ = ("scene", "_inner")
+    __slots__ = ("scene", "_inner", "_mesh")
 
     def __init__(self, scene: Scene):
         self.scene = scene
         self._inner = _Simulation(scene._inner)
+        self._mesh: Optional[Mesh] = None
+
+    @property
+    def mesh(self) -> Mesh:
+        """The model's mesh and dof map (:class:`Mesh`). Builds the model if nothing has
+        yet (the first :meth:`step` then integrates that model instead of building it
+        again)."""
+        if self._mesh is None:
+            self._mesh = Mesh(self._inner.mesh())
+        return self._mesh
 
     def run(
         self,

@@ -40,6 +40,17 @@ class _Simulation:
         plots: Optional[bool] = None,
     ) -> None: ...
     def step(self, n: int) -> int: ...
+    def mesh(
+        self,
+    ) -> Tuple[
+        npt.NDArray[np.float64],
+        npt.NDArray[np.uint64],
+        npt.NDArray[np.int64],
+        List[Tuple[str, int, List[int]]],
+        int,
+        npt.NDArray[np.int64],
+        List[str],
+    ]: ...
     @property
     def q(self) -> npt.NDArray[np.float64]: ...
     @property

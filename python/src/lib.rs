@@ -13,7 +13,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-use numpy::{IntoPyArray, PyArray1};
+use numpy::{IntoPyArray, PyArray1, PyArrayMethods};
 use pyo3::exceptions::{PyException, PyRuntimeError};
 use pyo3::prelude::*;
 
@@ -64,7 +64,45 @@ impl Kind {
             Kind::Bar(b) => b.steps(),
         }
     }
+
+    /// The model (mesh, assembly, contacts), as a run builds it.
+    fn build(&self) -> Result<signorini::scene::Model, Error> {
+        match self {
+            Kind::File(s) => Ok(s.build()?.0),
+            Kind::Bar(b) => b.build(),
+        }
+    }
+
+    /// The scheme's parameters and the step.
+    fn scheme_and_step(&self) -> (&signorini::integrators::SchemeParams, f64) {
+        match self {
+            Kind::File(s) => (&s.scheme, s.time.dt),
+            Kind::Bar(b) => (&b.scheme, b.dt),
+        }
+    }
+
+    /// The bodies' names, in the order of the model's bodies.
+    fn body_names(&self) -> Vec<String> {
+        match self {
+            Kind::File(s) => s.bodies.iter().map(|b| b.name.clone()).collect(),
+            Kind::Bar(_) => vec!["bar".to_string()],
+        }
+    }
 }
+
+/// The arrays of [`PySimulation::mesh`]: points `(N, 3)`, node ids `(N,)`, the body of
+/// each point `(N,)` (−1 for a point no cell uses), cells as `(kind, body, nodes)`, the
+/// displacement components per point and the dof map `(N, dim)` (−1: fixed or
+/// prescribed), and the bodies' names.
+type MeshArrays = (
+    Py<numpy::PyArray2<f64>>,
+    Py<PyArray1<u64>>,
+    Py<PyArray1<i64>>,
+    Vec<(String, usize, Vec<usize>)>,
+    usize,
+    Py<numpy::PyArray2<i64>>,
+    Vec<String>,
+);
 
 /// A validated scene (`signorini.Scene` wraps it).
 #[pyclass(module = "signorini._signorini", name = "_Scene", frozen)]
@@ -284,6 +322,11 @@ struct SimState {
     summary: Option<String>,
     history: Option<Columns>,
     out: Option<PathBuf>,
+    /// The model built for `mesh` before the first `step()`, which then integrates it
+    /// instead of building it again.
+    model: Option<signorini::scene::Model>,
+    /// The mesh and dof map of the built model (kept once the integrator has the rest).
+    geometry: Option<std::sync::Arc<signorini::model::geometry::Geometry>>,
 }
 
 impl SimState {
@@ -394,6 +437,8 @@ impl PySimulation {
             callback: progress,
             error: None,
         };
+        // a run builds its own model (the CLI's path): one built for `mesh` is freed
+        g.model = None;
         let kind = &self.kind;
         let result = py.detach(|| {
             let o = Output {
@@ -445,17 +490,21 @@ impl PySimulation {
         }
         if g.integ.is_none() {
             let kind = &self.kind;
+            let cached = g.model.take();
             let built = py.detach(|| -> Result<_, Error> {
-                let (model, params, dt) = match kind {
-                    Kind::File(s) => (s.build()?.0, &s.scheme, s.time.dt),
-                    Kind::Bar(b) => (b.build()?, &b.scheme, b.dt),
+                let mut model = match cached {
+                    Some(m) => m,
+                    None => kind.build()?,
                 };
+                let (params, dt) = kind.scheme_and_step();
                 let checks = RunChecks::new(params, model.geometry.size());
-                Ok((model.into_integrator(params, dt)?, checks))
+                let geometry = std::sync::Arc::new(std::mem::take(&mut model.geometry));
+                Ok((model.into_integrator(params, dt)?, checks, geometry))
             });
-            let (integ, checks) = built.map_err(py_err)?;
+            let (integ, checks, geometry) = built.map_err(py_err)?;
             g.integ = Some(integ);
             g.checks = Some(checks);
+            g.geometry = Some(geometry);
         }
         let total = self.kind.steps();
         let SimState {
@@ -506,6 +555,70 @@ impl PySimulation {
             py.check_signals()?;
         }
         Ok(integ.state().step)
+    }
+
+    /// The mesh of the model and where each nodal displacement component is in `q`
+    /// (module doc of the Python `Mesh`); builds the model when nothing has yet (the
+    /// first `step()` then integrates it without building it again).
+    fn mesh(&self, py: Python<'_>) -> PyResult<MeshArrays> {
+        let mut g = self.lock()?;
+        if g.geometry.is_none() {
+            let kind = &self.kind;
+            let mut model = py.detach(|| kind.build()).map_err(py_err)?;
+            g.geometry = Some(std::sync::Arc::new(std::mem::take(&mut model.geometry)));
+            if g.integ.is_none() && g.finished.is_none() {
+                g.model = Some(model);
+            }
+        }
+        let geo = g.geometry.clone().expect("built");
+        drop(g);
+        let n = geo.points.len();
+        let dim = geo.dim;
+        let points: Vec<f64> = geo.points.iter().flatten().copied().collect();
+        let ids: Vec<u64> = if geo.node_ids.len() == n {
+            geo.node_ids.clone()
+        } else {
+            (0..n as u64).collect()
+        };
+        let mut body = vec![-1_i64; n];
+        let mut cells = Vec::with_capacity(geo.cells.len());
+        for (kind, nodes, b) in &geo.cells {
+            for &p in nodes {
+                body[p] = *b as i64;
+            }
+            let name = match kind {
+                signorini::model::geometry::GeomCell::Line => "line".to_string(),
+                signorini::model::geometry::GeomCell::Solid(k) => k.name().to_string(),
+            };
+            cells.push((name, *b, nodes.clone()));
+        }
+        let dofs: Vec<i64> = (0..n * dim)
+            .map(|i| {
+                geo.dof_of
+                    .get(i)
+                    .copied()
+                    .flatten()
+                    .map_or(-1, |d| d as i64)
+            })
+            .collect();
+        let to2 = |v: Vec<f64>, cols: usize| {
+            numpy::PyArray1::from_vec(py, v)
+                .reshape([n, cols])
+                .map(|a| a.unbind())
+        };
+        let points = to2(points, 3)?;
+        let dof_map = numpy::PyArray1::from_vec(py, dofs)
+            .reshape([n, dim])?
+            .unbind();
+        Ok((
+            points,
+            ids.into_pyarray(py).unbind(),
+            body.into_pyarray(py).unbind(),
+            cells,
+            dim,
+            dof_map,
+            self.kind.body_names(),
+        ))
     }
 
     /// Nodal displacements `q` (m), one per dof (owned copy).

@@ -251,3 +251,71 @@ def test_reading_a_running_simulation_from_another_thread_raises_instead_of_bloc
     # either the run was still going (the read is refused, no deadlock) or it had ended
     assert not errors or "another thread" in errors[0]
     assert sim.steps_done == 10000
+
+
+# --- issue 37: the mesh, the dof map and numpy values -------------------------------
+
+
+def test_the_bar_mesh_maps_every_unknown_once():
+    """The reference bar: N + 1 points along x at L/N spacing (L = 1 m, N = 1000, the
+    built-in defaults), N line cells, one component per point, every unknown of `q` in
+    the dof map exactly once."""
+    sim = signorini.Scene.bar().simulation()
+    m = sim.mesh
+    n = 1000
+    assert m.points.shape == (n + 1, 3) and m.dim == 1 and m.bodies == ["bar"]
+    assert np.allclose(np.diff(m.points[:, 0]), 1.0 / n, rtol=1e-12)
+    assert m.cells["line"].shape == (n, 2) and (m.cell_bodies["line"] == 0).all()
+    dofs = m.dof_map[m.dof_map >= 0]
+    sim.step(1)
+    assert sorted(dofs.tolist()) == list(range(sim.q.shape[0]))
+
+
+def test_mesh_of_two_bodies_and_nodal_values_follow_the_state():
+    """`hex_bars.toml`: two hex8 bodies, three components per point; `nodal(q)` puts each
+    unknown at its point and component (checked against the dof map entry by entry), and
+    the model built for `mesh` is the one `step` integrates (same q as a fresh
+    simulation stepped without asking for the mesh)."""
+    scene = signorini.Scene.from_toml(MESHES / "hex_bars.toml")
+    sim = scene.simulation()
+    m = sim.mesh
+    assert m.bodies == ["striker", "target"]
+    assert m.dim == 3 and set(m.cells) == {"hex8"}
+    assert set(np.unique(m.cell_bodies["hex8"]).tolist()) == {0, 1}
+    # every point of a cell belongs to that cell's body
+    conn, body = m.cells["hex8"], m.cell_bodies["hex8"]
+    assert (m.point_body[conn] == body[:, None]).all()
+    sim.step(20)
+    other = scene.simulation()
+    other.step(20)
+    assert np.array_equal(sim.q, other.q)
+    u = m.nodal(sim.q)
+    assert u.shape == (len(m.points), 3)
+    known = m.dof_map >= 0
+    assert np.array_equal(u[known], sim.q[m.dof_map[known]])
+    assert np.isnan(u[~known]).all()
+    with pytest.raises(signorini.BadInput, match="one value per unknown"):
+        m.nodal(sim.q[:-1])
+
+
+def test_numpy_scalars_and_arrays_are_accepted_where_numbers_and_lists_are():
+    """numpy integers, floats and arrays in `Scene.bar`, `simulation`, `set=` and
+    `from_dict` give the runs that plain Python values give (the values converted
+    exactly: a float32 is its own float64 value)."""
+    plain = signorini.Scene.bar(elements=100, dt=1e-6).simulation()
+    plain.run()
+    numpy = signorini.Scene.bar(elements=np.int64(100), dt=np.float64(1e-6)).simulation()
+    numpy.run()
+    assert np.array_equal(plain.q, numpy.q)
+    for n in np.arange(50, 70, 10):
+        assert signorini.Scene.bar(elements=n).steps > 0
+    f32 = signorini.Scene.bar(elements=100, dt=np.float32(1e-6))
+    assert f32.to_dict()["dt"] == float(np.float32(1e-6))
+    scene = signorini.Scene.from_toml(
+        MESHES / "two_bars.toml", set={"time.t_end": np.float64(2e-4)}
+    )
+    assert scene.to_dict()["time"]["t_end"] == 2e-4
+    d = scene.to_dict()
+    d["bodies"][0]["velocity"] = np.asarray(d["bodies"][0]["velocity"])
+    again = signorini.Scene.from_dict(d, base_dir=MESHES)
+    assert again.to_dict() == scene.to_dict()
