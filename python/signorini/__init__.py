@@ -21,7 +21,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Union
+from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Tuple, Union
 
 import numpy as np
 
@@ -33,6 +33,7 @@ __all__ = [
     "Scene",
     "Simulation",
     "Mesh",
+    "History",
     "SignoriniError",
     "BadInput",
     "RunFailed",
@@ -91,6 +92,15 @@ def _json(data: Any, what: str) -> str:
         raise BadInput(f"{what}: {e}") from None
 
 
+def _bar(params: Mapping[str, Any]) -> _Scene:
+    """The built-in bar from its parameters, errors in the keyword arguments' spelling
+    (the library names the end time by its CLI flag, `t-end`)."""
+    try:
+        return _Scene.bar(_json(params, "Scene.bar"))
+    except BadInput as e:
+        raise BadInput(str(e).replace("`t-end`", "`t_end`")) from None
+
+
 class Scene:
     """A validated scene: a scene file, a dict of its tables, the built-in bar or one of
     the paper's examples. Immutable: :meth:`simulation` takes the run's parameters."""
@@ -98,6 +108,11 @@ class Scene:
     __slots__ = ("_inner",)
 
     def __init__(self, inner: _Scene):
+        if not isinstance(inner, _Scene):
+            raise TypeError(
+                f"Scene() is made by Scene.from_toml(path or text), Scene.from_dict(tables), "
+                f"Scene.bar(**params) or Scene.example(name), not from a {type(inner).__name__}"
+            )
         self._inner = inner
 
     @classmethod
@@ -106,10 +121,12 @@ class Scene:
         ending in ``.toml``) or from TOML text (any other string; relative mesh paths
         then start from the working directory). ``set`` overrides keys as ``signorini
         run --set`` does: ``{"time.dt": 1e-6}``."""
+        # a string without `=` holds no TOML key: it names a file (a missing suffix or a
+        # wrong directory then reads as "no such file", not as a TOML syntax error)
         if isinstance(source, os.PathLike) or (
             isinstance(source, str)
             and "\n" not in source
-            and (source.endswith(".toml") or os.path.exists(source))
+            and (source.endswith(".toml") or os.path.exists(source) or "=" not in source)
         ):
             return cls(_Scene.from_file(os.fspath(source), _overrides(set)))
         return cls(_Scene.from_text(source, _overrides(set)))
@@ -135,7 +152,7 @@ class Scene:
         parameters, or its name)."""
         if isinstance(params.get("scheme"), str):
             params["scheme"] = {"kind": params["scheme"]}
-        return cls(_Scene.bar(_json(params, "bar")))
+        return cls(_bar(params))
 
     @classmethod
     def example(cls, name: str) -> "Scene":
@@ -191,7 +208,7 @@ class Scene:
                 for part in path:
                     node = node.setdefault(part, {})
                 node[last] = value
-            return Scene(_Scene.bar(_json(p, "bar")))
+            return Scene(_bar(p))
         keys: Dict[str, Any] = {}
         if scheme is not None:
             keys["scheme.kind"] = scheme
@@ -234,15 +251,30 @@ class Mesh:
       ``cell_bodies``: ``{kind: (n,)}`` the body of each of those cells;
     - ``dim``: displacement components per point (1 for rods, 2 or 3 for solids);
     - ``dof_map``: ``(N, dim)`` where each component is in ``q`` and ``v`` (−1: fixed
-      or moved at a prescribed velocity, so not an unknown).
+      or moved at a prescribed velocity, so not an unknown);
+    - ``contacts``: the contact list in the order of ``sim.gaps`` and ``sim.impulses``
+      and of the history's per-contact columns: ``{"point": (m,), "node_id": (m,),
+      "body": (m,), "target": (m,) str, "entry": (m,)}`` (the node, its body, the
+      obstacle or body it meets, the scene's ``[[contacts]]`` entry); empty for the
+      academic examples, whose contacts are not mesh nodes.
 
     ``nodal(x)`` turns a dof vector (``sim.q``, ``sim.v``) into ``(N, dim)`` nodal values,
     NaN where a component is not an unknown."""
 
-    __slots__ = ("points", "node_ids", "point_body", "bodies", "cells", "cell_bodies", "dim", "dof_map")
+    __slots__ = (
+        "points",
+        "node_ids",
+        "point_body",
+        "bodies",
+        "cells",
+        "cell_bodies",
+        "dim",
+        "dof_map",
+        "contacts",
+    )
 
     def __init__(self, raw: Any):
-        points, node_ids, point_body, cells, dim, dof_map, bodies = raw
+        points, node_ids, point_body, cells, dim, dof_map, bodies, contacts = raw
         self.points: np.ndarray = points
         self.node_ids: np.ndarray = node_ids
         self.point_body: np.ndarray = point_body
@@ -259,6 +291,14 @@ class Mesh:
         }
         self.cell_bodies: Dict[str, np.ndarray] = {
             k: np.asarray(v, dtype=np.int64) for k, v in body_of.items()
+        }
+        point = np.asarray([c[0] for c in contacts], dtype=np.int64)
+        self.contacts: Dict[str, np.ndarray] = {
+            "point": point,
+            "node_id": node_ids[point] if len(point) else np.zeros(0, dtype=np.uint64),
+            "body": np.asarray([c[1] for c in contacts], dtype=np.int64),
+            "target": np.asarray([c[2] for c in contacts], dtype=str),
+            "entry": np.asarray([c[3] for c in contacts], dtype=np.int64),
         }
 
     def nodal(self, x: Any) -> np.ndarray:
@@ -278,7 +318,144 @@ class Mesh:
 
     def __repr__(self) -> str:
         kinds = ", ".join(f"{len(v)} {k}" for k, v in self.cells.items())
-        return f"<signorini.Mesh ({len(self.points)} points, {kinds}; {len(self.bodies)} bodies, dim {self.dim})>"
+        return (
+            f"<signorini.Mesh ({len(self.points)} points, {kinds}; {len(self.bodies)} bodies, "
+            f"dim {self.dim}; {len(self.contacts['point'])} contacts)>"
+        )
+
+
+#: Units of the history's columns (SI; "" for counts and flags). `projection` is τ of
+#: eq. 28: metres with the Euclidean metric, kg·m with the M̂⁻¹ metric (q moves by N G τ).
+_UNITS = {
+    "step": "",
+    "time": "s",
+    "kinetic_energy": "J",
+    "potential_energy": "J",
+    "max_violation": "m",
+    "newton_iterations": "",
+    "projection_iterations": "",
+    "index_set_iterations": "",
+    "closed_contacts": "",
+    "total_impulse": "N·s",
+    "min_gap": "m",
+    "total_projection": "m or kg·m (τ, eq. 28)",
+    "total_tangent_impulse": "N·s",
+    "sticking": "",
+    "slipping": "",
+    "friction_iterations": "",
+    "friction_residual": "",
+    "gap": "m",
+    "velocity": "m/s",
+    "impulse": "N·s",
+    "projection": "m or kg·m (τ, eq. 28)",
+    "tangent_impulse": "N·s",
+    "slip_velocity": "m/s",
+    "status": "",
+}
+
+#: The per-contact quantities of the history (`gap_c`, …), then those with a tangent
+#: index too (`tangent_impulse_c_t`, …).
+_PER_CONTACT = ("gap", "velocity", "impulse", "projection", "status")
+_PER_TANGENT = ("tangent_impulse", "slip_velocity")
+
+
+def _split(name: str) -> Tuple[str, Tuple[int, ...]]:
+    """A column's quantity and its indices: ``impulse_3`` → ``("impulse", (3,))``,
+    ``tangent_impulse_3_1`` → ``("tangent_impulse", (3, 1))``, ``time`` → ``("time", ())``."""
+    parts = name.split("_")
+    idx: List[int] = []
+    while parts and parts[-1].isdigit():
+        idx.insert(0, int(parts.pop()))
+    return "_".join(parts), tuple(idx)
+
+
+class History(dict):
+    """The run's history (``history.csv``) as a dict of ``float64`` arrays, one per
+    column in the file's order, plus the same numbers shaped by meaning:
+
+    - ``time``: ``(steps,)`` s;
+    - ``contacts``: how many contacts have their own columns (0 past 256 contacts, where
+      the file keeps the sums: ``closed_contacts``, ``total_impulse``, …);
+    - ``per_contact(q)``: ``(steps, contacts)`` for ``gap``, ``velocity``, ``impulse``,
+      ``projection``, ``status``; ``(steps, contacts, tangents)`` for
+      ``tangent_impulse`` and ``slip_velocity`` (contact ``c`` is ``mesh.contacts[c]``);
+    - ``unit(name)``: a column's or a quantity's SI unit (``""`` for counts);
+    - ``to_pandas()``: a DataFrame indexed by time, units in ``df.attrs["units"]``;
+    - ``to_xarray()``: a Dataset on dimensions ``time``, ``contact``, ``tangent``, each
+      variable with its ``units`` attribute.
+    """
+
+    @property
+    def time(self) -> np.ndarray:
+        """Times (s), one per row."""
+        return self["time"]
+
+    @property
+    def contacts(self) -> int:
+        """Contacts with their own columns."""
+        return sum(1 for k in self if _split(k)[0] == "gap" and len(_split(k)[1]) == 1)
+
+    def per_contact(self, quantity: str) -> np.ndarray:
+        """``quantity`` for every contact: ``(steps, contacts)``, or
+        ``(steps, contacts, tangents)`` for the tangential ones."""
+        if quantity not in _PER_CONTACT + _PER_TANGENT:
+            raise BadInput(
+                f"invalid value for `quantity`: {quantity!r} (expected one of "
+                f"{', '.join(_PER_CONTACT + _PER_TANGENT)})"
+            )
+        cols = {idx: v for k, v in self.items() for q, idx in [_split(k)] if q == quantity}
+        steps = len(self["time"])
+        if not cols:
+            if self.contacts == 0 and "total_impulse" in self:
+                raise BadInput(
+                    f"invalid value for `quantity`: {quantity!r} (this history keeps the sums "
+                    f"over its contacts, not one column per contact: set "
+                    f'[output] contact_columns = "all" in the scene)'
+                )
+            return np.zeros((steps, self.contacts) + ((0,) if quantity in _PER_TANGENT else ()))
+        shape = tuple(max(i[d] for i in cols) + 1 for d in range(len(next(iter(cols)))))
+        out = np.full((steps,) + shape, np.nan)
+        for idx, v in cols.items():
+            out[(slice(None),) + idx] = v
+        return out
+
+    def unit(self, name: str) -> str:
+        """The SI unit of a column (``impulse_3``) or a quantity (``impulse``)."""
+        q = _split(name)[0]
+        if q not in _UNITS:
+            raise BadInput(f"invalid value for `name`: {name!r} (not a history column)")
+        return _UNITS[q]
+
+    def to_pandas(self) -> Any:
+        """The history as a pandas DataFrame indexed by ``time`` (s), one column per
+        history column, units in ``df.attrs["units"]`` (needs pandas)."""
+        import pandas as pd
+
+        df = pd.DataFrame({k: v for k, v in self.items() if k != "time"}, index=self["time"])
+        df.index.name = "time"
+        df.attrs["units"] = {k: self.unit(k) for k in self}
+        return df
+
+    def to_xarray(self) -> Any:
+        """The history as an xarray Dataset: scalar columns on ``time``, the per-contact
+        quantities on ``(time, contact)`` and the tangential ones on
+        ``(time, contact, tangent)``, each with its ``units`` (needs xarray)."""
+        import xarray as xr
+
+        data: Dict[str, Any] = {}
+        done = set()
+        for k, v in self.items():
+            q, idx = _split(k)
+            if k == "time":
+                continue
+            if idx and q in _PER_CONTACT + _PER_TANGENT:
+                if q not in done:
+                    dims = ("time", "contact") + (("tangent",) if q in _PER_TANGENT else ())
+                    data[q] = (dims, self.per_contact(q), {"units": _UNITS[q]})
+                    done.add(q)
+            else:
+                data[k] = (("time",), v, {"units": self.unit(k)})
+        return xr.Dataset(data, coords={"time": ("time", self["time"], {"units": "s"})})
 
 
 class Simulation:
@@ -376,10 +553,32 @@ class Simulation:
         return json.loads(s)
 
     @property
-    def history(self) -> Dict[str, np.ndarray]:
-        """``history.csv`` of the run as a dict of ``float64`` arrays, one per column in the
-        file's order (after :meth:`run`; the same numbers, bit for bit)."""
-        return dict(self._inner.history_columns())
+    def history(self) -> "History":
+        """``history.csv`` of the run as a :class:`History`: a dict of ``float64`` arrays,
+        one per column in the file's order (after :meth:`run`; the same numbers, bit for
+        bit), with the per-contact columns also as ``(steps, contacts)`` arrays, units,
+        and ``to_pandas()`` / ``to_xarray()``."""
+        return History(self._inner.history_columns())
+
+    @property
+    def probes(self) -> Dict[str, Dict[str, Any]]:
+        """The scene's ``[[probes]]`` after :meth:`run`, by name: ``times`` ``(k,)`` (s),
+        ``displacement`` ``(k, dim)`` (m, the mean over the probe's nodes), ``node_count``,
+        ``body`` and ``nodes`` (the set), and for a rod ``analytic`` ``(k, dim)`` when the
+        summary has it."""
+        out: Dict[str, Dict[str, Any]] = {}
+        for p in self.summary.get("probes", []):
+            d: Dict[str, Any] = {
+                "times": np.asarray(p["times"], dtype=np.float64),
+                "displacement": np.asarray(p["displacement"], dtype=np.float64),
+                "node_count": p["node_count"],
+                "body": p["body"],
+                "nodes": p["nodes"],
+            }
+            if p.get("analytic") is not None:
+                d["analytic"] = np.asarray(p["analytic"], dtype=np.float64)
+            out[p["name"]] = d
+        return out
 
     @property
     def out(self) -> Optional[str]:

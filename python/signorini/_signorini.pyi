@@ -50,6 +50,7 @@ class _Simulation:
         int,
         npt.NDArray[np.int64],
         List[str],
+        List[Tuple[int, int, str, int]],
     ]: ...
     @property
     def q(self) -> npt.NDArray[np.float64]: ...

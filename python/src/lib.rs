@@ -93,7 +93,7 @@ impl Kind {
 /// The arrays of [`PySimulation::mesh`]: points `(N, 3)`, node ids `(N,)`, the body of
 /// each point `(N,)` (−1 for a point no cell uses), cells as `(kind, body, nodes)`, the
 /// displacement components per point and the dof map `(N, dim)` (−1: fixed or
-/// prescribed), and the bodies' names.
+/// prescribed), the bodies' names, and the contacts as `(point, body, target, entry)`.
 type MeshArrays = (
     Py<numpy::PyArray2<f64>>,
     Py<PyArray1<u64>>,
@@ -102,6 +102,7 @@ type MeshArrays = (
     usize,
     Py<numpy::PyArray2<i64>>,
     Vec<String>,
+    Vec<(usize, usize, String, usize)>,
 );
 
 /// A validated scene (`signorini.Scene` wraps it).
@@ -242,11 +243,27 @@ fn strip_nulls(v: &mut serde_json::Value) {
     }
 }
 
-/// serde_json with the key path in the message (`scheme.kind: unknown variant …`).
+/// The bar's parameters from JSON, an error naming the parameter by its key path in
+/// Python's spelling (`scheme.kind`, `dt`) instead of a line and column of the JSON text.
 fn serde_path_to_error_free<T: serde::de::DeserializeOwned>(
     de: &mut serde_json::Deserializer<serde_json::de::StrRead<'_>>,
 ) -> PyResult<T> {
-    T::deserialize(de).map_err(|e| BadInput::new_err(format!("bar: {e}")))
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.inner().to_string();
+        // serde_json's message ends with the position in the JSON text, which the
+        // caller never wrote
+        let msg = inner
+            .rsplit_once(" at line ")
+            .map_or(inner.as_str(), |(m, _)| m)
+            .replace("expected f64", "expected a number")
+            .replace("expected usize", "expected a whole number ≥ 0");
+        if path == "." {
+            BadInput::new_err(format!("Scene.bar: {msg}"))
+        } else {
+            BadInput::new_err(format!("invalid value for `{path}`: {msg}"))
+        }
+    })
 }
 
 /// Calls the Python progress callback and watches for Ctrl-C while the run holds no GIL.
@@ -618,6 +635,10 @@ impl PySimulation {
             dim,
             dof_map,
             self.kind.body_names(),
+            geo.contacts
+                .iter()
+                .map(|c| (c.point, c.body, c.target.clone(), c.entry))
+                .collect(),
         ))
     }
 

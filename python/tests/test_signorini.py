@@ -319,3 +319,99 @@ def test_numpy_scalars_and_arrays_are_accepted_where_numbers_and_lists_are():
     d["bodies"][0]["velocity"] = np.asarray(d["bodies"][0]["velocity"])
     again = signorini.Scene.from_dict(d, base_dir=MESHES)
     assert again.to_dict() == scene.to_dict()
+
+
+def test_the_contact_list_matches_the_gaps():
+    """`mesh.contacts` is in the order of `sim.gaps`: on the ball drop (a plane under a
+    tet4 ball released 1 cm above it, meshes/ball_drop.toml) each contact's starting gap
+    is its node's height above the plane; on two bars the one contact is the striker's
+    end against the target body."""
+    scene = signorini.Scene.from_toml(MESHES / "ball_drop.toml")
+    sim = scene.simulation()
+    m = sim.mesh
+    c = m.contacts
+    sim.step(1)
+    assert len(c["point"]) == len(sim.gaps) > 0
+    assert c["target"].tolist() == ["floor"] * len(sim.gaps)
+    assert (c["body"] == 0).all() and (c["entry"] == 0).all()
+    # the floor is z = -0.01 m with normal +z: after one step from rest each gap is its
+    # node's height above it (the step moves a node by g dt² / 2, far below 1e-6 m)
+    heights = m.points[c["point"], 2] + 0.01
+    assert np.allclose(sim.gaps, heights, rtol=0, atol=1e-6)
+    bars = signorini.Scene.from_toml(MESHES / "two_bars.toml").simulation()
+    mb = bars.mesh
+    assert mb.contacts["target"].tolist() == [mb.bodies[1]]
+    assert mb.contacts["body"].tolist() == [0]
+
+
+def test_history_shaped_by_meaning_with_units():
+    """`sim.history` is still the flat dict of the file's columns, and also gives the
+    per-contact quantities as (steps, contacts[, tangents]) arrays equal to those columns,
+    their units, and pandas / xarray views (tested where the packages are installed)."""
+    bar = signorini.Scene.bar(elements=100, dt=1e-6).simulation()
+    bar.run()
+    h = bar.history
+    assert isinstance(h, dict) and list(h)[:2] == ["step", "time"]
+    assert h.contacts == 1
+    p = h.per_contact("impulse")
+    assert p.shape == (len(h.time), 1) and np.array_equal(p[:, 0], h["impulse_0"])
+    assert h.unit("impulse_0") == "N·s" and h.unit("gap") == "m" and h.unit("time") == "s"
+    with pytest.raises(signorini.BadInput, match="expected one of"):
+        h.per_contact("force")
+    # friction: 25 contacts, two tangents each (meshes/sliding_block.toml)
+    block = signorini.Scene.from_toml(MESHES / "sliding_block.toml").simulation()
+    block.run()
+    hb = block.history
+    assert hb.contacts == 25
+    t = hb.per_contact("tangent_impulse")
+    assert t.shape == (len(hb.time), 25, 2)
+    assert np.array_equal(t[:, 7, 1], hb["tangent_impulse_7_1"])
+    assert np.array_equal(hb.per_contact("status")[:, 3], hb["status_3"])
+    # the probes: the scene's times, one mean displacement (m) per time
+    pr = block.probes["mean"]
+    assert pr["times"].tolist() == [0.1, 0.2, 0.3, 0.4]
+    assert pr["displacement"].shape == (4, 3)
+    pd = pytest.importorskip("pandas")
+    df = hb.to_pandas()
+    assert isinstance(df, pd.DataFrame) and df.index.name == "time"
+    assert np.array_equal(df["impulse_3"].to_numpy(), hb["impulse_3"])
+    assert df.attrs["units"]["slip_velocity_0_0"] == "m/s"
+
+
+def test_history_to_xarray():
+    xr = pytest.importorskip("xarray")
+    block = signorini.Scene.from_toml(MESHES / "sliding_block.toml").simulation()
+    block.run()
+    ds = block.history.to_xarray()
+    assert isinstance(ds, xr.Dataset)
+    assert ds["tangent_impulse"].dims == ("time", "contact", "tangent")
+    assert ds["gap"].shape == (len(block.history.time), 25)
+    assert ds["gap"].attrs["units"] == "m"
+
+
+def test_errors_name_python_arguments_not_json_positions_or_cli_flags():
+    """Issue 37 §5: the bar's bad parameters are named by their keyword (and key path
+    inside `scheme`), never by a line and column of the JSON the package wrote, nor by
+    the CLI's flag; a path without its suffix reads as a missing file; `Scene(str)` is
+    refused at once."""
+    cases = [
+        (lambda: signorini.Scene.bar(dt="1e-6"), "invalid value for `dt`: invalid type: string"),
+        (lambda: signorini.Scene.bar(elemnts=100), "unknown field `elemnts`, expected one of"),
+        (lambda: signorini.Scene.bar().simulation(t_end=-1), "invalid value for `t_end`: -1"),
+        (
+            lambda: signorini.Scene.bar().simulation(scheme="moreau"),
+            "invalid value for `scheme.kind`: unknown variant `moreau`",
+        ),
+        (
+            lambda: signorini.Scene.from_toml(str(MESHES / "ball_drop")),
+            "ball_drop",
+        ),
+    ]
+    for make, expected in cases:
+        with pytest.raises(signorini.BadInput) as e:
+            make()
+        assert expected in str(e.value), str(e.value)
+        assert "at line" not in str(e.value) and "column" not in str(e.value), str(e.value)
+        assert "t-end" not in str(e.value)
+    with pytest.raises(TypeError, match="Scene.from_toml"):
+        signorini.Scene("meshes/bar.toml")

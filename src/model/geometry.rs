@@ -41,6 +41,23 @@ pub struct Geometry {
     pub prescribed: Vec<(usize, f64, usize)>,
     /// The time functions `φ` of `prescribed`.
     pub prescribed_functions: Vec<crate::model::TimeFunction>,
+    /// Each contact of the contact set, in its order: where it is and what it meets
+    /// (empty for the academic examples, whose contacts are not mesh nodes).
+    pub contacts: Vec<ContactPoint>,
+}
+
+/// One contact of a built model as a user names it: a node of a body against an obstacle
+/// or another body's surface.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ContactPoint {
+    /// The node (index into [`Geometry::points`]).
+    pub point: usize,
+    /// Its body (index into [`Geometry::bodies`]).
+    pub body: usize,
+    /// What it meets: an obstacle's name, or the target body's name.
+    pub target: String,
+    /// The scene's `[[contacts]]` entry it comes from (0 for the built-in bars).
+    pub entry: usize,
 }
 
 impl Geometry {

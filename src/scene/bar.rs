@@ -137,6 +137,13 @@ impl BarScene {
             ),
             geometry: Geometry {
                 outlines: vec![wall(-self.gap, 0.2 * self.length)],
+                // the one contact: the end x = 0 against the wall
+                contacts: vec![crate::model::geometry::ContactPoint {
+                    point: 0,
+                    body: 0,
+                    target: "wall".to_string(),
+                    entry: 0,
+                }],
                 ..Geometry::rod(self.length, self.elements, self.young, self.density)
             },
             probes: Vec::new(),

@@ -141,6 +141,15 @@ impl SolidBarScene {
             bodies: vec![(self.material, Formulation::Solid)],
             dim: 3,
             dof_of: (0..n).map(Some).collect(),
+            contacts: face
+                .iter()
+                .map(|&v| crate::model::geometry::ContactPoint {
+                    point: v,
+                    body: 0,
+                    target: "wall".to_string(),
+                    entry: 0,
+                })
+                .collect(),
             ..Geometry::default()
         };
         let mut system = system;

@@ -369,6 +369,14 @@ impl Scene {
                     }
                 ));
                 sets.push(set.0);
+                geometry.contacts.extend(nodes.iter().map(|&v| {
+                    crate::model::geometry::ContactPoint {
+                        point: point_base[bi] + v,
+                        body: bi,
+                        target: t.body.clone(),
+                        entry: ci,
+                    }
+                }));
                 continue;
             }
             let obstacle = self.obstacle(c);
@@ -401,6 +409,14 @@ impl Scene {
             )
             .map_err(at)?;
             sets.push(set);
+            geometry
+                .contacts
+                .extend(nodes.iter().map(|&v| crate::model::geometry::ContactPoint {
+                    point: point_base[bi] + v,
+                    body: bi,
+                    target: obstacle.name().to_string(),
+                    entry: ci,
+                }));
         }
         geometry.outlines = self
             .obstacles
