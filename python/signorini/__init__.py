@@ -44,6 +44,12 @@ __all__ = [
 PathLike = Union[str, "os.PathLike[str]"]
 
 
+def __dir__() -> List[str]:
+    """The public names only (tab completion on ``signorini.`` offers the API, not the
+    module's imports)."""
+    return list(__all__)
+
+
 def _plain(value: Any) -> Any:
     """``value`` with numpy scalars and arrays turned into Python numbers and lists
     (recursively through dicts, lists and tuples), so that a number or a list may come

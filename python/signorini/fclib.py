@@ -7,13 +7,18 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Any, Dict, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
-from ._signorini import fclib_read, fclib_solve_arrays, fclib_solve_file
+from ._signorini import BadInput, fclib_read, fclib_solve_arrays, fclib_solve_file
 
 __all__ = ["solve", "read"]
+
+
+def __dir__() -> List[str]:
+    """The public names only (tab completion offers the API, not the imports)."""
+    return list(__all__)
 
 
 def read(path: Union[str, "os.PathLike[str]"]) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -47,8 +52,20 @@ def solve(
         if hasattr(W, "toarray"):  # scipy.sparse
             W = W.toarray()
         W = np.asarray(W, dtype=np.float64)
+        if W.ndim != 2:
+            raise BadInput(
+                f"invalid value for `W`: an array of shape {W.shape} (expected a matrix, n × n)"
+            )
+        for name, value in (("q", q), ("mu", mu)):
+            if value is None:
+                raise BadInput(f"missing `{name}`: W given as a matrix needs q and mu")
         q = np.ascontiguousarray(q, dtype=np.float64)
         mu = np.ascontiguousarray(mu, dtype=np.float64)
         r0 = None if r0 is None else np.ascontiguousarray(r0, dtype=np.float64)
+        for name, value in (("q", q), ("mu", mu), ("r0", r0)):
+            if value is not None and value.ndim != 1:
+                raise BadInput(
+                    f"invalid value for `{name}`: an array of shape {value.shape} (expected a vector)"
+                )
         r, u, report = fclib_solve_arrays(W, q, mu, solver, tol, max_iter, residual, r0)
     return {"r": r, "u": u, "report": json.loads(report)}

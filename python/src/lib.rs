@@ -801,11 +801,31 @@ fn fclib_solve_arrays(
 ) -> PyResult<Solved> {
     let (w, q, mu) = (w.as_array(), q.as_array(), mu.as_array());
     let n = q.len();
-    if w.dim() != (n, n) {
+    let (wr, wc) = w.dim();
+    if wr != wc {
         return Err(BadInput::new_err(format!(
-            "invalid value for `W`: shape {:?} (expected ({n}, {n}) for q of {n} rows)",
-            w.dim()
+            "invalid value for `W`: shape ({wr}, {wc}) (expected a square matrix)"
         )));
+    }
+    if wr != n {
+        return Err(BadInput::new_err(format!(
+            "invalid value for `q`: {n} values (expected one per row of W: {wr})"
+        )));
+    }
+    if let Some(r) = &r0 {
+        let r = r.as_array();
+        if r.len() != n {
+            return Err(BadInput::new_err(format!(
+                "invalid value for `r0`: {} values (expected one per row of W: {n})",
+                r.len()
+            )));
+        }
+        if let Some(i) = r.iter().position(|x| !x.is_finite()) {
+            return Err(BadInput::new_err(format!(
+                "invalid value for `r0`: entry {i} is {} (a warm start must be finite)",
+                r[i]
+            )));
+        }
     }
     if mu.is_empty() || n % mu.len() != 0 {
         return Err(BadInput::new_err(format!(

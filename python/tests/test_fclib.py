@@ -62,11 +62,38 @@ def test_one_contact_in_closed_form_dense_and_sparse():
 
 
 def test_bad_problems_raise_with_the_message():
-    with pytest.raises(BadInput, match="shape"):
+    with pytest.raises(BadInput, match="`q`: 3 values"):
         fclib.solve(np.eye(2), np.zeros(3), [0.1])
+    with pytest.raises(BadInput, match="expected a square matrix"):
+        fclib.solve(np.ones((3, 2)), np.zeros(3), [0.1])
     with pytest.raises(BadInput, match="mu"):
         fclib.solve(np.eye(3), np.zeros(3), [-0.1])
     with pytest.raises(BadInput, match="solver"):
         fclib.solve(np.eye(3), np.zeros(3), [0.1], solver="lemke")
     with pytest.raises(BadInput, match="no-such.dat"):
         fclib.solve("no-such.dat")
+
+
+def test_array_inputs_are_named_when_wrong():
+    """Issue 37 §5, §7: a short `q`, a 1-D `W`, a missing `mu`, and a warm start of the
+    wrong length or with a NaN are refused with the argument's name (before, a short `q`
+    was reported as a wrong shape of `W`, a 1-D `W` as "dimensionality mismatch", and a
+    bad warm start was ignored)."""
+    W = np.eye(3)
+    q = np.array([-1.0, 0.0, 0.0])
+    mu = np.array([0.5])
+    cases = [
+        (lambda: fclib.solve(W, q[:2], mu), "`q`: 2 values"),
+        (lambda: fclib.solve(np.ones(9), q, mu), "`W`: an array of shape (9,)"),
+        (lambda: fclib.solve(W, q), "missing `mu`"),
+        (lambda: fclib.solve(W, q, mu, r0=np.zeros(2)), "`r0`: 2 values"),
+        (lambda: fclib.solve(W, q, mu, r0=np.array([np.nan, 0.0, 0.0])), "`r0`: entry 0 is NaN"),
+    ]
+    for make, expected in cases:
+        with pytest.raises(BadInput) as e:
+            make()
+        assert expected in str(e.value), str(e.value)
+    # the right warm start is taken: from the solution, no iteration is left to do
+    sol = fclib.solve(W, q, mu)
+    again = fclib.solve(W, q, mu, r0=sol["r"])
+    assert np.array_equal(again["r"], sol["r"])

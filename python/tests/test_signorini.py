@@ -415,3 +415,16 @@ def test_errors_name_python_arguments_not_json_positions_or_cli_flags():
         assert "t-end" not in str(e.value)
     with pytest.raises(TypeError, match="Scene.from_toml"):
         signorini.Scene("meshes/bar.toml")
+
+
+def test_progress_is_called_at_most_1000_times_and_dir_lists_the_api():
+    """Issue 37 §8–9: `progress(step, total)` is called at most 1000 times, the last at
+    the last step (1500 steps gave 1500 calls before); `dir(signorini)` (what tab
+    completion offers) is the public API, without the module's imports."""
+    calls = []
+    sim = signorini.Scene.bar(elements=100, dt=1e-6, t_end=1.5e-3).simulation()
+    sim.run(progress=lambda k, n: calls.append((k, n)))
+    total = sim.steps_total
+    assert total == 1500 and 0 < len(calls) <= 1000 and calls[-1] == (total, total)
+    assert dir(signorini) == sorted(signorini.__all__)
+    assert "np" not in dir(signorini) and "json" not in dir(signorini.fclib)

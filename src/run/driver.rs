@@ -234,7 +234,8 @@ pub fn drive(
     observers: &mut [&mut dyn Observer],
     progress: &mut dyn Progress,
 ) -> Result<(), Error> {
-    let report_every = (steps / 1000).max(1);
+    // at most 1000 calls (and the last step): ⌈steps / 1000⌉ apart
+    let report_every = steps.div_ceil(1000).max(1);
     let first = integ.state().step;
     progress.start(steps);
     for k in first..steps {
