@@ -122,11 +122,17 @@ class Scene:
         self._inner = inner
 
     @classmethod
-    def from_toml(cls, source: Union[PathLike, str], set: Optional[Mapping[str, Any]] = None) -> "Scene":
+    def from_toml(
+        cls,
+        source: Union[PathLike, str],
+        set: Optional[Mapping[str, Any]] = None,
+        base_dir: Optional[PathLike] = None,
+    ) -> "Scene":
         """A scene from a file (a path object, or a string naming an existing file or
         ending in ``.toml``) or from TOML text (any other string; relative mesh paths
-        then start from the working directory). ``set`` overrides keys as ``signorini
-        run --set`` does: ``{"time.dt": 1e-6}``."""
+        then start from ``base_dir``, default the working directory: give a scene's own
+        :attr:`base_dir` to rebuild it from its :meth:`to_toml`). ``set`` overrides keys
+        as ``signorini run --set`` does: ``{"time.dt": 1e-6}``."""
         # a string without `=` holds no TOML key: it names a file (a missing suffix or a
         # wrong directory then reads as "no such file", not as a TOML syntax error)
         if isinstance(source, os.PathLike) or (
@@ -135,7 +141,8 @@ class Scene:
             and (source.endswith(".toml") or os.path.exists(source) or "=" not in source)
         ):
             return cls(_Scene.from_file(os.fspath(source), _overrides(set)))
-        return cls(_Scene.from_text(source, _overrides(set)))
+        base = None if base_dir is None else os.fspath(base_dir)
+        return cls(_Scene.from_text(source, _overrides(set), base))
 
     @classmethod
     def from_dict(
@@ -176,8 +183,19 @@ class Scene:
         """Steps of a run of this scene."""
         return self._inner.steps()
 
+    @property
+    def base_dir(self) -> Optional[str]:
+        """The directory the scene's relative mesh paths start from (None for the bar):
+        ``Scene.from_dict(s.to_dict(), base_dir=s.base_dir)`` and
+        ``Scene.from_toml(s.to_toml(), base_dir=s.base_dir)`` rebuild ``s`` from anywhere."""
+        d = self._inner.base_dir()
+        # absolute (against today's working directory, which the scene's relative paths
+        # were read against): it stays right after a chdir
+        return None if d is None else os.path.abspath(os.fspath(d))
+
     def to_dict(self) -> Dict[str, Any]:
-        """The scene as Python data (file scenes: its tables; the bar: its parameters)."""
+        """The scene as Python data (file scenes: its tables; the bar: its parameters).
+        Mesh paths stay relative to :attr:`base_dir`."""
         return json.loads(self._inner.to_json())
 
     def to_toml(self) -> str:

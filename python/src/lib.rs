@@ -205,6 +205,14 @@ impl PyScene {
         v.to_string()
     }
 
+    /// The directory relative mesh paths start from (file scenes; None for the bar).
+    fn base_dir(&self) -> Option<PathBuf> {
+        match &self.kind {
+            Kind::File(s) => Some(s.base_dir.clone()),
+            Kind::Bar(_) => None,
+        }
+    }
+
     /// The scene as TOML text.
     fn to_toml(&self) -> PyResult<String> {
         match &self.kind {

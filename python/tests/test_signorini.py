@@ -428,3 +428,22 @@ def test_progress_is_called_at_most_1000_times_and_dir_lists_the_api():
     assert total == 1500 and 0 < len(calls) <= 1000 and calls[-1] == (total, total)
     assert dir(signorini) == sorted(signorini.__all__)
     assert "np" not in dir(signorini) and "json" not in dir(signorini.fclib)
+
+
+def test_a_scene_rebuilt_from_its_dict_or_toml_reads_its_meshes(tmp_path, monkeypatch):
+    """Issue 37 §6: `to_dict()` / `to_toml()` keep mesh paths relative to the scene's
+    `base_dir`; given it back, the rebuilt scene runs from another working directory
+    (before: "cannot read ball.msh")."""
+    scene = signorini.Scene.from_toml(MESHES / "ball_drop.toml")
+    assert pathlib.Path(scene.base_dir).resolve() == MESHES.resolve()
+    monkeypatch.chdir(tmp_path)
+    for again in (
+        signorini.Scene.from_dict(scene.to_dict(), base_dir=scene.base_dir),
+        signorini.Scene.from_toml(scene.to_toml(), base_dir=scene.base_dir),
+    ):
+        a, b = again.simulation(), scene.simulation()
+        a.step(3)
+        b.step(3)
+        assert np.array_equal(a.q, b.q)
+    with pytest.raises(signorini.BadInput, match="ball.msh"):
+        signorini.Scene.from_dict(scene.to_dict()).simulation().step(1)
