@@ -140,55 +140,32 @@ fn a_problem_changed_after_its_plan_is_built_afresh() {
         err.to_string().contains("initial velocity"),
         "the validation names the field: {err}"
     );
-    // the stiffness doubled after the plan: steps as the same problem built unplanned
-    let stiffer = |plan: bool| {
+    // `q` after 20 steps of the scene, planned at `dt` or not, its stiffness scaled by
+    // `k` after the plan, built at step `dt_build`
+    let run = |plan: bool, k: f64, dt_build: f64| {
         let (mut model, _) = s.build().unwrap();
         if plan {
             model.plan(p, dt).unwrap();
         }
-        model
-            .problem
-            .system
-            .stiffness
-            .val_mut()
-            .iter_mut()
-            .for_each(|k| *k *= 2.0);
-        let mut integ = model.into_integrator(p, dt).unwrap();
+        let stiffness = model.problem.system.stiffness.val_mut();
+        stiffness.iter_mut().for_each(|x| *x *= k);
+        let mut integ = model.into_integrator(p, dt_build).unwrap();
         for _ in 0..20 {
             integ.step().unwrap();
         }
-        integ
-            .state()
-            .q
-            .iter()
-            .map(|x| x.to_bits())
-            .collect::<Vec<_>>()
+        let q = &integ.state().q;
+        q.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
     };
+    // the stiffness doubled after the plan: steps as the same problem built unplanned
     assert_eq!(
-        stiffer(true),
-        stiffer(false),
+        run(true, 2.0, dt),
+        run(false, 2.0, dt),
         "stiffness changed after the plan"
     );
     // planned at dt, built at dt/2: the matrix of dt/2
-    let halved = |plan: bool| {
-        let (mut model, _) = s.build().unwrap();
-        if plan {
-            model.plan(p, dt).unwrap();
-        }
-        let mut integ = model.into_integrator(p, dt / 2.0).unwrap();
-        for _ in 0..20 {
-            integ.step().unwrap();
-        }
-        integ
-            .state()
-            .q
-            .iter()
-            .map(|x| x.to_bits())
-            .collect::<Vec<_>>()
-    };
     assert_eq!(
-        halved(true),
-        halved(false),
+        run(true, 1.0, dt / 2.0),
+        run(false, 1.0, dt / 2.0),
         "built at another step than planned"
     );
 }
