@@ -335,6 +335,9 @@ fn read_history(dir: &Path) -> Result<Columns, Error> {
 /// longer (a mesh's step, a long chunk) runs with the GIL released.
 const GIL_RELEASE_AFTER: f64 = 50e-6;
 
+/// `step(n)` checks for Ctrl-C about this often (s), whatever a step costs.
+const INTERRUPT_EVERY: f64 = 0.05;
+
 #[derive(Default)]
 struct SimState {
     /// The last chunk's seconds per step (0 before the first: the first chunk of a
@@ -551,8 +554,16 @@ impl PySimulation {
         }
         let mut taken = 0;
         while taken < n {
-            // the GIL is taken back every 1000 steps for Ctrl-C
-            let chunk = (n - taken).min(1000);
+            // the GIL is taken back for Ctrl-C after at most 1000 steps and, once a step's
+            // cost is known, after about INTERRUPT_EVERY seconds (hex_bars: 1–6 ms a step
+            // made 1000-step chunks 0.9–5.9 s deaf to Ctrl-C); the first chunk of a new
+            // simulation is one step, which measures it
+            let by_time = if *step_seconds > 0.0 {
+                ((INTERRUPT_EVERY / *step_seconds) as usize).clamp(1, 1000)
+            } else {
+                1
+            };
+            let chunk = (n - taken).min(by_time);
             let mut work = || -> Result<Option<StepStats>, Error> {
                 let mut st = None;
                 for _ in 0..chunk {
