@@ -104,9 +104,8 @@ pub fn build_problem(
     h: f64,
 ) -> Result<Box<dyn Integrator>, Error> {
     // validated once: by the plan of this problem, or here
-    if !problem.planned_for(params, h) {
-        problem.validate(params, h)?;
-    }
+    let mut problem = problem;
+    problem.validate_once(params, h)?;
     Ok(match params.kind {
         SchemeKind::MoreauJean => Box::new(moreau_jean::MoreauJean::new(params, problem, h)?),
         SchemeKind::DirectProjection => Box::new(direct_projection::DirectProjection::new(

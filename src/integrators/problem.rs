@@ -26,6 +26,9 @@ struct Planned {
     h: f64,
     print: u64,
     step: Option<StepMatrix>,
+    /// [`Problem::validate_once`] found the problem unchanged just before the build: the
+    /// step matrix is taken without hashing the problem again.
+    checked: bool,
 }
 
 /// The structure, its contacts and the initial state of a run.
@@ -71,6 +74,7 @@ impl Problem {
             h,
             print: self.fingerprint(),
             step,
+            checked: false,
         });
         Ok(plan)
     }
@@ -83,14 +87,26 @@ impl Problem {
         })
     }
 
+    /// Validates the problem for `params` at step `h` unless its plan did (the build's
+    /// check: one hash of the problem instead of a second validation).
+    pub(crate) fn validate_once(&mut self, params: &SchemeParams, h: f64) -> Result<(), Error> {
+        if self.planned_for(params, h) {
+            if let Some(p) = self.planned.as_mut() {
+                p.checked = true;
+            }
+            return Ok(());
+        }
+        self.planned = None;
+        self.validate(params, h)
+    }
+
     /// The step matrix the plan formed and analysed, when the problem is still the one
     /// planned (the build takes it: [`StepMatrix`] is matched on its coefficients).
     pub(crate) fn take_step_matrix(&mut self) -> Option<StepMatrix> {
-        let print = self.fingerprint();
-        self.planned
-            .take()
-            .filter(|p| p.print == print)
-            .and_then(|p| p.step)
+        let p = self.planned.take()?;
+        (p.checked || p.print == self.fingerprint())
+            .then_some(p.step)
+            .flatten()
     }
 
     /// A hash of what validation and the step matrix read: the matrices' patterns and

@@ -160,28 +160,6 @@ impl StructureModel for LinearStructure {
         Ok(false)
     }
 
-    fn restart(
-        &mut self,
-        _: &mut StepData<'_>,
-        _: bool,
-        _: &mut StepStats,
-    ) -> Result<Option<bool>, Error> {
-        Ok(None)
-    }
-
-    fn relinearize(
-        &mut self,
-        _: &mut StepData<'_>,
-        _: (f64, f64),
-        _: &mut StepStats,
-    ) -> Result<bool, Error> {
-        Ok(false)
-    }
-
-    fn residual(&mut self, _: &mut StepData<'_>, _: &mut StepStats) -> Result<Option<f64>, Error> {
-        Ok(None)
-    }
-
     fn describe(&self, _: &LinearSystem, backend: &str, n: usize) -> String {
         format!("M̂ = M + hθC + h²θ²K factored once ({backend}, n = {n})")
     }

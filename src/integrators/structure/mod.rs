@@ -109,12 +109,15 @@ pub trait StructureModel: Send + std::fmt::Debug {
     /// first iterate); otherwise the new free velocity is in `cx.v_free` and the value
     /// says whether `M̂` was factored again. `last_converged`: the last loop converged, so
     /// the next starts from its velocity.
+    /// The default is a structure whose `M̂` is constant: nothing to do.
     fn restart(
         &mut self,
-        cx: &mut StepData<'_>,
-        last_converged: bool,
-        stats: &mut StepStats,
-    ) -> Result<Option<bool>, Error>;
+        _cx: &mut StepData<'_>,
+        _last_converged: bool,
+        _stats: &mut StepStats,
+    ) -> Result<Option<bool>, Error> {
+        Ok(None)
+    }
 
     /// Linearizes at the iterate `(cx.q_new, cx.v_new)` for the next Newton iteration,
     /// given the last two changes of the iterate, latest first (modified Newton's
@@ -122,19 +125,23 @@ pub trait StructureModel: Send + std::fmt::Debug {
     /// returns whether `M̂` was factored again. A linear structure does nothing.
     fn relinearize(
         &mut self,
-        cx: &mut StepData<'_>,
-        changes: (f64, f64),
-        stats: &mut StepStats,
-    ) -> Result<bool, Error>;
+        _cx: &mut StepData<'_>,
+        _changes: (f64, f64),
+        _stats: &mut StepStats,
+    ) -> Result<bool, Error> {
+        Ok(false)
+    }
 
     /// The relative residual of eq. 41 at the iterate `(cx.q_new, cx.v_new)` with the
     /// impulse `cx.p`; `None` where the change of the iterate decides alone (a linear
     /// structure).
     fn residual(
         &mut self,
-        cx: &mut StepData<'_>,
-        stats: &mut StepStats,
-    ) -> Result<Option<f64>, Error>;
+        _cx: &mut StepData<'_>,
+        _stats: &mut StepStats,
+    ) -> Result<Option<f64>, Error> {
+        Ok(None)
+    }
 
     /// The structure's part of the linear-algebra path, for summaries (`backend`: the
     /// factor's name, `n` the dofs).

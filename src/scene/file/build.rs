@@ -318,6 +318,15 @@ impl Scene {
                 .expect("validated");
             let mesh = &meshes[bi];
             let nodes = std::mem::take(&mut nodes_of[ci]);
+            // the entry's contacts, one per node in order (as both kinds of set make them)
+            let record = |out: &mut Vec<crate::model::geometry::ContactPoint>, target: &str| {
+                out.extend(nodes.iter().map(|&v| crate::model::geometry::ContactPoint {
+                    point: point_base[bi] + v,
+                    body: bi,
+                    target: target.to_string(),
+                    entry: ci,
+                }))
+            };
             if let Some(t) = &c.target {
                 let ti = self.body_index(&t.body);
                 let node_dofs = |body: usize, v: usize| -> [Option<usize>; 3] {
@@ -369,14 +378,7 @@ impl Scene {
                     }
                 ));
                 sets.push(set.0);
-                geometry.contacts.extend(nodes.iter().map(|&v| {
-                    crate::model::geometry::ContactPoint {
-                        point: point_base[bi] + v,
-                        body: bi,
-                        target: t.body.clone(),
-                        entry: ci,
-                    }
-                }));
+                record(&mut geometry.contacts, &t.body);
                 continue;
             }
             let obstacle = self.obstacle(c);
@@ -409,14 +411,7 @@ impl Scene {
             )
             .map_err(at)?;
             sets.push(set);
-            geometry
-                .contacts
-                .extend(nodes.iter().map(|&v| crate::model::geometry::ContactPoint {
-                    point: point_base[bi] + v,
-                    body: bi,
-                    target: obstacle.name().to_string(),
-                    entry: ci,
-                }));
+            record(&mut geometry.contacts, obstacle.name());
         }
         geometry.outlines = self
             .obstacles
