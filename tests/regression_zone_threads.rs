@@ -51,3 +51,32 @@ fn zone_set_up_is_independent_of_the_thread_count() {
         assert!(q1 == q2, "{delassus}: q differs between 1 and 2 threads");
     }
 }
+
+/// Issue 35: under the `M̂⁻¹` metric the zone flexibilities `F` and `F_E` come from the
+/// factor (`F = ZᵀZ`, `Z = L⁻¹PS` on the zone's elimination-tree paths; `F_E` from the
+/// factor's tangent along `K`) instead of `2z` column solves. The same scene with the
+/// zone kept as `Â⁻¹S` (`dense`, the swept columns) gives the same run: the two forms of
+/// `F` agree to round-off (the unit test in `linalg::zone_flex` holds them to 1e-12 of
+/// the largest entry), and 40 steps of Newton-projected iterates carry that round-off
+/// into the impulses and `q`; 1e-9 of the largest value leaves three orders of margin
+/// over what the unit test allows and still fails on any wrong entry of `F` or `F_E`
+/// (a missing path, a transposed block), which moves the impulses at the percent level.
+#[test]
+fn zone_flexibilities_from_the_factor_match_the_swept_columns() {
+    let (pa, qa, path) = history("auto", 2);
+    assert!(path.contains("tangent along K"), "auto: {path}");
+    let (pd, qd, path_d) = history("dense", 2);
+    assert!(!path_d.contains("tangent"), "dense: {path_d}");
+    let close = |a: &[f64], b: &[f64], what: &str| {
+        let scale = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        assert!(scale > 0.0, "{what}: all zero");
+        let err = a
+            .iter()
+            .zip(b)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        assert!(err <= 1e-9 * scale, "{what}: {err:e} of {scale:e}");
+    };
+    assert_eq!(pa.len(), pd.len());
+    close(&pa, &pd, "impulses");
+    close(&qa, &qd, "q");
+}

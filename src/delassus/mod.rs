@@ -41,9 +41,12 @@
 //!   ([`Delassus::zone_corrections`]), keep only the flexibilities by default
 //!   ([`ZoneStorage::Flexibility`]; faster on every between-body scene measured but one,
 //!   and smaller: two 20³ hex8 cubes' `Y`, `E` would take 2.3 GB, their `F`, `F_E`
-//!   112 MB): they are formed [`ZONE_CHUNK`] columns at a time (`n × ZONE_CHUNK`
-//!   scratch, threaded solves), and an `n`-space correction is one sparse solve of
-//!   `G x`, as on the per-active-column path. Each storage falls back on the other where
+//!   112 MB): a supernodal factor gives them without a full sweep, from `L⁻¹S` on the
+//!   zone's elimination-tree paths and the factor's tangent along `K`
+//!   ([`crate::linalg::SpdFactor::zone_flexibilities`]: two 40³ cubes' set-up 349 →
+//!   178 s), other factors and the Euclidean metric in [`ZONE_CHUNK`] columns at a
+//!   time (`n × ZONE_CHUNK` scratch, threaded solves); an `n`-space correction is one
+//!   sparse solve of `G x`, as on the per-active-column path. Each storage falls back on the other where
 //!   it does not fit the dense budget.
 //!
 //! * **matrix-free** (any path, [`Delassus::product`]): `W x = Gᵀ Â⁻¹ (G x)` through the
@@ -251,6 +254,9 @@ pub struct Delassus {
     ng_ready: bool,
     /// The contact zone's condensed data ([`Delassus::condense_zone`]).
     zone: Option<Zone>,
+    /// The zone's flexibilities came from the factor and its tangent
+    /// ([`LinearSolver::zone_flexibilities`]), not from column solves.
+    zone_by_tangent: bool,
     /// The user's choice of storage (with [`DelassusKind::Auto`] or
     /// [`DelassusKind::Flexibility`] the zone may switch a per-active-column choice to
     /// the dense one).
@@ -347,6 +353,7 @@ impl Delassus {
             blk2: vec![0.0; if with_d { nb } else { 0 }],
             ng_ready: false,
             zone: None,
+            zone_by_tangent: false,
             kind,
         })
     }
@@ -404,12 +411,18 @@ impl Delassus {
 
     /// One phrase for summaries: which path runs.
     pub fn describe(&self) -> String {
-        describe_path(
+        let path = describe_path(
             self.zone.as_ref().map(|z| (z.dofs.len(), z.storage)),
             self.dense,
             self.n,
             self.m,
             self.cap,
-        )
+        );
+        if self.zone_by_tangent {
+            path + "; F from L⁻¹S on the zone's tree paths, F_E from the factor's tangent \
+                    along K (no column solve)"
+        } else {
+            path
+        }
     }
 }

@@ -14,6 +14,10 @@ pub struct DelassusPlan {
     pub dense: bool,
     /// Bytes of the blocks, columns and scratch.
     pub bytes: u64,
+    /// The contact zone keeps its flexibilities only ([`ZoneStorage::Flexibility`]).
+    pub zone_flexibilities: bool,
+    /// Of [`DelassusPlan::bytes`], the set-up's swept chunks (freed after it).
+    pub setup_bytes: u64,
 }
 
 /// [`DelassusKind::Auto`]'s and the user's choice of the dense path.
@@ -172,6 +176,12 @@ impl Delassus {
             });
         let (n8, m8) = (n as u64 * 8, m as u64 * 8);
         let per = per as u64;
+        let setup_bytes = match z {
+            Some((z, ZoneStorage::Flexibility)) => {
+                flexibility_scratch_bytes(n, z, per as usize) as u64
+            }
+            _ => 0,
+        };
         let bytes = match z {
             Some((z, ZoneStorage::Full)) => zone_bytes(n, z, m, per as usize) as u64,
             Some((z, ZoneStorage::Flexibility)) => {
@@ -182,6 +192,8 @@ impl Delassus {
             None => m8 * cap as u64 * per + n8 * SOLVE_BLOCK.min(m).max(2) as u64 * per + 2 * n8,
         };
         DelassusPlan {
+            zone_flexibilities: matches!(z, Some((_, ZoneStorage::Flexibility))),
+            setup_bytes,
             dense: dense || z.is_some(),
             describe: describe_path(
                 z,

@@ -353,8 +353,10 @@ pub(super) fn restrict(zone: &[usize], x: &[f64], n: usize, f: &mut [f64]) {
 impl Delassus {
     /// Condenses the step matrix onto the contact zone `zone` (sorted dofs) for a
     /// nonlinear `G` on a constant `Â` (the zone blocks `Y`, `E`, `F`, `F_E` of the module
-    /// doc): `z` solves (`2z` with `W_D`), once, instead of `m` (`2m`) at every
-    /// re-linearization. Taken on the dense path
+    /// doc): once, instead of `m` (`2m`) solves at every re-linearization; the
+    /// flexibilities from the factor and its tangent where it can
+    /// ([`crate::linalg::SpdFactor::zone_flexibilities`]), else `z` solves (`2z` with
+    /// `W_D`). Taken on the dense path
     /// (also when [`DelassusKind::Auto`] had chosen the per-active-column path for a
     /// nonlinear `G`: its reason, `m` solves per re-linearization, is gone) when the
     /// `m × m` operators and the zone's blocks fit the dense budget: `Y`, `E` and `F`,
@@ -405,17 +407,32 @@ impl Delassus {
         for (k, &d) in zone.iter().enumerate() {
             pos[d] = k;
         }
-        let mut f = vec![0.0; z * z];
-        let mut fe = vec![0.0; if per == 2 { z * z } else { 0 }];
-        // the columns of the zone, a chunk of `cols` at a time (all at once when the
+        // the flexibilities alone under the M̂⁻¹ metric (or without W_D): from the
+        // factor and its tangent along K, on the zone's paths (`linalg::zone_flex`)
+        let from_factor = (storage == ZoneStorage::Flexibility
+            && (per == 1 || self.metric == Metric::Mass))
+            .then(|| {
+                self.factor
+                    .zone_flexibilities(zone, (per == 2).then(|| stiffness.as_ref()))
+            })
+            .flatten();
+        let swept = from_factor.is_none();
+        self.zone_by_tangent = !swept;
+        let (mut f, mut fe) = from_factor.unwrap_or_else(|| {
+            (
+                vec![0.0; z * z],
+                vec![0.0; if per == 2 { z * z } else { 0 }],
+            )
+        });
+        // else the columns of the zone, a chunk of `cols` at a time (all at once when the
         // n × z blocks are kept): Y = Â⁻¹S, E = Â⁻¹K N S, and their zone rows
         let cols = match storage {
             ZoneStorage::Full => z,
             ZoneStorage::Flexibility => ZONE_CHUNK.min(z),
         };
-        let mut yc = vec![0.0; n * cols];
-        let mut ec = vec![0.0; if per == 2 { n * cols } else { 0 }];
-        for start in (0..z).step_by(cols) {
+        let mut yc = vec![0.0; if swept { n * cols } else { 0 }];
+        let mut ec = vec![0.0; if swept && per == 2 { n * cols } else { 0 }];
+        for start in (0..z).step_by(cols).filter(|_| swept) {
             let w = cols.min(z - start);
             let (yb, eb) = (
                 &mut yc[..n * w],

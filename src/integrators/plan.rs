@@ -124,6 +124,7 @@ pub fn plan_kept(
             backend: "dense LU".to_string(),
             entries: (n * n) as u64,
             scratch_bytes: 0,
+            supernodal: false,
         }
     } else {
         // the LU's fill follows its pivots: the symmetric pattern's as an estimate
@@ -177,7 +178,24 @@ pub fn plan_kept(
     ledger.add("step matrix M̂ (for its factorization)", nnz(step), 16);
     ledger.add("factor of M̂", factor.entries, 8);
     ledger.add("factorization scratch", factor.scratch_bytes, 1);
-    ledger.add("Delassus data", delassus.bytes, 1);
+    // the zone's flexibilities from a supernodal factor and its tangent (under the M̂⁻¹
+    // metric, or without W_D) hold up to one more factor's entries instead of the
+    // swept chunks
+    let by_tangent = delassus.zone_flexibilities
+        && factor.supernodal
+        && !(with_projection && params.metric == crate::integrators::Metric::Euclidean);
+    if by_tangent {
+        ledger.add("Delassus data", delassus.bytes - delassus.setup_bytes, 1);
+        if with_projection {
+            ledger.add(
+                "zone set-up: tangent of the factor (at most)",
+                factor.entries,
+                8,
+            );
+        }
+    } else {
+        ledger.add("Delassus data", delassus.bytes, 1);
+    }
     if sp {
         super::core::workspace_ledger(m, m, params, (false, false), &mut ledger);
     } else {

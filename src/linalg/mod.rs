@@ -40,6 +40,7 @@ mod sparse;
 mod sparse_rhs;
 mod spd;
 pub mod subnormals;
+mod zone_flex;
 
 pub use arith::*;
 pub use dense::*;

@@ -82,6 +82,7 @@ pub fn analyse_spd_kept(
             backend: "tridiagonal LDLᵀ".to_string(),
             entries: 2 * a.nrows() as u64,
             scratch_bytes: 0,
+            supernodal: false,
         };
         return Ok((plan, None));
     }
@@ -98,6 +99,7 @@ pub fn analyse_spd_kept(
         ),
         entries: symbolic.len_val() as u64,
         scratch_bytes: factor_scratch(&symbolic).unaligned_bytes_required() as u64,
+        supernodal: matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)),
     };
     Ok((
         plan,
@@ -124,6 +126,7 @@ pub fn analyse_ldlt(a: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<Fa
         backend: format!("faer LDLᵀ, AMD, nnz(L) = {}", symbolic.len_val()),
         entries: symbolic.len_val() as u64,
         scratch_bytes: req.unaligned_bytes_required() as u64,
+        supernodal: false,
     })
 }
 
@@ -136,4 +139,7 @@ pub struct FactorPlan {
     pub entries: u64,
     /// Scratch of the factorization and the solves (bytes).
     pub scratch_bytes: u64,
+    /// A supernodal Cholesky factor: the zone flexibilities come from it and its tangent
+    /// (`linalg::zone_flex`, whose set-up holds up to `entries` more).
+    pub supernodal: bool,
 }

@@ -90,6 +90,18 @@ pub trait LinearSolver: Send {
         let _ = rows;
         self.solve_block_in_place_par(x, k);
     }
+    /// The zone flexibilities `F = SᵀA⁻¹S` and, given `k`, `F_E = SᵀA⁻¹KA⁻¹S` for the
+    /// unit columns `S` on the dofs `zone` (`z × z` each, column-major, in the order of
+    /// `zone`), without a full sweep per column (`linalg::zone_flex`); `None` where the
+    /// backend cannot (the caller then solves the columns).
+    fn zone_flexibilities(
+        &self,
+        zone: &[usize],
+        k: Option<SparseColMatRef<'_, usize, f64>>,
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let _ = (zone, k);
+        None
+    }
     /// Sizes what [`LinearSolver::solve_sparse_rhs_in_place`] needs for `k` columns
     /// (at set-up; nothing for backends without it).
     fn reserve_sparse_rhs(&mut self, k: usize) {
@@ -141,6 +153,13 @@ impl LinearSolver for SpdFactor {
     }
     fn solve_block_for_rows(&mut self, x: &mut [f64], k: usize, rows: Option<&[usize]>) {
         SpdFactor::solve_block_for_rows(self, x, k, rows)
+    }
+    fn zone_flexibilities(
+        &self,
+        zone: &[usize],
+        k: Option<SparseColMatRef<'_, usize, f64>>,
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        SpdFactor::zone_flexibilities(self, zone, k)
     }
     fn reserve_sparse_rhs(&mut self, k: usize) {
         SpdFactor::reserve_sparse_rhs(self, k)

@@ -1,7 +1,8 @@
 //! Set-up solves that skip what is zero and what is not needed (issue 35 §3): the
-//! zone flexibilities of contacts between bodies (`delassus`, `condense_zone`) solve
-//! `2z` columns through the factor, each a unit vector on the contact zone or a
-//! product supported on one body.
+//! zone blocks of contacts between bodies (`delassus`, `condense_zone`) where they are
+//! kept whole or not taken from the factor's tangent (`linalg::zone_flex`) solve `2z`
+//! columns through the factor, each a unit vector on the contact zone or a product
+//! supported on one body.
 //!
 //! Owns [`SpdFactor::solve_block_for_rows`]: the supernodal `L Lᵀ` sweeps of faer
 //! (the same kernels, `Par::Seq`, on the same blocks), with
