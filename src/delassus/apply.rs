@@ -50,7 +50,7 @@ impl Delassus {
         out: &mut [f64],
         stiffness: &SparseMatrix,
     ) {
-        if x.iter().all(|&v| v == 0.0) {
+        if x.iter().all(|&v| v == 0.0) || self.product_by_flexibility(op, s, x, out) {
             return;
         }
         self.products += 1;

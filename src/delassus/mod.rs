@@ -53,7 +53,10 @@
 //!   factor, one sparse solve per product, no column stored. [`Delassus::mul_add`] falls
 //!   back on it when a column of the support is not in store; the one-step problems
 //!   past the dense workspaces (`max_active_rows`, [`Delassus::limit_columns`]) use it
-//!   alone ([`crate::solvers::global`]).
+//!   alone ([`crate::solvers::global`]). For a constant `G` on the per-active-column
+//!   path whose problems go matrix-free, the products of `W` go through the
+//!   flexibilities `F` of the dofs `G` acts on instead, `W x = Bᵀ F (B x)`, `F` formed
+//!   once from the factor ([`Delassus::condense_products`], `products.rs`).
 //!
 //! The `Auto` choice takes the dense path while the dense blocks stay under 2 GiB and
 //! either `G` is constant (the blocks are formed once, by blocked solves) or there are
@@ -80,9 +83,12 @@ mod apply;
 mod condense;
 mod policy;
 mod pool;
+mod products;
 mod zone;
 
 use condense::*;
+use products::ProductFlex;
+pub use products::acting_dofs;
 
 pub use policy::DelassusPlan;
 use policy::*;
@@ -146,13 +152,17 @@ pub enum DelassusKind {
     /// For a nonlinear contact set condensed onto its contact zone: keep the zone's
     /// flexibilities `F = SᵀÂ⁻¹S` only ([`ZoneStorage::Flexibility`]: less memory,
     /// corrections by sparse solves) in every scheme, Schatzman–Paoli included, where the
-    /// flexibilities fit; otherwise as `auto`.
+    /// flexibilities fit. For a constant `G`: the per-active-column path, whose one-step
+    /// problems past the dense workspaces take their products through the flexibilities
+    /// of the dofs `G` touches ([`Delassus::condense_products`]; `auto` does so only
+    /// where the dense blocks do not fit). Otherwise as `auto`.
     #[cfg_attr(
         feature = "cli",
         value(
             help = "For contacts between bodies condensed on their contact zone: keep only \
                     the zone's flexibilities F in every scheme (less memory, corrections by \
-                    sparse solves); otherwise as auto"
+                    sparse solves); for a constant G, per-active-column with the matrix-free \
+                    products through the flexibilities of its dofs; otherwise as auto"
         )
     )]
     Flexibility,
@@ -238,7 +248,8 @@ pub struct Delassus {
     epoch: u64,
     /// Sparse solves spent on columns since construction (set-up included).
     pub column_solves: usize,
-    /// Products through the factor ([`Delassus::product`]) since construction.
+    /// Products through the factor ([`Delassus::product`]) since construction (not
+    /// those through the flexibilities of [`Delassus::condense_products`]).
     pub products: usize,
     /// Largest support whose columns are stored ([`Delassus::limit_columns`]).
     limit: usize,
@@ -257,6 +268,9 @@ pub struct Delassus {
     /// The zone's flexibilities came from the factor and its tangent
     /// ([`LinearSolver::zone_flexibilities`]), not from column solves.
     zone_by_tangent: bool,
+    /// `F` on the dofs of a constant `G` for the matrix-free products
+    /// ([`Delassus::condense_products`]).
+    pflex: Option<ProductFlex>,
     /// The user's choice of storage (with [`DelassusKind::Auto`] or
     /// [`DelassusKind::Flexibility`] the zone may switch a per-active-column choice to
     /// the dense one).
@@ -354,6 +368,7 @@ impl Delassus {
             ng_ready: false,
             zone: None,
             zone_by_tangent: false,
+            pflex: None,
             kind,
         })
     }
@@ -421,6 +436,8 @@ impl Delassus {
         if self.zone_by_tangent {
             path + "; F from L⁻¹S on the zone's tree paths, F_E from the factor's tangent \
                     along K (no column solve)"
+        } else if let Some(p) = self.pflex.as_ref() {
+            path + &p.phrase()
         } else {
             path
         }

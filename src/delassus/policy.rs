@@ -31,6 +31,9 @@ pub(super) fn choose_dense(
     match kind {
         DelassusKind::Dense => true,
         DelassusKind::Columns => false,
+        // a constant G under `flexibility`: the columns, with the matrix-free products
+        // through the flexibilities of its dofs (`Delassus::condense_products`)
+        DelassusKind::Flexibility if g_constant => false,
         DelassusKind::Auto | DelassusKind::Flexibility => {
             (g_constant || m <= AUTO_DENSE_MAX_CONTACTS)
                 && n.saturating_mul(m).saturating_mul(8 * per) <= AUTO_DENSE_MAX_BYTES

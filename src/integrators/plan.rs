@@ -166,6 +166,24 @@ pub fn plan_kept(
             !sp,
         );
     }
+    // a constant G whose problems go matrix-free: F on its dofs for the products
+    // (`Delassus::condense_products`, built where `ThetaCore::new` calls it)
+    let products = if linear && !sp && g_constant && rows > ws_cap {
+        // the dofs of G's non-zero entries, G being constant: at any q
+        let mut jac = crate::contact::ContactJacobian::for_set(contacts);
+        contacts.evaluate(&vec![0.0; n], &mut vec![0.0; m], &mut jac);
+        let dofs = crate::delassus::acting_dofs(&jac);
+        let paths = analysis.as_ref().and_then(|a| a.zone_path_entries(&dofs));
+        paths.filter(|_| {
+            delassus.add_products(
+                params.delassus,
+                dofs.len(),
+                (factor.supernodal, factor.entries),
+            )
+        })
+    } else {
+        None
+    };
     let mut ledger = MemoryEstimate::default();
     ledger.add(
         "the process (binary, libraries, threads)",
@@ -195,6 +213,14 @@ pub fn plan_kept(
         }
     } else {
         ledger.add("Delassus data", delassus.bytes, 1);
+    }
+    if let Some(paths) = products {
+        // L⁻¹S on the tree paths of G's dofs, freed as the pass climbs
+        ledger.add(
+            "products' set-up: L⁻¹S on the zone's paths (at most)",
+            paths,
+            8,
+        );
     }
     if sp {
         super::core::workspace_ledger(m, m, params, (false, false), &mut ledger);

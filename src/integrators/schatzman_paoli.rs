@@ -337,6 +337,6 @@ impl Integrator for SchatzmanPaoli {
                 "nonlinear gap: re-linearized every Newton iteration"
             },
             self.del.describe()
-        ) + &self.ws.describe()
+        ) + &self.ws.describe(self.del.products_by_flexibility())
     }
 }

@@ -224,6 +224,7 @@ pub struct StepStats {
     /// workspaces (`max_active_rows`; [`crate::solvers::global`]).
     pub global_solves: usize,
     /// Products with the Delassus operator those solves took (each one sparse solve
-    /// through the factor when the columns are not stored).
+    /// through the factor when the columns are not stored, none when they go through
+    /// the flexibilities of `G`'s dofs, `Delassus::condense_products`).
     pub global_products: usize,
 }

@@ -107,6 +107,11 @@ pub trait LinearSolver: Send {
     fn reserve_sparse_rhs(&mut self, k: usize) {
         let _ = k;
     }
+    /// Stored entries of the factor (`nnz(L)`), where the backend knows them: what one
+    /// solve reads twice (the cost model of `Delassus::condense_products`).
+    fn factor_entries(&self) -> Option<u64> {
+        None
+    }
     /// Like [`LinearSolver::solve_block_in_place`] for right-hand sides supported on a
     /// few rows: a supernodal factor skips the forward sweep's zero blocks
     /// (`linalg::sparse_rhs`); the same results on every row; does not allocate.
@@ -160,6 +165,12 @@ impl LinearSolver for SpdFactor {
         k: Option<SparseColMatRef<'_, usize, f64>>,
     ) -> Option<(Vec<f64>, Vec<f64>)> {
         SpdFactor::zone_flexibilities(self, zone, k)
+    }
+    fn factor_entries(&self) -> Option<u64> {
+        match &self.backend {
+            super::spd::Backend::Faer(f) => Some(f.values.len() as u64),
+            super::spd::Backend::Tridiagonal(t) => Some(2 * t.l.len() as u64),
+        }
     }
     fn reserve_sparse_rhs(&mut self, k: usize) {
         SpdFactor::reserve_sparse_rhs(self, k)

@@ -57,6 +57,45 @@ fn par(work: usize) -> Par {
     }
 }
 
+impl super::SpdAnalysis {
+    /// Entries of `Z = L⁻¹PS` on the tree paths of the dofs `zone` (original indices):
+    /// `Σ_s cols(s) · reach(s)` over the supernodes `s`, `reach(s)` the zone columns in
+    /// the subtree of `s`; what [`SpdFactor::zone_flexibilities`] may hold beside `F`
+    /// (its pass frees a block after its last reader, so this is an upper bound), for
+    /// the memory plan. `None` for a simplicial analysis (no such pass).
+    pub fn zone_path_entries(&self, zone: &[usize]) -> Option<u64> {
+        let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else {
+            return None;
+        };
+        let ns = sym.n_supernodes();
+        let begin = &sym.supernode_begin()[..ns];
+        let end = &sym.supernode_end()[..ns];
+        let owner = |r: usize| end.partition_point(|&e| e <= r);
+        let perm = self.symbolic.perm().map(|p| p.arrays());
+        let mut reach = vec![0u64; ns];
+        for &d in zone {
+            let c = perm.map_or(d, |(_, inv)| inv[d]);
+            if c >= *end.last()? {
+                return None;
+            }
+            reach[owner(c)] += 1;
+        }
+        let (ptr, rows) = (sym.col_ptr_for_row_idx(), sym.row_idx());
+        let mut total = 0u64;
+        for s in 0..ns {
+            total += (end[s] - begin[s]) as u64 * reach[s];
+            // the parent owns the first row below the supernode (indices grow upward)
+            if ptr[s] < ptr[s + 1] {
+                let p = owner(rows[ptr[s]]);
+                if p > s && p < ns {
+                    reach[p] += reach[s];
+                }
+            }
+        }
+        Some(total)
+    }
+}
+
 impl SpdFactor {
     /// `F` and (when `k` is given) `F_E` of the module doc for the zone `zone`
     /// (original dof indices), both `z × z` column-major in the order of `zone`

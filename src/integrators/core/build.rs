@@ -192,6 +192,11 @@ impl ThetaCore {
                     cp.cap = cp.cap.min(rows_mf);
                 }
             }
+            // a constant G whose problems may go matrix-free: its products through the
+            // zone flexibilities F (formed once from the factor) instead of a solve each
+            if g_constant && core.ws.global.capacity() > 0 {
+                core.del.condense_products();
+            }
         } else {
             // a nonlinear structure condenses with each step's first iteration matrix,
             // and carries the projection's feedback in F: W_D is never read
@@ -237,7 +242,7 @@ impl ThetaCore {
             } else {
                 String::new()
             }
-        ) + &self.ws.describe()
+        ) + &self.ws.describe(self.del.products_by_flexibility())
     }
 }
 

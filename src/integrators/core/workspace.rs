@@ -152,15 +152,22 @@ impl Workspace {
         }
     }
 
-    /// The matrix-free fallback, for the path line (empty when every row fits).
-    pub fn describe(&self) -> String {
+    /// The matrix-free fallback, for the path line (empty when every row fits);
+    /// `through_f`: its products go through the flexibilities of `G`'s dofs
+    /// ([`Delassus::condense_products`]), not through the factor.
+    pub fn describe(&self, through_f: bool) -> String {
         if self.global.capacity() == 0 {
             return String::new();
         }
         format!(
             "; one-step problems of more than {} active rows solved matrix-free on products \
-             W x = Gᵀ(M̂⁻¹(G x)) (MPRGP{})",
+             {} (MPRGP{})",
             self.mf_from,
+            if through_f {
+                "W x = Bᵀ F (B x)"
+            } else {
+                "W x = Gᵀ(M̂⁻¹(G x))"
+            },
             if self.friction.capacity() > 0 {
                 ", friction by accelerated projected gradient with the fixed point on ‖u_T‖"
             } else {
