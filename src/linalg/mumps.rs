@@ -251,6 +251,9 @@ pub struct Mumps {
     /// MUMPS' memory for the last factor: the largest rank's and all ranks' (MB,
     /// `INFOG(21)`, `INFOG(22)`).
     memory_mb: (i32, i32),
+    /// Entries of the last factor over all ranks (`INFOG(29)`; MUMPS gives millions as
+    /// a negative value past `i32`): comparable with faer's `nnz(L)`.
+    entries: i64,
     /// Relaxation of the workspace estimate for the next factor (`ICNTL(14)`).
     relax: i32,
     /// The first failed solve's message (solves return no error: their output is NaN).
@@ -334,6 +337,7 @@ impl Mumps {
             ranks: SimpleCommunicator::world().size() as usize,
             ordering: "",
             memory_mb: (0, 0),
+            entries: 0,
             relax: 0,
             solve_error: None,
         };
@@ -394,6 +398,12 @@ impl Mumps {
                 continue;
             }
             self.memory_mb = (self.inst.infog(21), self.inst.infog(22));
+            let e = self.inst.infog(29);
+            self.entries = if e < 0 {
+                -(e as i64) * 1_000_000
+            } else {
+                e as i64
+            };
             return self.check(what, "factor");
         }
     }
@@ -466,10 +476,11 @@ impl LinearSolver for Mumps {
             .map(|&c| c as u8 as char)
             .collect();
         format!(
-            "MUMPS {} ({what}, {} ordering) over {} MPI rank(s), factor {} MB on the \
-             largest rank, {} MB in all",
+            "MUMPS {} ({what}, {} ordering, {} factor entries) over {} MPI rank(s), factor \
+             {} MB on the largest rank, {} MB in all",
             v.trim(),
             self.ordering,
+            self.entries,
             self.ranks,
             self.memory_mb.0,
             self.memory_mb.1
