@@ -8,6 +8,8 @@
 //! stale column after eviction or a missing feedback term changes results at the
 //! 1e-3 level or more.
 
+mod common;
+
 use signorini::contact::ContactSet;
 use signorini::contact::plane::NodesOnPlane;
 use signorini::contact::sphere::{RoundObstacle, Side};
@@ -55,14 +57,6 @@ fn run(
     (s.q.clone(), s.v.clone(), impulses)
 }
 
-fn max_rel_diff(a: &[f64], b: &[f64]) -> f64 {
-    let scale = a.iter().fold(0.0_f64, |m, x| m.max(x.abs())).max(1e-300);
-    a.iter()
-        .zip(b)
-        .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()))
-        / scale
-}
-
 fn compare(make: &dyn Fn() -> Box<dyn ContactSet>, steps: usize, h: f64, what: &str) {
     let (sys, _, _) = box_system();
     for kind in SchemeKind::ALL {
@@ -101,7 +95,7 @@ fn compare(make: &dyn Fn() -> Box<dyn ContactSet>, steps: usize, h: f64, what: &
                 ("v", &dense.1, &cols.1),
                 ("P", &dense.2, &cols.2),
             ] {
-                let d = max_rel_diff(a, b);
+                let d = common::max_rel_diff(a, b);
                 assert!(
                     d < 1e-9,
                     "{what} {} {metric:?}: {name} differs by {d:e} between the paths",
@@ -115,20 +109,7 @@ fn compare(make: &dyn Fn() -> Box<dyn ContactSet>, steps: usize, h: f64, what: &
 #[test]
 fn plane_contacts_same_on_both_paths() {
     let (_, points, face) = box_system();
-    let make = || -> Box<dyn ContactSet> {
-        Box::new(
-            NodesOnPlane::new(
-                face.iter()
-                    .map(|&v| vec![3 * v, 3 * v + 1, 3 * v + 2])
-                    .collect(),
-                face.iter().map(|&v| points[v].to_vec()).collect(),
-                vec![0.0, 0.0, 1.0],
-                -1e-4,
-                0.0,
-            )
-            .unwrap(),
-        )
-    };
+    let make = || common::blocks::floor_contacts(&face, &points, -1e-4);
     // 1e-4 m gap closed at 1 m/s after 1e-4 s = 5 steps; contact lasts about
     // 2 × 0.1 m / c0 ≈ 2e-3 s, so 60 steps cover impact and compression.
     compare(&make, 60, 2e-5, "plane");
@@ -194,7 +175,7 @@ fn evicted_columns_are_recomputed() {
     let (cols, _) = trajectory(DelassusKind::Columns, 1);
     // 5 s at 3 m/s between walls 2 m apart: 7 bounces.
     assert!(bounces >= 7, "{bounces} bounces");
-    let d = max_rel_diff(&dense, &cols);
+    let d = common::max_rel_diff(&dense, &cols);
     assert!(d < 1e-12, "trajectories differ by {d:e}");
     // a particle driven into a corner activates two walls at once: a one-column pool
     // cannot hold them

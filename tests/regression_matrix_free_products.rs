@@ -16,8 +16,9 @@
 //! orders of margin and is far below what a wrong entry of `F` (a missing tree path: a
 //! column of `W` off by its coupling to the other contacts, tens of percent) would give.
 
+mod common;
+
 use signorini::contact::ContactSet;
-use signorini::contact::plane::NodesOnPlane;
 use signorini::delassus::DelassusKind;
 use signorini::integrators::{self, Metric, SchemeKind, SchemeParams};
 use signorini::model::generate::box_mesh;
@@ -36,20 +37,7 @@ fn block() -> (LinearSystem, Box<dyn Fn() -> Box<dyn ContactSet>>) {
     let sys = assemble(&mesh, &MAT, Formulation::Solid, MassKind::Consistent).unwrap();
     let face = mesh.node_sets["z0"].clone();
     let points = mesh.points.clone();
-    let make = move || -> Box<dyn ContactSet> {
-        Box::new(
-            NodesOnPlane::new(
-                face.iter()
-                    .map(|&v| vec![3 * v, 3 * v + 1, 3 * v + 2])
-                    .collect(),
-                face.iter().map(|&v| points[v].to_vec()).collect(),
-                vec![0.0, 0.0, 1.0],
-                -1e-4,
-                0.0,
-            )
-            .unwrap(),
-        )
-    };
+    let make = move || common::blocks::floor_contacts(&face, &points, -1e-4);
     (sys, Box::new(make))
 }
 
@@ -84,14 +72,6 @@ fn run(
     (integ.state().q.clone(), impulses, integ.path())
 }
 
-fn max_rel_diff(a: &[f64], b: &[f64]) -> f64 {
-    let scale = a.iter().fold(0.0_f64, |m, x| m.max(x.abs())).max(1e-300);
-    a.iter()
-        .zip(b)
-        .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()))
-        / scale
-}
-
 #[test]
 fn products_through_the_flexibilities_match_products_through_the_factor() {
     let (sys, make) = block();
@@ -124,7 +104,7 @@ fn products_through_the_flexibilities_match_products_through_the_factor() {
                 "{kind:?}: too few impulses"
             );
             for (what, a, b) in [("q", &qa, &qc), ("impulses", &pa, &pc)] {
-                let d = max_rel_diff(a, b);
+                let d = common::max_rel_diff(a, b);
                 assert!(d < 1e-9, "{kind:?} {metric:?}: {what} differ by {d:e}");
             }
         }

@@ -62,3 +62,48 @@ use faer::sparse::{SparseColMat, SparseColMatRef};
 use faer::{Conj, MatMut, MatRef, Par, Side};
 
 use crate::error::Error;
+
+/// Test matrices shared by the factor's unit tests.
+#[cfg(test)]
+pub(crate) mod test_grids {
+    use faer::sparse::Triplet;
+
+    /// Node `(i, j, l)` of body `b` of [`two_grids`]: `b g³ + (i g + j) g + l`.
+    pub(crate) fn grid_id(g: usize) -> impl Fn(usize, usize, usize, usize) -> usize + Copy {
+        move |b, i, j, l| b * g * g * g + (i * g + j) * g + l
+    }
+
+    /// Two uncoupled `g × g × g` grids with the 27-point coupling of a hex8 mesh, as
+    /// triplets of both triangles: `diag(c)` on the diagonal and `off(c, o)` between
+    /// neighbours (symmetric when `off` is), numbered by [`grid_id`].
+    pub(crate) fn two_grids(
+        g: usize,
+        diag: impl Fn(usize) -> f64,
+        off: impl Fn(usize, usize) -> f64,
+    ) -> Vec<Triplet<usize, usize, f64>> {
+        let id = grid_id(g);
+        let mut t = Vec::new();
+        for b in 0..2 {
+            for i in 0..g {
+                for j in 0..g {
+                    for l in 0..g {
+                        let c = id(b, i, j, l);
+                        t.push(Triplet::new(c, c, diag(c)));
+                        for (di, dj, dl) in (0..27).map(|q| (q / 9, q / 3 % 3, q % 3)) {
+                            let (a, bb, cc) = (i + di, j + dj, l + dl);
+                            if (di, dj, dl) == (1, 1, 1) || a < 1 || bb < 1 || cc < 1 {
+                                continue;
+                            }
+                            let (a, bb, cc) = (a - 1, bb - 1, cc - 1);
+                            if a < g && bb < g && cc < g {
+                                let o = id(b, a, bb, cc);
+                                t.push(Triplet::new(c, o, off(c, o)));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        t
+    }
+}

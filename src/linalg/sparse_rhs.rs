@@ -302,7 +302,6 @@ fn sweeps(
 mod tests {
     use super::*;
     use crate::linalg::SparseMatrix;
-    use faer::sparse::Triplet;
 
     /// Two uncoupled 3-D grid operators (27-point, diagonally dominant) as one matrix, large enough for
     /// faer's supernodal factor: every column of unit vectors on one body's face, solved
@@ -312,30 +311,9 @@ mod tests {
         let g = 12usize;
         let body = g * g * g;
         let n = 2 * body;
-        let id = |b: usize, i: usize, j: usize, l: usize| b * body + (i * g + j) * g + l;
-        let mut t = Vec::new();
-        for b in 0..2 {
-            for i in 0..g {
-                for j in 0..g {
-                    for l in 0..g {
-                        // a 27-point stencil (a hex8 mesh's coupling), diagonally
-                        // dominant: dense enough for a supernodal factor
-                        let c = id(b, i, j, l);
-                        t.push(Triplet::new(c, c, 27.5));
-                        for (di, dj, dl) in (0..27).map(|q| (q / 9, q / 3 % 3, q % 3)) {
-                            let (a, bb, cc) = (i + di, j + dj, l + dl);
-                            if (di, dj, dl) == (0, 0, 0) || a < 1 || bb < 1 || cc < 1 {
-                                continue;
-                            }
-                            let (a, bb, cc) = (a - 1, bb - 1, cc - 1);
-                            if a < g && bb < g && cc < g {
-                                t.push(Triplet::new(c, id(b, a, bb, cc), -1.0));
-                            }
-                        }
-                    }
-                }
-            }
-        }
+        // diagonally dominant (26 neighbours of −1): dense enough for a supernodal factor
+        let t = crate::linalg::test_grids::two_grids(g, |_| 27.5, |_, _| -1.0);
+        let id = crate::linalg::test_grids::grid_id(g);
         let a = SparseMatrix::try_new_from_triplets(n, n, &t).unwrap();
         let mut f = SpdFactor::new(a.as_ref(), "test").unwrap();
         assert!(

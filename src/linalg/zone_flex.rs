@@ -732,34 +732,16 @@ mod tests {
     #[test]
     fn flexibilities_match_full_solves() {
         let g = 11usize;
-        let body = g * g * g;
-        let n = 2 * body;
-        let id = |b: usize, i: usize, j: usize, l: usize| b * body + (i * g + j) * g + l;
-        let mut kt = Vec::new();
-        let mut mt = Vec::new();
-        for b in 0..2 {
-            for i in 0..g {
-                for j in 0..g {
-                    for l in 0..g {
-                        let c = id(b, i, j, l);
-                        kt.push(Triplet::new(c, c, 26.5 + (c % 7) as f64));
-                        mt.push(Triplet::new(c, c, 1.0 + (c % 5) as f64 * 0.1));
-                        for q in 0..27 {
-                            let (di, dj, dl) = (q / 9, q / 3 % 3, q % 3);
-                            let (a, bb, cc) = (i + di, j + dj, l + dl);
-                            if (di, dj, dl) == (1, 1, 1) || a < 1 || bb < 1 || cc < 1 {
-                                continue;
-                            }
-                            let (a, bb, cc) = (a - 1, bb - 1, cc - 1);
-                            if a < g && bb < g && cc < g {
-                                let o = id(b, a, bb, cc);
-                                kt.push(Triplet::new(c, o, -0.6 - ((c + o) % 3) as f64 * 0.1));
-                            }
-                        }
-                    }
-                }
-            }
-        }
+        let n = 2 * g * g * g;
+        let id = crate::linalg::test_grids::grid_id(g);
+        let kt = crate::linalg::test_grids::two_grids(
+            g,
+            |c| 26.5 + (c % 7) as f64,
+            |c, o| -0.6 - ((c + o) % 3) as f64 * 0.1,
+        );
+        let mt: Vec<_> = (0..n)
+            .map(|c| Triplet::new(c, c, 1.0 + (c % 5) as f64 * 0.1))
+            .collect();
         let k = SparseMatrix::try_new_from_triplets(n, n, &kt).unwrap();
         let mut zone: Vec<usize> = (0..2)
             .flat_map(|b| (0..g).flat_map(move |i| (0..g).map(move |j| id(b, i, j, 0))))

@@ -157,3 +157,24 @@ target = {{ body = "lower", surface = "z1" }}
 "#
     )
 }
+
+/// Frictionless contacts of the 3-D nodes `face` (dofs `3v .. 3v + 3`) with a plane of
+/// normal `z`, at the signed offset `offset` of `NodesOnPlane` (−1e-4: a 1e-4 m gap).
+pub fn floor_contacts(
+    face: &[usize],
+    points: &[[f64; 3]],
+    offset: f64,
+) -> Box<dyn signorini::contact::ContactSet> {
+    Box::new(
+        signorini::contact::plane::NodesOnPlane::new(
+            face.iter()
+                .map(|&v| vec![3 * v, 3 * v + 1, 3 * v + 2])
+                .collect(),
+            face.iter().map(|&v| points[v].to_vec()).collect(),
+            vec![0.0, 0.0, 1.0],
+            offset,
+            0.0,
+        )
+        .unwrap(),
+    )
+}

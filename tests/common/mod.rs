@@ -9,6 +9,16 @@ pub mod scratch;
 pub mod sweeps;
 
 use std::collections::HashMap;
+
+/// `max |a − b|` over the largest `|a|`: how far two runs' values part, relative to
+/// their scale.
+pub fn max_rel_diff(a: &[f64], b: &[f64]) -> f64 {
+    let scale = a.iter().fold(0.0_f64, |m, x| m.max(x.abs())).max(1e-300);
+    a.iter()
+        .zip(b)
+        .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()))
+        / scale
+}
 use std::path::Path;
 
 /// One frame as vtkio reads it: points, VTK cell types, point and cell arrays.
