@@ -167,15 +167,15 @@ impl Delassus {
         x: &[f64],
         out: &mut [f64],
     ) -> bool {
-        if self.pflex.is_none() || !matches!((op, self.metric), (Op::W, _) | (Op::Wn, Metric::Mass))
-        {
+        if !matches!((op, self.metric), (Op::W, _) | (Op::Wn, Metric::Mass)) {
             return false;
         }
-        // G x on the n dofs: non-zero on the zone alone
-        self.gather_g(x);
-        let Some(pf) = self.pflex.as_mut() else {
+        // taken out while `gather_g` borrows `self` (a move, no allocation)
+        let Some(mut pf) = self.pflex.take() else {
             return false;
         };
+        // G x on the n dofs: non-zero on the zone alone
+        self.gather_g(x);
         for (v, &d) in pf.zx.iter_mut().zip(&pf.dofs) {
             *v = self.t1[d];
         }
@@ -201,6 +201,7 @@ impl Delassus {
         for (&v, &d) in pf.zy.iter().zip(&pf.dofs) {
             self.t1[d] = v;
         }
+        self.pflex = Some(pf);
         for (a, o) in out.iter_mut().enumerate() {
             *o += s * self.jac.dot(a, &self.t1);
         }
