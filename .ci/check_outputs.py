@@ -146,6 +146,14 @@ def check_vtkhdf(h5, out, frames, rows):
                 want = np.array([float(rows[k][f"{q}_{c}"]) for k in steps])
                 if not np.array_equal(hist[q][:, c], want):
                     fail(f"{h5}: /history/{q}[:, {c}] differs from history.csv")
+        # solid scenes: each body's centre and momenta, x y z per body
+        for q in ["centre", "momentum", "angular_momentum"]:
+            if q not in hist:
+                continue
+            for j in range(hist[q].shape[1]):
+                want = np.array([float(rows[k][f"{q}_{j // 3}_{j % 3}"]) for k in steps])
+                if not np.array_equal(hist[q][:, j], want):
+                    fail(f"{h5}: /history/{q}[:, {j}] differs from history.csv")
     print(f"check_outputs: {h5}: {len(times)} VTKHDF time steps equal the .vtu frames; "
           f"/history equals history.csv")
 

@@ -158,10 +158,13 @@ friction = 0.3
     assert_eq!(
         sh[8..].join(","),
         "closed_contacts,total_impulse,min_gap,total_projection,total_tangent_impulse_0,\
-         total_tangent_impulse_1,sticking,slipping,friction_iterations,friction_residual"
+         total_tangent_impulse_1,sticking,slipping,friction_iterations,friction_residual,\
+         centre_0_0,centre_0_1,centre_0_2,momentum_0_0,momentum_0_1,momentum_0_2,\
+         angular_momentum_0_0,angular_momentum_0_1,angular_momentum_0_2"
     );
     let (ah, all) = read(ContactColumns::All);
-    assert_eq!(ah.len(), 8 + 289 * 9 + 2);
+    // the per-contact columns, the friction sweeps and residual, the body's nine
+    assert_eq!(ah.len(), 8 + 289 * 9 + 2 + 9);
     let col = |name: &str| ah.iter().position(|h| h == name).unwrap();
     let mut touched = 0;
     for (s, a) in sums.iter().zip(&all) {

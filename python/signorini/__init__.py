@@ -340,6 +340,33 @@ class Mesh:
         out[known] = x[self.dof_map[known]]
         return out
 
+    def dofs(self, x: Any, name: str = "x") -> np.ndarray:
+        """The inverse of :meth:`nodal`: ``(N, dim)`` nodal values as one value per
+        unknown. Where a component is fixed or prescribed (no unknown) the value must be
+        0 or NaN (a motion there cannot be given: it is the scene's); a dof vector
+        (shape ``(unknowns,)``) is returned as a ``float64`` copy."""
+        x = np.asarray(x, dtype=np.float64)
+        n_dofs = int(self.dof_map.max()) + 1 if self.dof_map.size else 0
+        if x.ndim == 1 and x.shape[0] == n_dofs:
+            return x.copy()
+        if x.shape != self.dof_map.shape:
+            raise BadInput(
+                f"invalid value for `{name}`: an array of shape {x.shape} (expected one value "
+                f"per unknown, shape ({n_dofs},), or one row per point, shape "
+                f"{self.dof_map.shape})"
+            )
+        known = self.dof_map >= 0
+        bad = ~known & ~np.isnan(x) & (x != 0)
+        if bad.any():
+            p, c = (int(i) for i in np.argwhere(bad)[0])
+            raise BadInput(
+                f"invalid value for `{name}`: {x[p, c]} at point {p}, component {c}, which is "
+                f"fixed or prescribed (give 0 or NaN there)"
+            )
+        out = np.empty(n_dofs)
+        out[self.dof_map[known]] = x[known]
+        return out
+
     def __repr__(self) -> str:
         kinds = ", ".join(f"{len(v)} {k}" for k, v in self.cells.items())
         return (
@@ -375,12 +402,17 @@ _UNITS = {
     "tangent_impulse": "N·s",
     "slip_velocity": "m/s",
     "status": "",
+    "centre": "m",
+    "momentum": "kg·m/s",
+    "angular_momentum": "kg·m²/s",
 }
 
 #: The per-contact quantities of the history (`gap_c`, …), then those with a tangent
 #: index too (`tangent_impulse_c_t`, …).
 _PER_CONTACT = ("gap", "velocity", "impulse", "projection", "status")
 _PER_TANGENT = ("tangent_impulse", "slip_velocity")
+#: The per-body quantities of a solid scene's history (`centre_b_d`, …; d = x, y, z).
+_PER_BODY = ("centre", "momentum", "angular_momentum")
 
 
 def _split(name: str) -> Tuple[str, Tuple[int, ...]]:
@@ -403,10 +435,13 @@ class History(dict):
     - ``per_contact(q)``: ``(steps, contacts)`` for ``gap``, ``velocity``, ``impulse``,
       ``projection``, ``status``; ``(steps, contacts, tangents)`` for
       ``tangent_impulse`` and ``slip_velocity`` (contact ``c`` is ``mesh.contacts[c]``);
+    - ``bodies`` and ``per_body(q)``: ``(steps, bodies, 3)`` for ``centre`` (centre of
+      mass), ``momentum`` and ``angular_momentum`` (about the centre of mass) of each
+      body of a solid or plane scene (body ``b`` is ``mesh.bodies[b]``);
     - ``unit(name)``: a column's or a quantity's SI unit (``""`` for counts);
     - ``to_pandas()``: a DataFrame indexed by time, units in ``df.attrs["units"]``;
-    - ``to_xarray()``: a Dataset on dimensions ``time``, ``contact``, ``tangent``, each
-      variable with its ``units`` attribute.
+    - ``to_xarray()``: a Dataset on dimensions ``time``, ``contact``, ``tangent``,
+      ``body``, ``axis``, each variable with its ``units`` attribute.
     """
 
     @property
@@ -443,6 +478,30 @@ class History(dict):
             out[(slice(None),) + idx] = v
         return out
 
+    @property
+    def bodies(self) -> int:
+        """Bodies with their own columns (0 for rods and the academic examples)."""
+        n = 0
+        for k in self:
+            q, idx = _split(k)
+            n += q == "centre" and len(idx) == 2 and idx[1] == 0
+        return n
+
+    def per_body(self, quantity: str) -> np.ndarray:
+        """``quantity`` (``centre``, ``momentum`` or ``angular_momentum``) of every body:
+        ``(steps, bodies, 3)``, the last axis x, y, z."""
+        if quantity not in _PER_BODY:
+            raise BadInput(
+                f"invalid value for `quantity`: {quantity!r} (expected one of "
+                f"{', '.join(_PER_BODY)})"
+            )
+        out = np.full((len(self["time"]), self.bodies, 3), np.nan)
+        for k, v in self.items():
+            q, idx = _split(k)
+            if q == quantity and len(idx) == 2:
+                out[:, idx[0], idx[1]] = v
+        return out
+
     def unit(self, name: str) -> str:
         """The SI unit of a column (``impulse_3``) or a quantity (``impulse``)."""
         q = _split(name)[0]
@@ -477,6 +536,10 @@ class History(dict):
                     dims = ("time", "contact") + (("tangent",) if q in _PER_TANGENT else ())
                     data[q] = (dims, self.per_contact(q), {"units": _UNITS[q]})
                     done.add(q)
+            elif len(idx) == 2 and q in _PER_BODY:
+                if q not in done:
+                    data[q] = (("time", "body", "axis"), self.per_body(q), {"units": _UNITS[q]})
+                    done.add(q)
             else:
                 data[k] = (("time",), v, {"units": self.unit(k)})
         return xr.Dataset(data, coords={"time": ("time", self["time"], {"units": "s"})})
@@ -501,6 +564,40 @@ class Simulation:
         if self._mesh is None:
             self._mesh = Mesh(self._inner.mesh())
         return self._mesh
+
+    def bodies(self) -> Dict[str, np.ndarray]:
+        """Each body's measures in the current state, as arrays over the bodies (in the
+        scene's order): ``name`` ``(B,)``, ``mass`` ``(B,)`` (kg), ``centre`` ``(B, 3)``
+        (centre of mass, m), ``momentum`` ``(B, 3)`` (kg·m/s) and ``angular_momentum``
+        ``(B, 3)`` (about the centre of mass, kg·m²/s; about the origin it is
+        ``angular_momentum + np.cross(centre, momentum)``). Of the state after the last
+        :meth:`step`, the final state of an in-memory :meth:`run`, or the initial state
+        before either. Sums over the kept dofs: a fixed or prescribed component adds
+        nothing (exact for free bodies)."""
+        rows = self._inner.bodies()
+        names = self.mesh.bodies
+        b = len(rows)
+        return {
+            "name": np.array(names[:b] + [f"body {i}" for i in range(len(names), b)]),
+            "mass": np.array([r[0] for r in rows], dtype=np.float64),
+            "centre": np.array([r[1] for r in rows], dtype=np.float64).reshape(b, 3),
+            "momentum": np.array([r[2] for r in rows], dtype=np.float64).reshape(b, 3),
+            "angular_momentum": np.array([r[3] for r in rows], dtype=np.float64).reshape(b, 3),
+        }
+
+    def set_state(self, q: Any = None, v: Any = None) -> None:
+        """Sets the displacements ``q`` (m) and/or velocities ``v`` (m/s): one value per
+        unknown (as :attr:`q`) or one row per point (``(N, dim)``, as
+        :meth:`Mesh.nodal` gives; 0 or NaN where a component is fixed or prescribed).
+        Before the first :meth:`step` it replaces the scene's initial state (a per-node
+        initial field); between steps, the current state, whose gaps and contact data
+        are evaluated again at the new ``q``. For :meth:`step` runs: :meth:`run` starts
+        from the scene's own initial state and refuses a simulation whose state was
+        set."""
+        m = self.mesh
+        qd = None if q is None else m.dofs(q, "q")
+        vd = None if v is None else m.dofs(v, "v")
+        self._inner.set_state(qd, vd)
 
     def run(
         self,

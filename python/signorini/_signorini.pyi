@@ -53,6 +53,16 @@ class _Simulation:
         List[str],
         List[Tuple[int, int, str, int]],
     ]: ...
+    def set_state(
+        self,
+        q: Optional[npt.NDArray[np.float64]] = None,
+        v: Optional[npt.NDArray[np.float64]] = None,
+    ) -> None: ...
+    def bodies(
+        self,
+    ) -> List[
+        Tuple[float, Tuple[float, float, float], Tuple[float, float, float], Tuple[float, float, float]]
+    ]: ...
     @property
     def q(self) -> npt.NDArray[np.float64]: ...
     @property

@@ -105,6 +105,9 @@ type MeshArrays = (
     Vec<(usize, usize, String, usize)>,
 );
 
+/// One body's mass, centre, momentum and angular momentum (`_Simulation.bodies`).
+type BodyRow = (f64, [f64; 3], [f64; 3], [f64; 3]);
+
 /// A validated scene (`signorini.Scene` wraps it).
 #[pyclass(module = "signorini._signorini", name = "_Scene", frozen)]
 struct PyScene {
@@ -355,6 +358,9 @@ struct SimState {
     model: Option<signorini::scene::Model>,
     /// The mesh and dof map of the built model (kept once the integrator has the rest).
     geometry: Option<std::sync::Arc<signorini::model::geometry::Geometry>>,
+    /// `set_state` changed the scene's initial state: `run()`, which starts from the
+    /// scene's, is refused.
+    state_set: bool,
 }
 
 impl SimState {
@@ -444,6 +450,13 @@ impl PySimulation {
                  run; make a new one with scene.simulation()",
             ));
         }
+        if g.state_set {
+            return Err(PyRuntimeError::new_err(
+                "run() starts from the scene's initial state, and set_state() changed it: \
+                 step() through the run instead, or give the scene the motion \
+                 (`velocity`, `angular_velocity` of its bodies)",
+            ));
+        }
         let mut options = match &self.kind {
             Kind::File(s) => s.output.clone(),
             Kind::Bar(_) => OutputOptions::default(),
@@ -519,14 +532,20 @@ impl PySimulation {
         if g.integ.is_none() {
             let kind = &self.kind;
             let cached = g.model.take();
+            // a model built for `mesh()` or `bodies()` gave its geometry away already:
+            // the run's checks measure that one (not the emptied field)
+            let known = g.geometry.clone();
             let built = py.detach(|| -> Result<_, Error> {
                 let mut model = match cached {
                     Some(m) => m,
                     None => kind.build()?,
                 };
                 let (params, dt) = kind.scheme_and_step();
-                let checks = RunChecks::new(params, model.geometry.size());
-                let geometry = std::sync::Arc::new(std::mem::take(&mut model.geometry));
+                let geometry = match known {
+                    Some(geo) => geo,
+                    None => std::sync::Arc::new(std::mem::take(&mut model.geometry)),
+                };
+                let checks = RunChecks::new(params, geometry.size());
                 Ok((model.into_integrator(params, dt)?, checks, geometry))
             });
             let (integ, checks, geometry) = built.map_err(py_err)?;
@@ -659,6 +678,126 @@ impl PySimulation {
                 .map(|c| (c.point, c.body, c.target.clone(), c.entry))
                 .collect(),
         ))
+    }
+
+    /// Each body's mass (kg), centre of mass (m), linear momentum (kg·m/s) and angular
+    /// momentum about its centre (kg·m²/s) in the current state
+    /// ([`signorini::model::BodyMeasures`]): after `step()`, of the integrator's state;
+    /// after an in-memory `run()`, the summary's final values; before either, of the
+    /// initial state (building the model as `mesh()` does).
+    fn bodies(&self, py: Python<'_>) -> PyResult<Vec<BodyRow>> {
+        let mut g = self.lock()?;
+        let row =
+            |s: &signorini::model::BodyState| (s.mass, s.centre, s.momentum, s.angular_momentum);
+        if g.integ.is_none() && g.finished.is_some() {
+            let summary = g.summary.clone().unwrap_or_default();
+            let v: serde_json::Value = serde_json::from_str(&summary).unwrap_or_default();
+            let parse = |b: &serde_json::Value| -> Option<BodyRow> {
+                let s: signorini::model::BodyState =
+                    serde_json::from_value(b.get("final")?.clone()).ok()?;
+                Some(row(&s))
+            };
+            return v
+                .get("bodies")
+                .and_then(|b| b.as_array())
+                .map(|b| b.iter().filter_map(parse).collect())
+                .ok_or_else(|| PyRuntimeError::new_err("the finished run recorded no bodies"));
+        }
+        if g.integ.is_none() && g.model.is_none() {
+            let kind = &self.kind;
+            let mut model = py.detach(|| kind.build()).map_err(py_err)?;
+            if g.geometry.is_none() {
+                g.geometry = Some(std::sync::Arc::new(std::mem::take(&mut model.geometry)));
+            }
+            g.model = Some(model);
+        }
+        let geo = match &g.geometry {
+            Some(geo) => geo.clone(),
+            None => {
+                let model = g.model.as_mut().expect("built above");
+                let geo = std::sync::Arc::new(std::mem::take(&mut model.geometry));
+                g.geometry = Some(geo.clone());
+                geo
+            }
+        };
+        let (sys, q, v) = match (&g.integ, &g.model) {
+            (Some(i), _) => (i.system(), &i.state().q, &i.state().v),
+            (None, Some(m)) => (&m.problem.system, &m.problem.q0, &m.problem.v0),
+            (None, None) => unreachable!("built above"),
+        };
+        let Some(mut bm) = signorini::model::BodyMeasures::new(&geo, q.len()) else {
+            return Ok(Vec::new());
+        };
+        let mut out = vec![signorini::model::BodyState::default(); bm.bodies()];
+        bm.measure(&sys.mass, q, v, &mut out);
+        Ok(out.iter().map(row).collect())
+    }
+
+    /// Replaces the displacements `q` and/or velocities `v` (one value per dof, finite):
+    /// before the first step, the model's initial state (building it as `mesh()` does);
+    /// after, the integrator's state, whose gaps, Jacobians and Delassus data are
+    /// evaluated again at the new `q` (as a checkpoint's restore does).
+    #[pyo3(signature = (q=None, v=None))]
+    fn set_state(&self, py: Python<'_>, q: Option<Vec<f64>>, v: Option<Vec<f64>>) -> PyResult<()> {
+        let mut g = self.lock()?;
+        if g.finished.is_some() && g.integ.is_none() {
+            return Err(PyRuntimeError::new_err(
+                "this simulation has finished its run: make a new one with scene.simulation()",
+            ));
+        }
+        if g.integ.is_none() && g.model.is_none() {
+            let kind = &self.kind;
+            let mut model = py.detach(|| kind.build()).map_err(py_err)?;
+            if g.geometry.is_none() {
+                g.geometry = Some(std::sync::Arc::new(std::mem::take(&mut model.geometry)));
+            }
+            g.model = Some(model);
+        }
+        let n = match (&g.integ, &g.model) {
+            (Some(i), _) => i.state().q.len(),
+            (None, Some(m)) => m.problem.q0.len(),
+            (None, None) => unreachable!("built above"),
+        };
+        for (name, x) in [("q", &q), ("v", &v)] {
+            let Some(x) = x else { continue };
+            if x.len() != n {
+                return Err(BadInput::new_err(format!(
+                    "{name} must have {n} entries (one per dof), got {}",
+                    x.len()
+                )));
+            }
+            if let Some(i) = x.iter().position(|y| !y.is_finite()) {
+                return Err(BadInput::new_err(format!(
+                    "{name}[{i}] is {}: every entry must be finite",
+                    x[i]
+                )));
+            }
+        }
+        let st = &mut *g;
+        match (&mut st.integ, &mut st.model) {
+            (Some(integ), _) => {
+                let mut saved = integ.save();
+                for (name, x) in [("q", q), ("v", v)] {
+                    if let Some(x) = x {
+                        saved
+                            .vectors
+                            .insert(name.to_string(), signorini::integrators::saved::Floats(x));
+                    }
+                }
+                integ.restore(&saved).map_err(py_err)?;
+            }
+            (None, Some(m)) => {
+                if let Some(q) = q {
+                    m.problem.q0 = q;
+                }
+                if let Some(v) = v {
+                    m.problem.v0 = v;
+                }
+            }
+            (None, None) => unreachable!("built above"),
+        }
+        g.state_set = true;
+        Ok(())
     }
 
     /// Nodal displacements `q` (m), one per dof (owned copy).

@@ -447,3 +447,132 @@ def test_a_scene_rebuilt_from_its_dict_or_toml_reads_its_meshes(tmp_path, monkey
         assert np.array_equal(a.q, b.q)
     with pytest.raises(signorini.BadInput, match="ball.msh"):
         signorini.Scene.from_dict(scene.to_dict()).simulation().step(1)
+
+
+def test_a_spinning_body_from_a_dict_and_its_momenta():
+    """Issue 37: a rigid-motion initial state (`angular_velocity` about the centre of
+    mass) and `Simulation.bodies()`. A homogeneous 0.4 × 0.2 × 0.1 m box (ρ = 1000):
+    m = 8 kg, centre (0.2, 0.1, 0.05), turning at ω = 3 rad/s about z with v = 0.5 m/s
+    along x: p = (4, 0, 0) kg·m/s and L = ω m (a² + b²)/12 = 0.4 kg·m²/s about the
+    centre, exact for hex8 cells with the consistent mass (tolerance 1e-12 relative).
+    Over 50 free steps the momentum stays and the centre moves at p/m (θ = 1/2: exact to
+    round-off); after `run()` the summary holds the same final values."""
+    d = {
+        "time": {"dt": 1e-5, "t_end": 5e-4},
+        "scheme": {"kind": "moreau-jean"},
+        "bodies": [
+            {
+                "name": "box",
+                "mesh": {"generator": "box", "cell": "hex8", "cells": np.array([4, 2, 2]), "size": [0.4, 0.2, 0.1]},
+                "material": {"young": 1e7, "poisson": 0.3, "density": np.float32(1000.0)},
+                "velocity": [0.5, 0.0, 0.0],
+                "angular_velocity": np.array([0.0, 0.0, 3.0]),
+            }
+        ],
+    }
+    sim = signorini.Scene.from_dict(d).simulation()
+    b = sim.bodies()
+    assert list(b["name"]) == ["box"]
+    m, lz = 8.0, 3.0 * 8.0 * (0.4**2 + 0.2**2) / 12.0
+    assert abs(b["mass"][0] - m) <= 1e-12 * m
+    assert np.allclose(b["centre"][0], [0.2, 0.1, 0.05], rtol=0, atol=1e-12)
+    assert np.allclose(b["momentum"][0], [0.5 * m, 0, 0], rtol=0, atol=1e-12 * m)
+    assert np.allclose(b["angular_momentum"][0], [0, 0, lz], rtol=0, atol=1e-12 * lz)
+    sim.step(50)
+    b1 = sim.bodies()
+    assert np.allclose(b1["momentum"][0], b["momentum"][0], rtol=0, atol=1e-12 * m)
+    t = sim.time
+    assert np.allclose(b1["centre"][0], b["centre"][0] + t * b["momentum"][0] / m, rtol=0, atol=1e-12)
+    ran = signorini.Scene.from_dict(d).simulation()
+    ran.run()
+    s = ran.summary["bodies"][0]
+    assert s["name"] == "box" and s["initial"]["angular_momentum"][2] == pytest.approx(lz, rel=1e-12)
+    assert np.allclose(ran.bodies()["centre"][0], s["final"]["centre"], rtol=0, atol=0)
+    assert np.allclose(ran.bodies()["centre"][0], b1["centre"][0], rtol=0, atol=1e-12)
+
+
+def test_the_history_holds_each_body_s_momenta(tmp_path):
+    """Issue 37: a solid scene's history ends each row with every body's centre of mass,
+    momentum and angular momentum; `per_body(q)` shapes them `(steps, bodies, 3)` with
+    units, and `to_xarray()` puts them on `(time, body, axis)`. `hex_bars.toml`: two
+    bodies, the striker launched along x at 0.1 m/s; the total momentum along x is
+    conserved through the impact to 1e-9 of itself (an internal impulse between the
+    bodies; the tolerance is the contact solver's) and equals the striker's ρ A L v0."""
+    scene = signorini.Scene.from_toml(MESHES / "hex_bars.toml")
+    sim = scene.simulation()
+    sim.run(out=tmp_path / "run", fields=False, plots=False)
+    h = sim.history
+    assert h.bodies == 2
+    p = h.per_body("momentum")
+    assert p.shape == (len(h.time), 2, 3)
+    assert h.unit("momentum_1_0") == "kg·m/s" and h.unit("angular_momentum") == "kg·m²/s"
+    total = p[:, 0, 0] + p[:, 1, 0]
+    assert np.allclose(total, total[0], rtol=1e-9, atol=0)
+    # ... and equal to the striker's at launch: ρ A L v0 (the bars touch from t = 0, so
+    # the first row has already passed some to the target)
+    striker = 7800.0 * 0.017724538509055159**2 * 1.0 * 0.1
+    assert total[0] == pytest.approx(striker, rel=1e-9) and p[0, 1, 0] > 0
+    c = h.per_body("centre")
+    assert np.isfinite(c).all() and (c[:, 0, 0] < c[:, 1, 0]).all()
+    x = h.to_xarray()
+    assert x["momentum"].dims == ("time", "body", "axis")
+    assert np.array_equal(x["momentum"].values, p)
+    with pytest.raises(signorini.BadInput, match="expected one of centre"):
+        h.per_body("spin")
+
+
+def _box(extra=None):
+    body = {
+        "name": "box",
+        "mesh": {"generator": "box", "cell": "hex8", "cells": [4, 2, 2], "size": [0.4, 0.2, 0.1]},
+        "material": {"young": 1e7, "poisson": 0.3, "density": 1000.0},
+    }
+    body.update(extra or {})
+    return {"time": {"dt": 1e-5, "t_end": 5e-4}, "scheme": {"kind": "moreau-jean"}, "bodies": [body]}
+
+
+def test_set_state_gives_a_per_node_initial_field_and_resets_between_steps():
+    """Issue 37: `set_state(v=…)` with one row per point. The rigid spin field
+    ω × (x − c) built in numpy before the first step gives the same velocities, to
+    round-off, as the scene's `angular_velocity` (1e-15 m/s), hence the same angular
+    momentum; a velocity reset to zero between steps leaves a free body at rest (its
+    momentum stays 0 to 1e-15 kg·m/s over the next steps: nothing drives it)."""
+    keyed = signorini.Scene.from_dict(_box({"angular_velocity": [0.0, 0.0, 3.0]})).simulation()
+    keyed.step(1)
+    sim = signorini.Scene.from_dict(_box()).simulation()
+    m = sim.mesh
+    c = sim.bodies()["centre"][0]
+    w = np.array([0.0, 0.0, 3.0])
+    v = np.cross(w, m.points - c)
+    sim.set_state(v=v)
+    b0 = sim.bodies()
+    assert b0["angular_momentum"][0][2] == pytest.approx(3.0 * 8.0 * (0.4**2 + 0.2**2) / 12.0, rel=1e-12)
+    sim.step(1)
+    assert np.allclose(sim.v, keyed.v, rtol=0, atol=1e-15)
+    sim.step(9)
+    sim.set_state(v=np.zeros_like(sim.v))
+    sim.step(10)
+    assert np.abs(sim.bodies()["momentum"]).max() <= 1e-15
+    sim2 = signorini.Scene.from_dict(_box()).simulation()
+    sim2.set_state(q=np.zeros(sim2.mesh.points.size))
+    with pytest.raises(RuntimeError, match="set_state"):
+        sim2.run()
+
+
+def test_set_state_refuses_what_it_cannot_take():
+    """Errors in Python terms: a wrong shape names the argument and both shapes a value
+    may have; a motion given to a fixed component names the point; a NaN names the
+    entry."""
+    sim = signorini.Scene.from_dict(_box({"fixed": ["x0"]})).simulation()
+    m = sim.mesh
+    with pytest.raises(signorini.BadInput, match=r"`v`: an array of shape \(5,\)"):
+        sim.set_state(v=np.zeros(5))
+    with pytest.raises(signorini.BadInput, match="fixed or prescribed"):
+        sim.set_state(v=np.ones(m.points.shape))
+    n = int(m.dof_map.max()) + 1
+    q = np.zeros(n)
+    q[7] = np.nan
+    with pytest.raises(signorini.BadInput, match=r"q\[7\] is NaN"):
+        sim.set_state(q=q)
+    # NaN where a component is fixed is what `nodal` gives: accepted
+    sim.set_state(v=m.nodal(np.zeros(n)))

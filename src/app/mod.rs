@@ -106,6 +106,7 @@ fn run_scene_from(
     progress.phase("building the model (mesh, assembly, contacts)");
     let (mut model, report) = scene.build()?;
     let probes = probes::ProbeSet::new(&model.probes, &model.geometry);
+    let mut bodies = BodyRecord::start(scene, &model);
     let geometry = std::mem::take(&mut model.geometry);
     // the run's memory ledger, checked before anything is factored
     let mut plan = model.plan(&scene.scheme, scene.time.dt)?;
@@ -161,7 +162,62 @@ fn run_scene_from(
         ckpt,
         probes,
     )
-    .and_then(|r| finish(r, setup, plan.ledger.total(), out))
+    .and_then(|mut r| {
+        r.summary.bodies = bodies.finish(integ.system(), &r.state);
+        finish(r, setup, plan.ledger.total(), out)
+    })
+}
+
+/// Each body's measures at the start of a scene's run, for its summary's `bodies`.
+struct BodyRecord {
+    measures: Option<crate::model::BodyMeasures>,
+    names: Vec<String>,
+    initial: Vec<crate::model::BodyState>,
+}
+
+impl BodyRecord {
+    /// Measures `model`'s initial state (before its geometry goes to the frames).
+    fn start(scene: &crate::scene::file::Scene, model: &crate::scene::Model) -> Self {
+        let p = &model.problem;
+        let mut measures = crate::model::BodyMeasures::new(&model.geometry, p.q0.len());
+        let mut initial = Vec::new();
+        if let Some(m) = measures.as_mut() {
+            initial = vec![crate::model::BodyState::default(); m.bodies()];
+            m.measure(&p.system.mass, &p.q0, &p.v0, &mut initial);
+        }
+        BodyRecord {
+            measures,
+            names: scene.bodies.iter().map(|b| b.name.clone()).collect(),
+            initial,
+        }
+    }
+
+    /// The start's and `state`'s measures, body by body.
+    fn finish(
+        &mut self,
+        sys: &crate::model::LinearSystem,
+        state: &crate::integrators::State,
+    ) -> Vec<crate::run::summary::BodySummary> {
+        let Some(m) = self.measures.as_mut() else {
+            return Vec::new();
+        };
+        let mut last = vec![crate::model::BodyState::default(); m.bodies()];
+        m.measure(&sys.mass, &state.q, &state.v, &mut last);
+        self.initial
+            .iter()
+            .zip(last)
+            .enumerate()
+            .map(|(b, (&initial, last))| crate::run::summary::BodySummary {
+                name: self
+                    .names
+                    .get(b)
+                    .cloned()
+                    .unwrap_or_else(|| format!("body {b}")),
+                initial,
+                last,
+            })
+            .collect()
+    }
 }
 
 /// Finishes the killed run in `dir` from its `checkpoint.json` (see

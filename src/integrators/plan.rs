@@ -67,6 +67,9 @@ impl Plan {
         // them; counted for every size, the thread runs from 4096 dofs)
         self.ledger
             .add("history thread state copies", 4 * n as u64, 8);
+        // each body's centre and momenta per row (`model::BodyMeasures`: a 20-byte map
+        // and `M v` per dof; solid scenes only, counted for every one)
+        self.ledger.add("history body measures", n as u64, 28);
         if hdf5 {
             let cols = 12 + m as u64 * (4 + 2 * tangent_dim as u64 + 1);
             self.ledger
@@ -114,7 +117,7 @@ pub fn plan_kept(
     let mut analysis = None;
     let factor = if linear {
         let (f, an) =
-            crate::linalg::analyse_spd_kept(step.as_ref(), what, system.ordering.as_deref())?;
+            crate::linalg::analyse_spd_kept(step.as_ref(), what, system.ordering.as_ref())?;
         analysis = an;
         f
     } else if system.symmetric() {

@@ -128,7 +128,7 @@ impl Problem {
         matrix(Some(&s.mass));
         matrix(Some(&s.stiffness));
         matrix(s.damping.as_ref());
-        for o in s.ordering.iter().flatten() {
+        for o in s.ordering.iter().flat_map(|o| &o.perm) {
             h.word(*o as u64);
         }
         for x in self.q0.iter().chain(&self.v0) {

@@ -65,10 +65,10 @@ impl Hdf5Output {
     ) -> Result<HistoryWriter, Error> {
         #[cfg(feature = "hdf5")]
         if let Some(f) = &self.file {
+            let bodies = hist.bodies();
             return Ok(hist.with_hdf5(h5::History::create(
                 f,
-                m,
-                tangent_dim,
+                (m, tangent_dim, bodies),
                 scheme,
                 h,
                 theta,
@@ -108,7 +108,28 @@ pub struct HistoryWriter {
     pub(super) rows: u64,
     /// One group of columns per contact; false: the sums ([`ContactColumns`]).
     pub(super) per_contact: bool,
+    /// Solid scenes: each body's centre, momentum and angular momentum per row.
+    pub(super) bodies: Option<BodyColumns>,
 }
+
+/// The per-body columns of a history ([`HistoryWriter::with_bodies`]): the measures'
+/// dof map and one state per body, reused row after row (no allocation).
+pub(super) struct BodyColumns {
+    pub(super) measures: crate::model::BodyMeasures,
+    pub(super) states: Vec<crate::model::BodyState>,
+}
+
+impl BodyColumns {
+    fn new(measures: crate::model::BodyMeasures) -> Self {
+        let states = vec![crate::model::BodyState::default(); measures.bodies()];
+        BodyColumns { measures, states }
+    }
+}
+
+/// The quantities of the per-body columns, three components each (x, y, z; zeros where
+/// a plane body has none): `centre_{b}_{d}` (m), `momentum_{b}_{d}` (kg·m/s),
+/// `angular_momentum_{b}_{d}` (about the centre of mass, kg·m²/s).
+pub const BODY_COLUMNS: [&str; 3] = ["centre", "momentum", "angular_momentum"];
 
 /// Contacts up to which [`ContactColumns::Auto`] writes per-contact history columns.
 pub const CSV_CONTACTS_MAX: usize = 256;
@@ -168,11 +189,13 @@ impl HistoryWriter {
     /// `total_impulse` (ΣP_N, N·s), `min_gap` (m), `total_projection` (Στ), with friction
     /// `total_tangent_impulse_{t}` (the tangential impulses summed in their own frames:
     /// a vector where the contacts share a frame, as on a plane), `sticking`, `slipping`.
+    /// With `bodies` (solid scenes), each row ends with every body's [`BODY_COLUMNS`].
     pub fn create(
         path: &Path,
         m: usize,
         tangent_dim: usize,
         per_contact: bool,
+        bodies: Option<crate::model::BodyMeasures>,
     ) -> Result<Self, Error> {
         let tmp = part_path(path);
         let f = File::create(&tmp).map_err(|e| Error::write(&tmp, e))?;
@@ -202,6 +225,13 @@ impl HistoryWriter {
         if tangent_dim > 0 {
             header.push_str(",friction_iterations,friction_residual");
         }
+        for b in 0..bodies.as_ref().map_or(0, |m| m.bodies()) {
+            for q in BODY_COLUMNS {
+                for d in 0..3 {
+                    header.push_str(&format!(",{q}_{b}_{d}"));
+                }
+            }
+        }
         writeln!(out, "{header}").map_err(|e| Error::write(&tmp, e))?;
         Ok(HistoryWriter {
             #[cfg(feature = "hdf5")]
@@ -212,14 +242,21 @@ impl HistoryWriter {
             rows_since_flush: 0,
             rows: 0,
             per_contact,
+            bodies: bodies.map(BodyColumns::new),
         })
     }
 
     /// Reopens the `.part` of a checkpointed run, cut to the `bytes` that belong to the
     /// checkpointed steps (rows a killed run wrote after its checkpoint, and a row the
     /// kill cut, are dropped: the resumed run writes them again). `per_contact` as the
-    /// run was created with.
-    pub fn resume(path: &Path, bytes: u64, rows: u64, per_contact: bool) -> Result<Self, Error> {
+    /// run was created with, and `bodies` too.
+    pub fn resume(
+        path: &Path,
+        bytes: u64,
+        rows: u64,
+        per_contact: bool,
+        bodies: Option<crate::model::BodyMeasures>,
+    ) -> Result<Self, Error> {
         let tmp = part_path(path);
         let mut f = std::fs::OpenOptions::new()
             .write(true)
@@ -282,7 +319,13 @@ impl HistoryWriter {
             rows_since_flush: 0,
             rows,
             per_contact,
+            bodies: bodies.map(BodyColumns::new),
         })
+    }
+
+    /// The bodies measured in each row (0 without per-body columns).
+    pub fn bodies(&self) -> usize {
+        self.bodies.as_ref().map_or(0, |b| b.states.len())
     }
 
     /// Rows written so far.
@@ -302,14 +345,19 @@ impl HistoryWriter {
         self
     }
 
-    /// Appends the row of the step that just ended.
+    /// Appends the row of the step that just ended (`mass`: the structure's mass matrix,
+    /// which the per-body columns read).
     pub fn row(
         &mut self,
+        mass: &crate::linalg::SparseMatrix,
         state: &State,
         stats: &StepStats,
         kinetic: f64,
         potential: f64,
     ) -> Result<(), Error> {
+        if let Some(b) = self.bodies.as_mut() {
+            b.measures.measure(mass, &state.q, &state.v, &mut b.states);
+        }
         let o = &mut self.out;
         let mut buf = ryu::Buffer::new();
         let r = (|| -> std::io::Result<()> {
@@ -377,12 +425,24 @@ impl HistoryWriter {
                 write!(o, ",{},", stats.friction_iterations)?;
                 o.write_all(fmt_f64(&mut buf, stats.friction_residual))?;
             }
+            for b in self.bodies.iter().flat_map(|b| &b.states) {
+                for x in b
+                    .centre
+                    .iter()
+                    .chain(&b.momentum)
+                    .chain(&b.angular_momentum)
+                {
+                    o.write_all(b",")?;
+                    o.write_all(fmt_f64(&mut buf, *x))?;
+                }
+            }
             o.write_all(b"\n")
         })();
         r.map_err(|e| Error::write(&self.tmp, e))?;
         #[cfg(feature = "hdf5")]
         if let Some(h) = self.h5.as_mut() {
-            h.row(state, stats, kinetic, potential)?;
+            let bodies = self.bodies.as_ref().map_or(&[][..], |b| &b.states[..]);
+            h.row(state, stats, kinetic, potential, bodies)?;
         }
         self.rows_since_flush += 1;
         self.rows += 1;

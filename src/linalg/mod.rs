@@ -11,6 +11,8 @@
 //! - [`Arithmetic`]: fused multiply-add in the tridiagonal solve where the CPU has it
 //!   (pulp's run-time dispatch), or the portable arithmetic that gives the same bits on
 //!   every CPU ([`set_portable_arithmetic`]).
+//! - `metis` (feature `metis`): METIS' nested dissection of a graph, a fill-reducing
+//!   order offered to the Cholesky of `M̂` beside AMD.
 //! - [`subnormals`](mod@subnormals): subnormal numbers flushed to zero on every computing thread of a
 //!   run ([`FlushGuard`]), or IEEE gradual underflow ([`set_ieee_subnormals`]).
 //! - [`spmv`] / [`spmv_add`] / [`sym_spmv_add`]: `y = A x` for a CSC matrix. Written here rather than
@@ -27,11 +29,13 @@
 //! analysis), `sparse_rhs` (set-up solves that skip zero blocks), `sparse` (the matrix
 //! type and products), `forms` (energies and dots of the step loop), `arith` (FMA or
 //! portable arithmetic), `dense` (small dense factorizations), `solver` (the trait and
-//! its backends), `subnormals`, `mumps` (feature).
+//! its backends), `subnormals`, `metis` and `mumps` (features).
 
 mod arith;
 mod dense;
 mod forms;
+#[cfg(feature = "metis")]
+pub mod metis;
 #[cfg(feature = "mumps")]
 pub mod mumps;
 mod plan;

@@ -4,13 +4,22 @@
 
 use super::*;
 
-/// `max |A x − b|`, for the tests of the solvers.
+/// A candidate fill-reducing order of the unknowns handed to the Cholesky of `M̂`
+/// (eq. 47) beside AMD, and the method that made it (named in the backend's path line).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DofOrdering {
+    /// What made the order, as the path line prints it (e.g. "nested dissection").
+    pub method: &'static str,
+    /// Position → unknown: a permutation of `0..n`.
+    pub perm: Vec<usize>,
+}
+
 /// The symbolic Cholesky analysis [`SpdFactor::new_general`] keeps: AMD, or `ordering`
-/// (position → unknown) where its factor has fewer entries; with the ordering's name.
+/// where its factor has fewer entries; with the ordering's name.
 pub(super) fn symbolic_choice(
     a: SparseColMatRef<'_, usize, f64>,
     what: &str,
-    ordering: Option<&[usize]>,
+    ordering: Option<&DofOrdering>,
 ) -> Result<(SymbolicCholesky<usize>, &'static str), Error> {
     let n = a.nrows();
     // AMD always: faer 0.24.4's `SymmetricOrdering::Identity` path factors the
@@ -24,7 +33,10 @@ pub(super) fn symbolic_choice(
     )
     .map_err(|e| Error::Numerical(format!("{what}: symbolic Cholesky failed: {e:?}")))?;
     let mut ordering_name = "AMD";
-    if let Some(fwd) = ordering.filter(|o| o.len() == n && n > 0) {
+    if let Some((fwd, method)) = ordering
+        .filter(|o| o.perm.len() == n && n > 0)
+        .map(|o| (&o.perm[..], o.method))
+    {
         let mut inv = vec![usize::MAX; n];
         for (i, &d) in fwd.iter().enumerate() {
             if d < n {
@@ -41,7 +53,7 @@ pub(super) fn symbolic_choice(
             ) && nd.len_val() < symbolic.len_val()
             {
                 symbolic = nd;
-                ordering_name = "nested dissection";
+                ordering_name = method;
             }
         }
     }
@@ -64,7 +76,7 @@ pub(super) fn factor_scratch(symbolic: &SymbolicCholesky<usize>) -> StackReq {
 pub fn analyse_spd(
     a: SparseColMatRef<'_, usize, f64>,
     what: &str,
-    ordering: Option<&[usize]>,
+    ordering: Option<&DofOrdering>,
 ) -> Result<FactorPlan, Error> {
     analyse_spd_kept(a, what, ordering).map(|(plan, _)| plan)
 }
@@ -75,7 +87,7 @@ pub fn analyse_spd(
 pub fn analyse_spd_kept(
     a: SparseColMatRef<'_, usize, f64>,
     what: &str,
-    ordering: Option<&[usize]>,
+    ordering: Option<&DofOrdering>,
 ) -> Result<(FactorPlan, Option<SpdAnalysis>), Error> {
     if Tridiagonal::is_tridiagonal(a) {
         let plan = FactorPlan {

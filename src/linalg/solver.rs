@@ -199,7 +199,7 @@ pub fn factor(
     a: SparseColMatRef<'_, usize, f64>,
     what: &str,
     kind: SolverKind,
-    ordering: Option<&[usize]>,
+    ordering: Option<&super::DofOrdering>,
 ) -> Result<Box<dyn LinearSolver>, Error> {
     #[cfg(feature = "mumps")]
     if let Some(f) = super::mumps::factor_if_active(a, what, kind) {
@@ -219,7 +219,7 @@ pub fn factor(
 pub fn factor_spd_analysed(
     a: SparseColMatRef<'_, usize, f64>,
     what: &str,
-    ordering: Option<&[usize]>,
+    ordering: Option<&super::DofOrdering>,
     analysis: Option<super::SpdAnalysis>,
 ) -> Result<Box<dyn LinearSolver>, Error> {
     #[cfg(feature = "mumps")]

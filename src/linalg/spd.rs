@@ -264,7 +264,7 @@ impl SpdFactor {
     pub fn with_ordering(
         a: SparseColMatRef<'_, usize, f64>,
         what: &str,
-        ordering: Option<&[usize]>,
+        ordering: Option<&DofOrdering>,
     ) -> Result<Self, Error> {
         if Tridiagonal::is_tridiagonal(a) {
             let t = Tridiagonal::factor(a)
@@ -282,7 +282,7 @@ impl SpdFactor {
     pub fn new_general(
         a: SparseColMatRef<'_, usize, f64>,
         what: &str,
-        ordering: Option<&[usize]>,
+        ordering: Option<&DofOrdering>,
     ) -> Result<Self, Error> {
         let (symbolic, ordering) = symbolic_choice(a, what, ordering)?;
         Self::factor_on(a, what, SpdAnalysis { symbolic, ordering })
@@ -295,7 +295,7 @@ impl SpdFactor {
         a: SparseColMatRef<'_, usize, f64>,
         what: &str,
         analysis: Option<SpdAnalysis>,
-        ordering: Option<&[usize]>,
+        ordering: Option<&DofOrdering>,
     ) -> Result<Self, Error> {
         match analysis {
             Some(an) if an.symbolic.nrows() == a.nrows() => Self::factor_on(a, what, an),

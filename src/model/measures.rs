@@ -1,5 +1,6 @@
 //! What a state of the structure measures: kinetic and potential energy (prescribed dofs
-//! and nonlinear parts included), total energy, momentum and mass.
+//! and nonlinear parts included), total energy, momentum and mass; a body's centre of
+//! mass and rigid-motion velocity field ([`centre_of_mass`], [`rigid_velocity`]).
 
 use super::*;
 
@@ -155,4 +156,67 @@ impl LinearSystem {
         }
         s
     }
+}
+
+/// The centre of mass of a body whose dof `p·dim + d` is component `d` of point `p`:
+/// `c_d = (e_dᵀ M X_d) / (e_dᵀ M e_d)` per component `d < dim`, `X_d` the points'
+/// coordinate `d` on the component-`d` dofs (m). With the consistent mass of
+/// isoparametric cells this is `∫ρx dV / ∫ρ dV` exactly (the row sums of `M` are
+/// `∫ρN_i`, and `Σ N_i x_i = x`); the lumped mass has the same row sums; under the
+/// redistributed mass (no mass on contact nodes) it is the discrete model's own centre.
+/// `None` when the body has no mass.
+pub fn centre_of_mass(
+    mass: faer::sparse::SparseColMatRef<'_, usize, f64>,
+    points: &[[f64; 3]],
+    dim: usize,
+) -> Option<[f64; 3]> {
+    let mut num = [0.0; 3];
+    let mut den = [0.0; 3];
+    for j in 0..mass.ncols().min(points.len() * dim) {
+        let d = j % dim;
+        for k in mass.col_ptr()[j]..mass.col_ptr()[j + 1] {
+            let i = mass.row_idx()[k];
+            if i % dim == d && i / dim < points.len() {
+                num[d] += mass.val()[k] * points[j / dim][d];
+                den[d] += mass.val()[k];
+            }
+        }
+    }
+    let mut c = [0.0; 3];
+    for d in 0..dim {
+        if den[d] <= 0.0 || !den[d].is_finite() {
+            return None;
+        }
+        c[d] = num[d] / den[d];
+    }
+    Some(c)
+}
+
+/// The velocity of each dof (`p·dim + d`, as [`centre_of_mass`]) in the rigid motion
+/// `v(x) = v₀ + ω × (x − c)`: `v₀` one value per component, `ω` the angular velocity
+/// (rad/s; three values in 3-D, one — about z — in 2-D, none in 1-D), `c` the point it
+/// turns about.
+pub fn rigid_velocity(
+    points: &[[f64; 3]],
+    dim: usize,
+    v0: &[f64],
+    omega: &[f64],
+    c: [f64; 3],
+) -> Vec<f64> {
+    let w = match (dim, omega) {
+        (3, &[x, y, z]) => [x, y, z],
+        (2, &[z]) => [0.0, 0.0, z],
+        _ => [0.0; 3],
+    };
+    let mut v = Vec::with_capacity(points.len() * dim);
+    for p in points {
+        let r = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
+        let wxr = [
+            w[1] * r[2] - w[2] * r[1],
+            w[2] * r[0] - w[0] * r[2],
+            w[0] * r[1] - w[1] * r[0],
+        ];
+        v.extend((0..dim).map(|d| v0.get(d).copied().unwrap_or(0.0) + wxr[d]));
+    }
+    v
 }

@@ -11,8 +11,10 @@
 //! Submodules build systems: [`rod`] (P1 rod elements, eq. 71), [`solid`] (linear
 //! solids), [`hyperelastic`] and [`material`] (large-deformation bodies and their laws),
 //! [`multibody`] and [`point_mass`]; `combine` joins bodies and eliminates fixed and
-//! prescribed dofs, `measures` gives a state's energies and momentum, and [`energy`]
-//! keeps a run's energy balance.
+//! prescribed dofs, `measures` gives a state's energies and momentum (and a body's
+//! centre of mass and rigid-motion velocity, for initial states), [`body_measures`]
+//! each body's mass, centre, linear and angular momentum, and [`energy`] keeps a run's
+//! energy balance.
 
 pub mod energy;
 pub mod generate;
@@ -26,8 +28,11 @@ pub mod rod;
 pub mod solid;
 pub mod system;
 
+pub mod body_measures;
 mod combine;
 mod measures;
+pub use body_measures::{BodyMeasures, BodyState};
+pub use measures::{centre_of_mass, rigid_velocity};
 
 use crate::linalg::{QuadraticForm, SparseMatrix, quadratic_form};
 
@@ -95,9 +100,9 @@ pub struct LinearSystem {
     /// The displacement component (0 = x, 1 = y, 2 = z) of each dof.
     pub component: Vec<u8>,
     /// A fill-reducing dof order (position → dof) for the Cholesky of `M̂`, from the
-    /// mesh geometry ([`ordering::nested_dissection`]); the factorization keeps it
-    /// only where it fills less than AMD. `None`: AMD alone.
-    pub ordering: Option<Vec<usize>>,
+    /// mesh ([`ordering::candidate`]); the factorization keeps it only where it
+    /// fills less than AMD. `None`: AMD alone.
+    pub ordering: Option<crate::linalg::DofOrdering>,
     /// Time-dependent nodal loads `φ_i(t) b_i`, added to `force` at `t_{k+θ}` by the
     /// schemes (the scene's `[[forces]]`).
     pub loads: Vec<NodalLoad>,

@@ -78,7 +78,7 @@ impl HistoryThread {
                             let (s, st) = &row;
                             let (ke, pe) =
                                 sys.energies_with(&forms, s.time, &s.q, &s.v, &mut scratch);
-                            writer.row(s, st, ke, pe)?;
+                            writer.row(&sys.mass, s, st, ke, pe)?;
                             // the run may have stopped listening (it failed): its report
                             let _ = free_tx.send(row);
                         }
@@ -224,7 +224,7 @@ impl History {
                 scratch,
             } => {
                 let (ke, pe) = sys.energies_with(forms, state.time, &state.q, &state.v, scratch);
-                writer.row(state, stats, ke, pe)
+                writer.row(&sys.mass, state, stats, ke, pe)
             }
             History::Thread(t) => t.push(state, stats),
         }

@@ -151,12 +151,18 @@ pub fn run_checkpointed(
         _lock = Some(crate::io::RunLock::acquire(o.dir)?);
         let geom_outlines = geom.outlines.clone();
         let hist_path = o.dir.join("history.csv");
+        // solid and plane bodies: each one's centre and momenta per row (a rod's are its
+        // summary's release velocity)
+        let bodies = (geom.dim >= 2)
+            .then(|| crate::model::BodyMeasures::new(&geom, integ.state().q.len()))
+            .flatten();
         let hist = match resume {
             Some(c) => HistoryWriter::resume(
                 &hist_path,
                 c.run.history_bytes,
                 c.run.history_rows,
                 o.options.contact_columns.per_contact(m),
+                bodies,
             )?,
             None => {
                 crate::io::prepare_run_dir(o.dir)?;
@@ -165,6 +171,7 @@ pub fn run_checkpointed(
                     m,
                     integ.state().tangent_dim,
                     o.options.contact_columns.per_contact(m),
+                    bodies,
                 )?
             }
         };
@@ -382,6 +389,8 @@ pub fn run_checkpointed(
         energy: [energy0, energy1],
         energy_balance,
         probes: probes.summaries(reference.as_ref()),
+        // set by the application, which knows the bodies
+        bodies: Vec::new(),
         arithmetic: crate::linalg::arithmetic().name().to_string(),
         subnormals: crate::linalg::subnormals::current_thread()
             .name()

@@ -131,6 +131,18 @@ pub struct EnergyBalance {
     pub excess_max: f64,
 }
 
+/// One body's measures at the start and the end of a run (`summary.json`'s `bodies`).
+#[derive(Clone, Debug, Serialize)]
+pub struct BodySummary {
+    /// The scene's body name.
+    pub name: String,
+    /// At the initial state.
+    pub initial: crate::model::BodyState,
+    /// After the last step.
+    #[serde(rename = "final")]
+    pub last: crate::model::BodyState,
+}
+
 /// Everything a run reports (`summary.json`).
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
@@ -213,6 +225,10 @@ pub struct Summary {
     /// The displacement probes (a scene's `[[probes]]`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub probes: Vec<super::probes::ProbeSummary>,
+    /// Each body's mass, centre of mass, linear and angular momentum at the start and
+    /// at the end of the run ([`crate::model::BodyMeasures`]; scenes with meshes).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bodies: Vec<BodySummary>,
     /// Linear-algebra path taken.
     pub path: String,
     /// Seconds to build the model (mesh, parallel assembly of `M` and `K`, contacts).

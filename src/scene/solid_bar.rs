@@ -153,7 +153,8 @@ impl SolidBarScene {
             ..Geometry::default()
         };
         let mut system = system;
-        system.ordering = Some(crate::model::ordering::nested_dissection(&geometry, n));
+        system.ordering = crate::model::ordering::candidate(self.scheme.ordering, &geometry, n)
+            .map_err(|e| Error::invalid("scheme.ordering", self.scheme.ordering.name(), &e))?;
         Ok(Model {
             problem: Problem::new(system, Box::new(contacts), vec![0.0; n], v0),
             geometry,

@@ -70,7 +70,7 @@ pub fn factor_step_matrix(
     crate::linalg::solver::factor_spd_analysed(
         step.matrix.as_ref(),
         what,
-        sys.ordering.as_deref(),
+        sys.ordering.as_ref(),
         step.analysis,
     )
 }

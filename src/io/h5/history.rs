@@ -15,7 +15,17 @@ pub struct History {
     /// Frictional scenes: `tangent_impulse`, `slip_velocity` (`[rows, m·td]`), `status`
     /// (`[rows, m]`, 0 open, 1 stick, 2 slip, 3 closed without friction) and the friction sweeps and residual.
     pub(super) friction: Option<FrictionHistory>,
+    /// Solid scenes: `centre`, `momentum`, `angular_momentum` of each body
+    /// (`[rows, bodies · 3]`, x y z per body).
+    pub(super) bodies: Option<BodyHistory>,
     pub(super) buffered: usize,
+}
+
+pub(super) struct BodyHistory {
+    pub(super) count: usize,
+    pub(super) sets: [Growing; 3],
+    /// Per row: the centres, then the momenta, then the angular momenta (3 per body each).
+    pub(super) rows: Vec<f64>,
 }
 
 pub(super) struct FrictionHistory {
@@ -44,14 +54,13 @@ impl History {
     pub(super) const BLOCK: usize = 4096;
 
     /// Creates `/history` for `m` contacts (with `td` tangents each in a frictional
-    /// scene, 0 otherwise) with the run's parameters as attributes.
+    /// scene, 0 otherwise) and `nb` bodies measured per row (0: none) with the run's
+    /// parameters as attributes.
     /// With `reopen = Some(rows)`, opens the `/history` of a checkpointed run instead,
     /// cut to its first `rows` rows.
-    #[allow(clippy::too_many_arguments)]
     pub fn create(
         run: &RunFile,
-        m: usize,
-        td: usize,
+        (m, td, nb): (usize, usize, usize),
         scheme: &str,
         dt: f64,
         theta: f64,
@@ -114,12 +123,24 @@ impl History {
             } else {
                 None
             };
+            let bodies = if nb > 0 {
+                let rows = (4096 / (3 * nb)).max(16);
+                let set = |name| Growing::make::<f64>(&g, name, 3 * nb, rows, reopen);
+                Some(BodyHistory {
+                    count: nb,
+                    sets: [set("centre")?, set("momentum")?, set("angular_momentum")?],
+                    rows: Vec::with_capacity(9 * nb * Self::BLOCK),
+                })
+            } else {
+                None
+            };
             Ok(History {
                 run: run.clone(),
                 scalars,
                 contact,
                 m,
                 friction,
+                bodies,
                 rows_s: Vec::with_capacity(5 * Self::BLOCK),
                 rows_i: Vec::with_capacity(4 * Self::BLOCK),
                 rows_c: Vec::with_capacity(4 * m * Self::BLOCK),
@@ -130,7 +151,26 @@ impl History {
     }
 
     /// Buffers one row (the same quantities as a `history.csv` row).
-    pub fn row(&mut self, s: &State, st: &StepStats, ke: f64, pe: f64) -> Result<(), Error> {
+    pub fn row(
+        &mut self,
+        s: &State,
+        st: &StepStats,
+        ke: f64,
+        pe: f64,
+        bodies: &[crate::model::BodyState],
+    ) -> Result<(), Error> {
+        if let Some(b) = self.bodies.as_mut() {
+            for get in [
+                |x: &crate::model::BodyState| x.centre,
+                |x: &crate::model::BodyState| x.momentum,
+                |x: &crate::model::BodyState| x.angular_momentum,
+            ] {
+                for k in 0..b.count {
+                    b.rows
+                        .extend_from_slice(&bodies.get(k).map_or([f64::NAN; 3], get));
+                }
+            }
+        }
         self.rows_i.extend([
             s.step as i64,
             st.newton_iterations as i64,
@@ -215,6 +255,18 @@ impl History {
                 f.rows_t.clear();
                 f.rows_st.clear();
                 f.rows_f.clear();
+            }
+            if let Some(b) = self.bodies.as_mut() {
+                let w = 3 * b.count;
+                let mut block = vec![0.0; n * w];
+                for (q, ds) in b.sets.iter_mut().enumerate() {
+                    for r in 0..n {
+                        let src = &b.rows[(3 * r + q) * w..(3 * r + q + 1) * w];
+                        block[r * w..(r + 1) * w].copy_from_slice(src);
+                    }
+                    ds.append(&block)?;
+                }
+                b.rows.clear();
             }
             Ok(())
         })();

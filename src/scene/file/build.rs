@@ -167,7 +167,12 @@ impl Scene {
                     &format!("needs {dim} finite values"),
                 )));
             }
-            v0.extend((0..n).map(|i| vel[i % dim]));
+            match &b.angular_velocity {
+                None if b.rotation_center.is_none() => v0.extend((0..n).map(|i| vel[i % dim])),
+                omega => {
+                    v0.extend(rigid_motion(b, mesh, &sys, dim, &vel, omega.as_deref()).map_err(at)?)
+                }
+            }
             let mut fx = vec![false; n];
             for name in &b.fixed {
                 let set = node_set(mesh, name).map_err(|e| at(prefix("fixed", e)))?;
@@ -441,7 +446,8 @@ impl Scene {
         };
         let n = system.ndof();
         if crate::model::ordering::worth_ordering(&geometry) {
-            system.ordering = Some(crate::model::ordering::nested_dissection(&geometry, n));
+            system.ordering = crate::model::ordering::candidate(self.scheme.ordering, &geometry, n)
+                .map_err(|e| Error::invalid("scheme.ordering", self.scheme.ordering.name(), &e))?;
         }
         Ok((
             Model {
@@ -595,4 +601,78 @@ fn keep_within(
         ));
     }
     Ok(kept)
+}
+
+/// The initial velocity of `b`'s dofs in the rigid motion its `velocity`,
+/// `angular_velocity` and `rotation_center` give (`omega` `None`: no rotation, a
+/// centre alone is then meaningless and refused), checked against the body's kind.
+fn rigid_motion(
+    b: &BodySpec,
+    mesh: &crate::model::solid::Mesh,
+    sys: &crate::model::LinearSystem,
+    dim: usize,
+    vel: &[f64],
+    omega: Option<&[f64]>,
+) -> Result<Vec<f64>, Error> {
+    let Some(omega) = omega else {
+        return Err(Error::invalid(
+            "rotation_center",
+            format!("{:?}", b.rotation_center.as_deref().unwrap_or_default()),
+            "is the point the initial rotation turns about: give angular_velocity with it",
+        ));
+    };
+    let cannot_turn = matches!(b.mesh, MeshSpec::Rod { .. })
+        || matches!(
+            b.formulation,
+            crate::model::solid::Formulation::Axisymmetric
+        );
+    if cannot_turn {
+        return Err(Error::invalid(
+            "angular_velocity",
+            format!("{omega:?}"),
+            "needs a 3-D solid or a plane body (a rod or an axisymmetric body cannot \
+             turn rigidly in its own model)",
+        ));
+    }
+    let n_omega = if dim == 3 { 3 } else { 1 };
+    if omega.len() != n_omega || omega.iter().any(|x| !x.is_finite()) {
+        return Err(Error::invalid(
+            "angular_velocity",
+            format!("{omega:?}"),
+            &format!(
+                "needs {n_omega} finite value{} (rad/s{})",
+                if n_omega == 1 { "" } else { "s" },
+                if n_omega == 1 { ", about z" } else { "" }
+            ),
+        ));
+    }
+    let centre = match &b.rotation_center {
+        Some(c) => {
+            if c.len() != dim || c.iter().any(|x| !x.is_finite()) {
+                return Err(Error::invalid(
+                    "rotation_center",
+                    format!("{c:?}"),
+                    &format!("needs {dim} finite values (m)"),
+                ));
+            }
+            std::array::from_fn(|d| c.get(d).copied().unwrap_or(0.0))
+        }
+        None => {
+            crate::model::centre_of_mass(sys.mass.as_ref(), &mesh.points, dim).ok_or_else(|| {
+                Error::invalid(
+                    "angular_velocity",
+                    format!("{omega:?}"),
+                    "turns about the body's centre of mass, but the body has no mass: give \
+                     rotation_center",
+                )
+            })?
+        }
+    };
+    Ok(crate::model::rigid_velocity(
+        &mesh.points,
+        dim,
+        vel,
+        omega,
+        centre,
+    ))
 }

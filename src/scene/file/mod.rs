@@ -166,9 +166,18 @@ pub struct BodySpec {
     /// Rayleigh damping `C = αM + βK`.
     #[serde(default)]
     pub damping: Option<Rayleigh>,
-    /// Uniform initial velocity (one value per component).
+    /// Initial velocity (m/s, one value per component): uniform, or the translation of
+    /// the rigid motion `v(x) = velocity + angular_velocity × (x − rotation_center)`.
     #[serde(default)]
     pub velocity: Option<Vec<f64>>,
+    /// Initial angular velocity of the body's rigid motion (rad/s): three values for a
+    /// 3-D solid, one (about z) for a plane body; not for rods or axisymmetric bodies.
+    #[serde(default)]
+    pub angular_velocity: Option<Vec<f64>>,
+    /// The point the initial rigid motion turns about (m, one value per component);
+    /// default: the body's centre of mass.
+    #[serde(default)]
+    pub rotation_center: Option<Vec<f64>>,
     /// Node sets held fixed (u = 0).
     #[serde(default)]
     pub fixed: Vec<String>,
