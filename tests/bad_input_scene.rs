@@ -433,6 +433,70 @@ const CASES: &[Case] = &[
         &["probes[1].name", "top", "probes[0] has that name"],
     ),
     (
+        "arrays mesh: a node index past the points",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, 8]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+        )],
+        &["mesh.cells.hex8[0]", "8", "not a point index", "8 points"],
+    ),
+    (
+        "arrays mesh: a cell with too few nodes",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+        )],
+        &["mesh.cells.hex8[0]", "a hex8 cell has 8 nodes"],
+    ),
+    (
+        "arrays mesh: an unknown cell kind",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex20 = [[0, 1, 2, 3, 4, 5, 6, 7]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+        )],
+        &["mesh.cells", "hex20", "not a cell kind"],
+    ),
+    (
+        "arrays mesh: a NaN coordinate",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, nan], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, 7]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+        )],
+        &["mesh.points[6]", "NaN", "finite"],
+    ),
+    (
+        "arrays mesh: a point with two coordinates in 3-D",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, 7]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+        )],
+        &["mesh.points[1]", "needs 3 coordinates"],
+    ),
+    (
+        "arrays mesh: a point in no cell",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1], [0.5, 0.5, 0.5]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, 7]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+        )],
+        &["mesh.points[8]", "in no cell"],
+    ),
+    (
+        "arrays mesh: a node set past the points",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, 7]] }, node_sets = { z0 = [0, 1, 2, 30] } }",
+        )],
+        &["mesh.node_sets.z0", "30", "not a point index"],
+    ),
+    (
+        "arrays mesh: no cells",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = {}, node_sets = { z0 = [0, 1, 2, 3] } }",
+        )],
+        &["mesh.cells", "at least one point and one cell"],
+    ),
+    (
         "unknown output encoding",
         &[("[time]\n", "[output]\nencoding = \"xml\"\n[time]\n")],
         &["output.encoding", "unknown variant `xml`"],

@@ -26,7 +26,7 @@ from typing import Any, Callable, Dict, Iterable, List, Mapping, Optional, Tuple
 import numpy as np
 
 from . import fclib
-from ._signorini import BadInput, RunFailed, SignoriniError, _Scene, _Simulation
+from ._signorini import BadInput, Cancelled, RunFailed, SignoriniError, _Scene, _Simulation
 from ._signorini import __version__
 
 __all__ = [
@@ -37,6 +37,7 @@ __all__ = [
     "SignoriniError",
     "BadInput",
     "RunFailed",
+    "Cancelled",
     "fclib",
     "__version__",
 ]
@@ -619,6 +620,14 @@ class Simulation:
         done; :attr:`stats` has the last step's statistics."""
         return self._inner.step(n)
 
+    def cancel(self) -> None:
+        """Asks the :meth:`step` or :meth:`run` running in another thread to stop after
+        the step it is taking (or the next such call, if none runs): it raises
+        :class:`Cancelled`. After :meth:`step` the state reached is kept and stepping can
+        go on; after :meth:`run` into ``out`` the history and frames so far are there,
+        readable. Safe to call from any thread (it takes no lock)."""
+        self._inner.cancel()
+
     @property
     def q(self) -> np.ndarray:
         """Displacements, one per dof (m; owned ``float64`` copy)."""
@@ -706,6 +715,28 @@ class Simulation:
         """The output directory of ``run(out=…)``."""
         o = self._inner.out
         return None if o is None else os.fspath(o)
+
+    def frames(self, reader: bool = True) -> Any:
+        """The field frames ``run(out=…)`` wrote (``fields.pvd``): with pyvista installed
+        and ``reader`` true, ``pyvista.get_reader`` on them (``.time_values``,
+        ``.set_active_time_value(t)``, ``.read()`` → the mesh with ``displacement``,
+        ``velocity``, ``contact_force``, ``gap``, ``stress`` …); else the ``.pvd`` path
+        (ParaView, meshio, VTK)."""
+        if self.out is None:
+            raise RuntimeError("no frames: run(out=...) writes them (an in-memory run does not)")
+        pvd = os.path.join(self.out, "fields.pvd")
+        if not os.path.exists(pvd):
+            raise RuntimeError(
+                f"no frames in {self.out}: the run wrote none (fields=False, or a scene "
+                f"without a mesh)"
+            )
+        if reader:
+            try:
+                import pyvista
+            except ImportError:
+                return pvd
+            return pyvista.get_reader(pvd)
+        return pvd
 
     def __repr__(self) -> str:
         return f"<signorini.Simulation {self.steps_done}/{self.steps_total} steps, t = {self.time:g} s>"

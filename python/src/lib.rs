@@ -38,6 +38,12 @@ pyo3::create_exception!(
 );
 pyo3::create_exception!(
     _signorini,
+    Cancelled,
+    SignoriniError,
+    "A step() or run() stopped by Simulation.cancel() (from another thread)."
+);
+pyo3::create_exception!(
+    _signorini,
     RunFailed,
     SignoriniError,
     "A run that failed (the CLI's exit code 1): a cap hit, a non-finite state, an output that could not be written."
@@ -48,6 +54,30 @@ fn py_err(e: Error) -> PyErr {
         2 => BadInput::new_err(e.to_string()),
         _ => RunFailed::new_err(e.to_string()),
     }
+}
+
+/// Checks that the argument `name` holds `n` values (`per` says what each is for) and
+/// that they are finite (`why`), in Python terms.
+fn check_vector(
+    name: &str,
+    x: impl ExactSizeIterator<Item = f64>,
+    (n, per): (usize, &str),
+    why: &str,
+) -> PyResult<()> {
+    if x.len() != n {
+        return Err(BadInput::new_err(format!(
+            "invalid value for `{name}`: {} values (expected {per}: {n})",
+            x.len()
+        )));
+    }
+    for (i, y) in x.enumerate() {
+        if !y.is_finite() {
+            return Err(BadInput::new_err(format!(
+                "invalid value for `{name}`: entry {i} is {y} ({why})"
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// A scene file's scene, or the built-in impacting bar (its own parameter set).
@@ -281,6 +311,8 @@ fn serde_path_to_error_free<T: serde::de::DeserializeOwned>(
 struct PyProgress {
     callback: Option<Py<PyAny>>,
     error: Option<PyErr>,
+    /// The simulation's `cancel()` flag, read at every step.
+    cancel: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }
 
 impl Progress for PyProgress {
@@ -301,7 +333,7 @@ impl Progress for PyProgress {
         });
     }
     fn cancelled(&mut self) -> bool {
-        self.error.is_some()
+        self.error.is_some() || self.cancel.load(std::sync::atomic::Ordering::Relaxed)
     }
 }
 
@@ -378,6 +410,9 @@ impl SimState {
 struct PySimulation {
     kind: Kind,
     state: Mutex<SimState>,
+    /// Set by `cancel()` (no lock: the stepping thread holds `state`), read at every
+    /// step, cleared when a call stops on it.
+    cancel: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }
 
 fn temp_dir() -> PathBuf {
@@ -425,6 +460,7 @@ impl PySimulation {
         PySimulation {
             kind: scene.kind.clone(),
             state: Mutex::new(SimState::default()),
+            cancel: Default::default(),
         }
     }
 
@@ -477,6 +513,7 @@ impl PySimulation {
         let mut prog = PyProgress {
             callback: progress,
             error: None,
+            cancel: self.cancel.clone(),
         };
         // a run builds its own model (the CLI's path): one built for `mesh` is freed
         g.model = None;
@@ -499,6 +536,18 @@ impl PySimulation {
                 }
                 return Err(match (e, prog.error.take()) {
                     (Error::Interrupted { .. }, Some(pe)) => pe,
+                    (Error::Interrupted { step, time }, None) => {
+                        self.cancel
+                            .store(false, std::sync::atomic::Ordering::Relaxed);
+                        Cancelled::new_err(format!(
+                            "run() cancelled after step {step} (t = {time:e} s){}",
+                            if temporary {
+                                String::new()
+                            } else {
+                                format!(": the history and frames so far are in {}", dir.display())
+                            }
+                        ))
+                    }
                     (e, _) => py_err(e),
                 });
             }
@@ -583,9 +632,17 @@ impl PySimulation {
                 1
             };
             let chunk = (n - taken).min(by_time);
+            let cancel = &self.cancel;
             let mut work = || -> Result<Option<StepStats>, Error> {
                 let mut st = None;
                 for _ in 0..chunk {
+                    if cancel.swap(false, std::sync::atomic::Ordering::Relaxed) {
+                        let s = integ.state();
+                        return Err(Error::Interrupted {
+                            step: s.step,
+                            time: s.time,
+                        });
+                    }
                     integ.prepare()?;
                     let s = integ.step()?;
                     checks.check(integ.as_ref(), &s)?;
@@ -604,6 +661,12 @@ impl PySimulation {
             *step_seconds = t0.elapsed().as_secs_f64() / chunk as f64;
             match r {
                 Ok(s) => *last = s.or(*last),
+                Err(Error::Interrupted { step, time }) => {
+                    return Err(Cancelled::new_err(format!(
+                        "step() cancelled after step {step} (t = {time:e} s): the state \
+                         reached is kept, and step() goes on from it"
+                    )));
+                }
                 Err(e) => return Err(py_err(e)),
             }
             taken += chunk;
@@ -733,6 +796,13 @@ impl PySimulation {
         Ok(out.iter().map(row).collect())
     }
 
+    /// Asks the `step()` or `run()` running (or the next one) to stop after its step:
+    /// no lock, so callable while another thread holds the simulation.
+    fn cancel(&self) {
+        self.cancel
+            .store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+
     /// Replaces the displacements `q` and/or velocities `v` (one value per dof, finite):
     /// before the first step, the model's initial state (building it as `mesh()` does);
     /// after, the integrator's state, whose gaps, Jacobians and Delassus data are
@@ -759,18 +829,13 @@ impl PySimulation {
             (None, None) => unreachable!("built above"),
         };
         for (name, x) in [("q", &q), ("v", &v)] {
-            let Some(x) = x else { continue };
-            if x.len() != n {
-                return Err(BadInput::new_err(format!(
-                    "{name} must have {n} entries (one per dof), got {}",
-                    x.len()
-                )));
-            }
-            if let Some(i) = x.iter().position(|y| !y.is_finite()) {
-                return Err(BadInput::new_err(format!(
-                    "{name}[{i}] is {}: every entry must be finite",
-                    x[i]
-                )));
+            if let Some(x) = x {
+                check_vector(
+                    name,
+                    x.iter().copied(),
+                    (n, "one per dof"),
+                    "a state is finite",
+                )?;
             }
         }
         let st = &mut *g;
@@ -972,18 +1037,12 @@ fn fclib_solve_arrays(
     }
     if let Some(r) = &r0 {
         let r = r.as_array();
-        if r.len() != n {
-            return Err(BadInput::new_err(format!(
-                "invalid value for `r0`: {} values (expected one per row of W: {n})",
-                r.len()
-            )));
-        }
-        if let Some(i) = r.iter().position(|x| !x.is_finite()) {
-            return Err(BadInput::new_err(format!(
-                "invalid value for `r0`: entry {i} is {} (a warm start must be finite)",
-                r[i]
-            )));
-        }
+        check_vector(
+            "r0",
+            r.iter().copied(),
+            (n, "one per row of W"),
+            "a warm start must be finite",
+        )?;
     }
     if mu.is_empty() || n % mu.len() != 0 {
         return Err(BadInput::new_err(format!(
@@ -1061,6 +1120,7 @@ fn _signorini(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SignoriniError", py.get_type::<SignoriniError>())?;
     m.add("BadInput", py.get_type::<BadInput>())?;
     m.add("RunFailed", py.get_type::<RunFailed>())?;
+    m.add("Cancelled", py.get_type::<Cancelled>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

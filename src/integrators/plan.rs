@@ -67,9 +67,9 @@ impl Plan {
         // them; counted for every size, the thread runs from 4096 dofs)
         self.ledger
             .add("history thread state copies", 4 * n as u64, 8);
-        // each body's centre and momenta per row (`model::BodyMeasures`: a 20-byte map
-        // and `M v` per dof; solid scenes only, counted for every one)
-        self.ledger.add("history body measures", n as u64, 28);
+        // each body's centre and momenta per row (`model::BodyMeasures`: a 24-byte map,
+        // `M v` and `M 1` per dof; solid scenes only, counted for every one)
+        self.ledger.add("history body measures", n as u64, 40);
         if hdf5 {
             let cols = 12 + m as u64 * (4 + 2 * tangent_dim as u64 + 1);
             self.ledger

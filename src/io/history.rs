@@ -345,18 +345,22 @@ impl HistoryWriter {
         self
     }
 
-    /// Appends the row of the step that just ended (`mass`: the structure's mass matrix,
-    /// which the per-body columns read).
+    /// Appends the row of the step that just ended. The per-body columns read the
+    /// structure's mass matrix `mass` and `M v` where the energies left it (`mv`, as
+    /// [`crate::model::LinearSystem::energies_keeping_mv`]; `None`: formed here).
     pub fn row(
         &mut self,
-        mass: &crate::linalg::SparseMatrix,
+        (mass, mv): (&crate::linalg::SparseMatrix, Option<&[f64]>),
         state: &State,
         stats: &StepStats,
         kinetic: f64,
         potential: f64,
     ) -> Result<(), Error> {
         if let Some(b) = self.bodies.as_mut() {
-            b.measures.measure(mass, &state.q, &state.v, &mut b.states);
+            match mv {
+                Some(mv) => b.measures.measure_with(mass, &state.q, mv, &mut b.states),
+                None => b.measures.measure(mass, &state.q, &state.v, &mut b.states),
+            }
         }
         let o = &mut self.out;
         let mut buf = ryu::Buffer::new();

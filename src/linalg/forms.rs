@@ -12,14 +12,44 @@ use super::*;
 pub fn quadratic_form(a: SparseColMatRef<'_, usize, f64>, x: &[f64]) -> f64 {
     let n = x.len();
     if a.compute_nnz() <= PAR_QUADRATIC_NNZ {
-        return quadratic_form_cols(a, x, 0..n);
+        return quadratic_form_cols(a, x, 0..n, None);
     }
     use rayon::prelude::*;
     let mut parts = [0.0; QUADRATIC_PARTS];
     parts.par_iter_mut().enumerate().for_each(|(p, out)| {
         let r = p * n / QUADRATIC_PARTS..(p + 1) * n / QUADRATIC_PARTS;
-        *out = quadratic_form_cols(a, x, r);
+        *out = quadratic_form_cols(a, x, r, None);
     });
+    parts.iter().sum()
+}
+
+/// [`quadratic_form`] of a symmetric `a`, keeping the product `a x` it forms column
+/// by column in `ax` (`n` values): the same `xᵀ A x` bit for bit, and `A x` for the
+/// price of storing it (the history's kinetic energy and each body's momenta read one
+/// pass over `M`). Does not allocate.
+pub fn quadratic_form_keep(a: SparseColMatRef<'_, usize, f64>, x: &[f64], ax: &mut [f64]) -> f64 {
+    let n = x.len();
+    if a.compute_nnz() <= PAR_QUADRATIC_NNZ {
+        return quadratic_form_cols(a, x, 0..n, Some(ax));
+    }
+    use rayon::prelude::*;
+    let mut parts = [0.0; QUADRATIC_PARTS];
+    // the parts of `quadratic_form`, each with its slice of `ax`
+    let mut rest = ax;
+    let mut slices: [&mut [f64]; QUADRATIC_PARTS] = std::array::from_fn(|p| {
+        let r = p * n / QUADRATIC_PARTS..(p + 1) * n / QUADRATIC_PARTS;
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut(r.len());
+        rest = tail;
+        head
+    });
+    parts
+        .par_iter_mut()
+        .zip(slices.par_iter_mut())
+        .enumerate()
+        .for_each(|(p, (out, ax))| {
+            let r = p * n / QUADRATIC_PARTS..(p + 1) * n / QUADRATIC_PARTS;
+            *out = quadratic_form_cols(a, x, r, Some(ax));
+        });
     parts.iter().sum()
 }
 
@@ -29,14 +59,17 @@ pub const PAR_QUADRATIC_NNZ: usize = 1 << 18;
 /// Column ranges of a parallel [`quadratic_form`].
 pub const QUADRATIC_PARTS: usize = 32;
 
+/// `Σ_j x_j (Aᵀx)_j` over `cols`; with `keep`, `(Aᵀx)_j` goes to `keep[j − cols.start]`.
 pub(super) fn quadratic_form_cols(
     a: SparseColMatRef<'_, usize, f64>,
     x: &[f64],
     cols: std::ops::Range<usize>,
+    mut keep: Option<&mut [f64]>,
 ) -> f64 {
     let col_ptr = a.col_ptr();
     let row_idx = a.row_idx();
     let val = a.val();
+    let start = cols.start;
     let mut s = 0.0;
     for j in cols {
         let r = col_ptr[j]..col_ptr[j + 1];
@@ -45,6 +78,9 @@ pub(super) fn quadratic_form_cols(
             .zip(&val[r])
             .map(|(&i, &v)| v * x[i])
             .sum();
+        if let Some(k) = keep.as_deref_mut() {
+            k[j - start] = c;
+        }
         s += c * x[j];
     }
     s
@@ -334,6 +370,44 @@ mod tests {
         u.push(Triplet::new(3, 4, 1e-9));
         let b = SparseMatrix::try_new_from_triplets(n, n, &u).unwrap();
         assert!(TridiagonalRows::new(b.as_ref()).is_none());
+    }
+
+    /// `quadratic_form_keep` gives `quadratic_form`'s value bit for bit and keeps `A x`
+    /// equal to `spmv`'s bit for bit (each column's sum in the same order), on the
+    /// sequential path and on the parallel one (a matrix past `PAR_QUADRATIC_NNZ`
+    /// entries, split into `QUADRATIC_PARTS` column ranges).
+    #[test]
+    fn quadratic_form_keep_keeps_the_product() {
+        for n in [50usize, 40_000] {
+            let mut t = Vec::new();
+            for i in 0..n {
+                t.push(Triplet::new(i, i, 4.0 + (i % 7) as f64 * 0.1));
+                for k in [1usize, 3, 7] {
+                    if i + k < n {
+                        let off = -0.3 - ((i * k) % 5) as f64 * 0.05;
+                        t.push(Triplet::new(i, i + k, off));
+                        t.push(Triplet::new(i + k, i, off));
+                    }
+                }
+            }
+            let a = SparseMatrix::try_new_from_triplets(n, n, &t).unwrap();
+            assert_eq!(a.compute_nnz() > PAR_QUADRATIC_NNZ, n > 1000, "n = {n}");
+            let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+            let mut kept = vec![f64::NAN; n];
+            let q = quadratic_form_keep(a.as_ref(), &x, &mut kept);
+            assert_eq!(
+                q.to_bits(),
+                quadratic_form(a.as_ref(), &x).to_bits(),
+                "n = {n}"
+            );
+            let mut ax = vec![0.0; n];
+            spmv(a.as_ref(), &x, &mut ax);
+            let same = kept
+                .iter()
+                .zip(&ax)
+                .all(|(p, r)| p.to_bits() == r.to_bits());
+            assert!(same, "n = {n}");
+        }
     }
 
     /// The tridiagonal form and the lane dot product against the column walk and a

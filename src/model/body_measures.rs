@@ -45,11 +45,14 @@ pub struct BodyMeasures {
     sums: Vec<[f64; 3]>,
     /// `M v` (one entry per kept dof).
     mv: Vec<f64>,
+    /// `M 1`, each dof's share of its body's mass (formed at the first measure).
+    row_sums: Vec<f64>,
+    row_sums_ready: bool,
 }
 
 const NONE: u32 = u32::MAX;
 
-/// 20 bytes per dof (indices as `u32`: [`BodyMeasures::new`] refuses a model past
+/// 24 bytes per dof (indices as `u32`: [`BodyMeasures::new`] refuses a model past
 /// `u32::MAX` points or dofs).
 #[derive(Clone, Copy, Debug)]
 struct Slot {
@@ -119,6 +122,8 @@ impl BodyMeasures {
             points: geom.points.clone(),
             sums: vec![[0.0; 3]; geom.bodies.len()],
             mv: vec![0.0; ndof],
+            row_sums: vec![0.0; ndof],
+            row_sums_ready: false,
         })
     }
 
@@ -133,37 +138,70 @@ impl BodyMeasures {
     }
 
     /// Each body's [`BodyState`] at `(q, v)` with the mass matrix `mass` of the kept
-    /// dofs, into `out` (one per body; bodies beyond `out` are skipped).
+    /// dofs, into `out` (one per body; bodies beyond `out` are skipped). One product
+    /// `M v` and two passes over the dofs: the masses and centres read the row sums
+    /// `M 1` (formed at the first call: `M` is the model's constant mass), the momenta
+    /// `Σ (M v)_i`, the angular momenta `Σ (x_i − c) × (M v)_i` (`M` couples no two
+    /// components and no two bodies, so every sum is exact).
     pub fn measure(&mut self, mass: &SparseMatrix, q: &[f64], v: &[f64], out: &mut [BodyState]) {
         let m = mass.as_ref();
-        let n = self.of_dof.len().min(m.ncols()).min(q.len()).min(v.len());
-        let nb = out.len().min(self.sums.len());
+        let n = self
+            .of_dof
+            .len()
+            .min(m.ncols())
+            .min(m.nrows())
+            .min(q.len())
+            .min(v.len());
         out.iter_mut().for_each(|s| *s = BodyState::default());
         self.sums.iter_mut().for_each(|s| *s = [0.0; 3]);
-        self.mv.iter_mut().for_each(|x| *x = 0.0);
+        if self.mv.len() != m.nrows() || v.len() < m.ncols() {
+            return; // not this model's mass matrix or state: nothing measured
+        }
+        crate::linalg::spmv(m, &v[..m.ncols()], &mut self.mv);
+        self.accumulate(mass, q, n, out);
+    }
+
+    /// [`BodyMeasures::measure`] with `M v` given (`mv`, as
+    /// [`crate::model::LinearSystem::energies_keeping_mv`] leaves it): no product.
+    pub fn measure_with(
+        &mut self,
+        mass: &SparseMatrix,
+        q: &[f64],
+        mv: &[f64],
+        out: &mut [BodyState],
+    ) {
+        let n = self.of_dof.len().min(q.len());
+        out.iter_mut().for_each(|s| *s = BodyState::default());
+        self.sums.iter_mut().for_each(|s| *s = [0.0; 3]);
+        if mv.len() != self.mv.len() || mass.as_ref().ncols() != self.mv.len() {
+            return;
+        }
+        self.mv.copy_from_slice(mv);
+        self.accumulate(mass, q, n, out);
+    }
+
+    /// The measures from `self.mv` (= `M v`) and the positions `q`.
+    fn accumulate(&mut self, mass: &SparseMatrix, q: &[f64], n: usize, out: &mut [BodyState]) {
+        let m = mass.as_ref();
+        let nb = out.len().min(self.sums.len());
+        if !self.row_sums_ready {
+            // `M` is symmetric: its row sums are its column sums
+            for (j, r) in self.row_sums.iter_mut().enumerate().take(m.ncols()) {
+                *r = m.val()[m.col_ptr()[j]..m.col_ptr()[j + 1]].iter().sum();
+            }
+            self.row_sums_ready = true;
+        }
         for j in 0..n {
             let sj = self.of_dof[j];
-            if sj.point == NONE {
+            let b = sj.body as usize;
+            if sj.point == NONE || b >= nb {
                 continue;
             }
-            let (pj, cj, bj) = (sj.point as usize, sj.component as usize, sj.body as usize);
-            let xj = self.points[pj][cj] + q[j];
-            for k in m.col_ptr()[j]..m.col_ptr()[j + 1] {
-                let (i, val) = (m.row_idx()[k], m.val()[k]);
-                if i >= n {
-                    continue;
-                }
-                self.mv[i] += val * v[j];
-                let si = self.of_dof[i];
-                if si.point == NONE || si.component != sj.component || si.body != sj.body {
-                    continue;
-                }
-                if bj < nb {
-                    out[bj].centre[cj] += val * xj;
-                    out[bj].momentum[cj] += val * v[j];
-                    self.sums[bj][cj] += val;
-                }
-            }
+            let (p, d) = (sj.point as usize, sj.component as usize);
+            let r = self.row_sums[j];
+            out[b].centre[d] += r * (self.points[p][d] + q[j]);
+            out[b].momentum[d] += self.mv[j];
+            self.sums[b][d] += r;
         }
         for (s, sums) in out.iter_mut().zip(&self.sums) {
             s.mass = sums[0];

@@ -70,8 +70,49 @@ impl LinearSystem {
         v: &[f64],
         scratch: &mut [f64],
     ) -> (f64, f64) {
+        self.energies_of(forms, (t, q, v), scratch, None)
+    }
+
+    /// [`LinearSystem::energies_with`], also leaving `M v` in `mv` (`n` values) for
+    /// each body's momenta ([`crate::model::BodyMeasures::measure_with`]): where the
+    /// mass form walks the matrix it keeps the product it forms (the same energies bit
+    /// for bit), else one product more.
+    pub fn energies_keeping_mv(
+        &self,
+        forms: &EnergyForms,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        scratch: &mut [f64],
+        mv: &mut [f64],
+    ) -> (f64, f64) {
+        self.energies_of(forms, (t, q, v), scratch, Some(mv))
+    }
+
+    /// The energies of [`LinearSystem::energies_with`], keeping `M v` where asked.
+    fn energies_of(
+        &self,
+        forms: &EnergyForms,
+        (t, q, v): (f64, &[f64], &[f64]),
+        scratch: &mut [f64],
+        mv: Option<&mut [f64]>,
+    ) -> (f64, f64) {
+        let m = self.mass.as_ref();
+        let fits = |mv: &[f64]| mv.len() == m.nrows() && v.len() == m.ncols();
+        let vmv = match mv {
+            Some(mv) if fits(mv) && matches!(forms.mass, crate::linalg::QuadraticForm::General) => {
+                crate::linalg::quadratic_form_keep(m, v, mv)
+            }
+            Some(mv) => {
+                if fits(mv) {
+                    crate::linalg::spmv(m, v, mv);
+                }
+                forms.mass.eval(m, v)
+            }
+            None => forms.mass.eval(m, v),
+        };
         let (k, u) = self.prescribed_energy(t, q, v, scratch);
-        let kinetic = 0.5 * forms.mass.eval(self.mass.as_ref(), v) + self.parts_kinetic(q, v);
+        let kinetic = 0.5 * vmv + self.parts_kinetic(q, v);
         let mut potential = 0.5 * forms.stiffness.eval(self.stiffness.as_ref(), q);
         if !forms.unloaded {
             potential -= crate::linalg::dot_lanes(&self.force, q);

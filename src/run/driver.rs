@@ -16,9 +16,8 @@ pub trait Progress {
     /// Called once right before the first step, with the number of steps (rates and
     /// ETAs count from here, not from the set-up).
     fn start(&mut self, _total: usize) {}
-    /// Asked after each [`Progress::update`]: `true` stops the run with
-    /// [`Error::Interrupted`] after the step just taken (its outputs finished and
-    /// readable). The CLI never cancels (Ctrl-C ends the process; the files are written
+    /// Asked after every step: `true` stops the run with [`Error::Interrupted`] after
+    /// the step just taken (its outputs finished and readable); keep it cheap. The CLI never cancels (Ctrl-C ends the process; the files are written
     /// incrementally and atomically); the Python package does on `KeyboardInterrupt`.
     fn cancelled(&mut self) -> bool {
         false
@@ -248,13 +247,15 @@ pub fn drive(
         }
         if (k + 1) % report_every == 0 || last {
             progress.update(k + 1, steps);
-            if progress.cancelled() {
-                let s = integ.state();
-                return Err(Error::Interrupted {
-                    step: s.step,
-                    time: s.time,
-                });
-            }
+        }
+        // asked at every step (a flag for the Python package's `cancel()`, `false` for
+        // the CLI): a stop comes one step after it is asked for
+        if progress.cancelled() {
+            let s = integ.state();
+            return Err(Error::Interrupted {
+                step: s.step,
+                time: s.time,
+            });
         }
     }
     Ok(())

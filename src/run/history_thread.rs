@@ -39,6 +39,22 @@ enum Job {
     Flush,
 }
 
+/// A row's energies, leaving `M v` in `mv` where the per-body columns want it
+/// (`mv` not empty): the same function on both paths, so the same bits.
+fn energies(
+    sys: &LinearSystem,
+    forms: &EnergyForms,
+    s: &State,
+    scratch: &mut [f64],
+    mv: &mut [f64],
+) -> (f64, f64) {
+    if mv.is_empty() {
+        sys.energies_with(forms, s.time, &s.q, &s.v, scratch)
+    } else {
+        sys.energies_keeping_mv(forms, s.time, &s.q, &s.v, scratch, mv)
+    }
+}
+
 /// The history thread.
 pub struct HistoryThread {
     work: Option<SyncSender<Job>>,
@@ -66,6 +82,15 @@ impl HistoryThread {
                 .expect("the pool channel holds POOL buffers");
         }
         let mut scratch = vec![0.0; 2 * sys.prescribed_dofs()];
+        // `M v` for the per-body columns, kept by the kinetic energy's pass over `M`
+        let mut mv = vec![
+            0.0;
+            if writer.bodies() > 0 {
+                template.v.len()
+            } else {
+                0
+            }
+        ];
         // the spawning run's subnormal mode (inherited on Linux; set, not assumed)
         let flush = crate::linalg::subnormals::current_thread();
         let thread = std::thread::Builder::new()
@@ -76,9 +101,9 @@ impl HistoryThread {
                     match job {
                         Job::Row(row) => {
                             let (s, st) = &row;
-                            let (ke, pe) =
-                                sys.energies_with(&forms, s.time, &s.q, &s.v, &mut scratch);
-                            writer.row(&sys.mass, s, st, ke, pe)?;
+                            let (ke, pe) = energies(&sys, &forms, s, &mut scratch, &mut mv);
+                            let mv = (!mv.is_empty()).then_some(&mv[..]);
+                            writer.row((&sys.mass, mv), s, st, ke, pe)?;
                             // the run may have stopped listening (it failed): its report
                             let _ = free_tx.send(row);
                         }
@@ -183,6 +208,8 @@ pub enum History {
         forms: EnergyForms,
         /// Scratch of the prescribed dofs' energy.
         scratch: Vec<f64>,
+        /// `M v` for the per-body columns (empty without them).
+        mv: Vec<f64>,
     },
     /// Rows formed and written by a thread of their own.
     Thread(HistoryThread),
@@ -203,6 +230,14 @@ impl History {
             History::Thread(HistoryThread::spawn(writer, sys, forms, state))
         } else {
             History::Inline {
+                mv: vec![
+                    0.0;
+                    if writer.bodies() > 0 {
+                        state.v.len()
+                    } else {
+                        0
+                    }
+                ],
                 writer,
                 forms,
                 scratch: vec![0.0; 2 * sys.prescribed_dofs()],
@@ -222,9 +257,11 @@ impl History {
                 writer,
                 forms,
                 scratch,
+                mv,
             } => {
-                let (ke, pe) = sys.energies_with(forms, state.time, &state.q, &state.v, scratch);
-                writer.row(&sys.mass, state, stats, ke, pe)
+                let (ke, pe) = energies(sys, forms, state, scratch, mv);
+                let mv = (!mv.is_empty()).then_some(&mv[..]);
+                writer.row((&sys.mass, mv), state, stats, ke, pe)
             }
             History::Thread(t) => t.push(state, stats),
         }

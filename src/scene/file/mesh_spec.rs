@@ -57,6 +57,11 @@ impl BodySpec {
                 }
                 Ok(m)
             }
+            MeshSpec::Arrays {
+                points,
+                cells,
+                node_sets,
+            } => arrays_mesh(points, cells, node_sets, self.dim()),
             MeshSpec::Rod {
                 elements,
                 length,
@@ -82,6 +87,110 @@ impl BodySpec {
             }
         }
     }
+}
+
+/// The mesh of `generator = "arrays"` for a body of dimension `dim` (2 or 3), every
+/// entry checked: finite coordinates of `dim` (or 3, z = 0 in 2-D) values, known cell
+/// kinds with their node counts, indices within `points`, every point in a cell (a point
+/// no cell holds has no mass), node sets within `points`; the size against the memory
+/// limit before anything is built. Cell shapes (inverted, degenerate) are checked with
+/// the formulation afterwards, as for files.
+fn arrays_mesh(
+    points: &[Vec<f64>],
+    cells: &BTreeMap<String, Vec<Vec<usize>>>,
+    node_sets: &BTreeMap<String, Vec<usize>>,
+    dim: usize,
+) -> Result<Mesh, Error> {
+    let np = points.len();
+    let nc: usize = cells.values().map(Vec::len).sum();
+    crate::limits::mesh_memory(np as u64, nc as u64, 8, dim as u64).check("mesh.points", np)?;
+    if np == 0 || nc == 0 {
+        return Err(Error::invalid(
+            if np == 0 { "mesh.points" } else { "mesh.cells" },
+            "[]",
+            "needs at least one point and one cell",
+        ));
+    }
+    let mut mesh = Mesh {
+        points: Vec::with_capacity(np),
+        ..Mesh::default()
+    };
+    for (i, p) in points.iter().enumerate() {
+        let key = format!("mesh.points[{i}]");
+        if !(p.len() == dim || p.len() == 3) {
+            return Err(Error::invalid(
+                &key,
+                format!("{p:?}"),
+                &format!(
+                    "needs {dim} coordinates (m){}",
+                    if dim == 2 { " or 3 with z = 0" } else { "" }
+                ),
+            ));
+        }
+        if let Some(x) = p.iter().find(|x| !x.is_finite()) {
+            return Err(Error::invalid(&key, x, "must be finite"));
+        }
+        if dim == 2 && p.len() == 3 && p[2] != 0.0 {
+            return Err(Error::invalid(
+                &key,
+                format!("{p:?}"),
+                "a plane body lies in z = 0",
+            ));
+        }
+        mesh.points
+            .push([p[0], p[1], p.get(2).copied().unwrap_or(0.0)]);
+    }
+    let mut used = vec![false; np];
+    for (name, list) in cells {
+        let kind: CellKind = serde_json::from_value(serde_json::Value::String(name.clone()))
+            .map_err(|_| {
+                Error::invalid(
+                    "mesh.cells",
+                    name,
+                    "is not a cell kind: hex8, tet4, quad4 or tri3",
+                )
+            })?;
+        for (c, nodes) in list.iter().enumerate() {
+            let key = format!("mesh.cells.{name}[{c}]");
+            if nodes.len() != kind.nodes() {
+                return Err(Error::invalid(
+                    &key,
+                    format!("{nodes:?}"),
+                    &format!("a {name} cell has {} nodes", kind.nodes()),
+                ));
+            }
+            if let Some(&v) = nodes.iter().find(|&&v| v >= np) {
+                return Err(Error::invalid(
+                    &key,
+                    v,
+                    &format!("is not a point index: mesh.points has {np} points (0-based)"),
+                ));
+            }
+            nodes.iter().for_each(|&v| used[v] = true);
+            mesh.cells.push((kind, nodes.clone()));
+        }
+    }
+    if let Some(i) = used.iter().position(|u| !u) {
+        return Err(Error::invalid(
+            &format!("mesh.points[{i}]"),
+            format!("{:?}", points[i]),
+            "is in no cell: such a point has no mass or stiffness (drop it)",
+        ));
+    }
+    for (name, set) in node_sets {
+        if let Some(&v) = set.iter().find(|&&v| v >= np) {
+            return Err(Error::invalid(
+                &format!("mesh.node_sets.{name}"),
+                v,
+                &format!("is not a point index: mesh.points has {np} points (0-based)"),
+            ));
+        }
+        let mut set = set.clone();
+        set.sort_unstable();
+        set.dedup();
+        mesh.node_sets.insert(name.clone(), set);
+    }
+    Ok(mesh)
 }
 
 /// The nodes of the set `name` of `mesh`: a named set, `boundary` (computed from the

@@ -233,6 +233,20 @@ pub enum MeshSpec {
         /// The path.
         path: PathBuf,
     },
+    /// A mesh given as arrays (a scene built in code or from Python's numpy arrays):
+    /// point coordinates, connectivity by cell kind and named node sets.
+    Arrays {
+        /// Coordinates (m) of each point: `[x, y, z]`, or `[x, y]` for a plane or
+        /// axisymmetric body.
+        points: Vec<Vec<f64>>,
+        /// Connectivity by cell kind (`hex8`, `tet4`, `quad4`, `tri3`): each cell's
+        /// point indices (0-based, in `points`), in the VTK/Gmsh node order.
+        cells: BTreeMap<String, Vec<Vec<usize>>>,
+        /// Named node sets (point indices) for `fixed`, `[[contacts]]`, `[[forces]]`,
+        /// `[[prescribed]]` and `[[probes]]` (`boundary` and `all` always exist).
+        #[serde(default)]
+        node_sets: BTreeMap<String, Vec<usize>>,
+    },
     /// The P1 rod of eq. 71 along x from the origin, with cross-section `area`.
     Rod {
         /// Elements.

@@ -125,6 +125,14 @@ pub fn refine(s: &mut Scene, level: usize) -> Result<(), Error> {
                     *c = grow(*c)?;
                 }
             }
+            MeshSpec::Arrays { .. } => {
+                return Err(Error::invalid(
+                    &format!("bodies[{i}].mesh"),
+                    "arrays",
+                    "is a mesh given as arrays, which `refine` cannot refine: give a \
+                     generator or list meshes on an axis",
+                ));
+            }
             MeshSpec::File { path } => {
                 return Err(Error::invalid(
                     &format!("bodies[{i}].mesh"),
