@@ -569,10 +569,15 @@ impl PySimulation {
     /// The statistics stay in Rust until asked for (`stats_json`): a Python loop of
     /// `step(1)` pays no conversion per step.
     fn step(&self, py: Python<'_>, n: usize) -> PyResult<usize> {
-        // the run's subnormal mode while building and stepping; this thread's own
-        // (Python's, numpy's) is put back on return
-        let _flush = signorini::linalg::FlushGuard::for_run();
         let mut g = self.lock()?;
+        // the run's subnormal mode while building and stepping; this thread's own
+        // (Python's, numpy's) is put back on return. The pool's workers are set once,
+        // with the integrator, and keep the mode (waking them costs more than a step)
+        let _flush = if g.integ.is_none() {
+            signorini::linalg::FlushGuard::for_run()
+        } else {
+            signorini::linalg::FlushGuard::for_caller()
+        };
         if g.finished.is_some() {
             return Err(PyRuntimeError::new_err(
                 "this simulation has run to its end; make a new one with scene.simulation()",
