@@ -101,8 +101,18 @@ fn history(dir: &Path) -> History {
     (head, rows)
 }
 
-/// The column's kind: `gap_12` → `gap`.
+/// The column's kind: `gap_12` → `gap`; a body's columns by quantity, every body and
+/// axis together (`angular_momentum_0_2` → `angular_momentum`).
 fn kind(name: &str) -> &str {
+    for q in ["centre", "momentum", "angular_momentum"] {
+        if let Some(rest) = name.strip_prefix(q).and_then(|r| r.strip_prefix('_'))
+            && rest
+                .split('_')
+                .all(|i| !i.is_empty() && i.chars().all(|c| c.is_ascii_digit()))
+        {
+            return q;
+        }
+    }
     match name.rsplit_once('_') {
         Some((k, i)) if i.chars().all(|c| c.is_ascii_digit()) => k,
         _ => name,
@@ -128,6 +138,12 @@ fn assert_close(what: &str, serial: &History, mumps: &History, projections: f64)
             "projection_iterations" => (projections, "± projections"),
             "gap" | "max_violation" => (1e-18_f64.max(1e-12 * scale[k]), "1e-18 m or 1e-12"),
             "velocity" => (1e-12_f64.max(1e-12 * scale[k]), "1e-12 m/s or 1e-12"),
+            // a body that does not turn has an angular momentum of round-off: its scale
+            // is the momentum's times the body's extent (the centres' scale)
+            "angular_momentum" => (
+                1e-12 * scale[k].max(scale["momentum"] * scale["centre"]),
+                "1e-12 of max(|L|, |p| |c|)",
+            ),
             _ => (1e-12 * scale[k], "1e-12 of the kind's scale"),
         };
         for (row, (a, b)) in serial.1.iter().zip(&mumps.1).enumerate() {

@@ -240,5 +240,13 @@ mod tests {
         }
         assert!(halve_min_positive() > 0.0, "the caller restored on drop");
         assert_eq!(current_thread(), Subnormals::Ieee);
+        // `for_caller`: the process's mode on this thread alone, put back on drop
+        if subnormals() == Subnormals::Flushed {
+            let g = FlushGuard::for_caller();
+            assert_eq!(g.mode(), Subnormals::Flushed);
+            assert_eq!(halve_min_positive(), 0.0);
+            drop(g);
+            assert!(halve_min_positive() > 0.0, "the caller restored on drop");
+        }
     }
 }
