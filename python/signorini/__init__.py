@@ -546,6 +546,23 @@ class History(dict):
         return xr.Dataset(data, coords={"time": ("time", self["time"], {"units": "s"})})
 
 
+def _progress_adapter(progress: Optional[Callable[..., None]]) -> Optional[Callable[..., None]]:
+    """The callback the run calls as ``(step, total, info)``: ``progress`` itself when it
+    takes three arguments, else a wrapper that passes ``(step, total)``."""
+    if progress is None:
+        return None
+    import inspect
+
+    try:
+        params = inspect.signature(progress).parameters.values()
+    except (TypeError, ValueError):  # a builtin without a signature: two arguments
+        return lambda step, total, info: progress(step, total)
+    positional = [p for p in params if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    if len(positional) >= 3 or any(p.kind == p.VAR_POSITIONAL for p in params):
+        return progress
+    return lambda step, total, info: progress(step, total)
+
+
 class Simulation:
     """One run of a scene: :meth:`run` for the whole run as the CLI makes it (files
     included), or :meth:`step` for step-by-step control. Not both."""
@@ -603,16 +620,23 @@ class Simulation:
     def run(
         self,
         out: Optional[PathLike] = None,
-        progress: Optional[Callable[[int, int], None]] = None,
+        progress: Optional[Callable[..., None]] = None,
         fields: Optional[bool] = None,
         plots: Optional[bool] = None,
     ) -> "Simulation":
         """Runs the whole scene with the GIL released. With ``out``, writes what the CLI
         writes there (``history.csv``, ``summary.json``, fields, plots); without, keeps
-        the history in memory only. ``progress(step, total)`` is called up to 1000
-        times. Ctrl-C stops after the current step, leaves ``out`` readable (the history
-        and the frames so far) and raises ``KeyboardInterrupt``."""
-        self._inner.run(None if out is None else os.fspath(out), progress, fields, plots)
+        the history in memory only. ``progress(step, total)`` — or
+        ``progress(step, total, info)``, ``info`` a dict of ``time`` (simulated, s),
+        ``elapsed`` (wall s since the first step), ``steps_per_second``, ``eta`` (s) and
+        the step's ``newton_iterations``, ``projection_iterations``,
+        ``index_set_iterations``, ``lcp_iterations``, ``max_violation`` (m), ``caps_hit``
+        — is called up to 1000 times. Ctrl-C stops after the current step, leaves
+        ``out`` readable (the history and the frames so far) and raises
+        ``KeyboardInterrupt``."""
+        self._inner.run(
+            None if out is None else os.fspath(out), _progress_adapter(progress), fields, plots
+        )
         return self
 
     def step(self, n: int = 1) -> int:

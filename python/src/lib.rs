@@ -313,24 +313,67 @@ struct PyProgress {
     error: Option<PyErr>,
     /// The simulation's `cancel()` flag, read at every step.
     cancel: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    /// When the first step began, and its index (the rate and the ETA count from there).
+    started: Option<(std::time::Instant, usize)>,
 }
 
-impl Progress for PyProgress {
-    fn update(&mut self, step: usize, total: usize) {
+impl PyProgress {
+    /// `callback(step, total, info)`: `info` the simulated time, the wall time since
+    /// the first step, the steps per second, the ETA and the step's statistics.
+    fn call(&mut self, step: usize, total: usize, time: f64, st: Option<&StepStats>) {
         if self.error.is_some() {
             return;
         }
+        let (t0, first) = *self
+            .started
+            .get_or_insert((std::time::Instant::now(), step.saturating_sub(1)));
+        let elapsed = t0.elapsed().as_secs_f64();
+        let done = step.saturating_sub(first) as f64;
+        let rate = if elapsed > 0.0 { done / elapsed } else { 0.0 };
+        let eta = match total.saturating_sub(step) {
+            0 => 0.0,
+            left if rate > 0.0 => left as f64 / rate,
+            _ => f64::NAN,
+        };
         Python::attach(|py| {
-            if let Some(cb) = &self.callback
-                && let Err(e) = cb.call1(py, (step, total))
-            {
-                self.error = Some(e);
-                return;
+            if let Some(cb) = &self.callback {
+                let info = pyo3::types::PyDict::new(py);
+                let filled = (|| -> PyResult<()> {
+                    info.set_item("time", time)?;
+                    info.set_item("elapsed", elapsed)?;
+                    info.set_item("steps_per_second", rate)?;
+                    info.set_item("eta", eta)?;
+                    if let Some(st) = st {
+                        info.set_item("newton_iterations", st.newton_iterations)?;
+                        info.set_item("projection_iterations", st.projection_iterations)?;
+                        info.set_item("index_set_iterations", st.index_set_iterations)?;
+                        info.set_item("lcp_iterations", st.lcp_iterations)?;
+                        info.set_item("max_violation", st.max_violation)?;
+                        info.set_item("caps_hit", st.caps_hit)?;
+                    }
+                    Ok(())
+                })();
+                if let Err(e) = filled.and_then(|_| cb.call1(py, (step, total, info)).map(|_| ())) {
+                    self.error = Some(e);
+                    return;
+                }
             }
             if let Err(e) = py.check_signals() {
                 self.error = Some(e);
             }
         });
+    }
+}
+
+impl Progress for PyProgress {
+    fn start(&mut self, _total: usize) {
+        self.started = Some((std::time::Instant::now(), 0));
+    }
+    fn update(&mut self, step: usize, total: usize) {
+        self.call(step, total, f64::NAN, None);
+    }
+    fn update_with(&mut self, step: usize, total: usize, time: f64, stats: &StepStats) {
+        self.call(step, total, time, Some(stats));
     }
     fn cancelled(&mut self) -> bool {
         self.error.is_some() || self.cancel.load(std::sync::atomic::Ordering::Relaxed)
@@ -514,6 +557,7 @@ impl PySimulation {
             callback: progress,
             error: None,
             cancel: self.cancel.clone(),
+            started: None,
         };
         // a run builds its own model (the CLI's path): one built for `mesh` is freed
         g.model = None;

@@ -665,3 +665,21 @@ def test_frames_open_in_one_call(tmp_path):
         assert r == pvd
     else:
         assert np.allclose(r.time_values, times)
+
+
+def test_progress_gets_the_time_the_statistics_and_the_eta():
+    """Issue 37: a three-argument `progress(step, total, info)` gets the simulated time
+    (step · dt, to round-off), the wall time, the rate, the ETA (0 at the last call) and
+    the step's statistics; a two-argument one is still called as before."""
+    scene = signorini.Scene.bar(elements=100, dt=2e-6, t_end=6e-4)
+    calls = []
+    scene.simulation().run(progress=lambda k, n, info: calls.append((k, n, dict(info))))
+    assert calls and calls[-1][0] == calls[-1][1] == scene.steps
+    for k, n, info in calls:
+        assert info["time"] == pytest.approx(k * 2e-6, rel=1e-12)
+        assert info["elapsed"] >= 0 and info["eta"] >= 0 and info["steps_per_second"] >= 0
+        assert isinstance(info["newton_iterations"], int) and info["max_violation"] >= 0
+    assert calls[-1][2]["eta"] == 0
+    two = []
+    scene.simulation().run(progress=lambda k, n: two.append(k))
+    assert two == [k for k, _, _ in calls]

@@ -10,6 +10,11 @@ use crate::integrators::{Integrator, StepStats};
 pub trait Progress {
     /// Called after `step` of `total` steps.
     fn update(&mut self, step: usize, total: usize);
+    /// [`Progress::update`] with the simulated time (s) and the statistics of the step
+    /// just taken: what the driver calls (the default forwards to `update`).
+    fn update_with(&mut self, step: usize, total: usize, _time: f64, _stats: &StepStats) {
+        self.update(step, total);
+    }
     /// Called when a set-up phase starts (building the model, factoring `M̂` and
     /// condensing the Delassus data, which take tens of seconds on 10⁵–10⁶ dofs).
     fn phase(&mut self, _what: &str) {}
@@ -246,7 +251,7 @@ pub fn drive(
             o.observe(integ, &st, last)?;
         }
         if (k + 1) % report_every == 0 || last {
-            progress.update(k + 1, steps);
+            progress.update_with(k + 1, steps, integ.state().time, &st);
         }
         // asked at every step (a flag for the Python package's `cancel()`, `false` for
         // the CLI): a stop comes one step after it is asked for
