@@ -483,6 +483,20 @@ impl PySimulation {
         })
     }
 
+    /// Builds the model (the GIL released) where neither an integrator nor a model
+    /// exists yet, its geometry kept for `mesh()`; the first `step()` integrates it.
+    fn ensure_model(&self, py: Python<'_>, g: &mut SimState) -> PyResult<()> {
+        if g.integ.is_none() && g.model.is_none() {
+            let kind = &self.kind;
+            let mut model = py.detach(|| kind.build()).map_err(py_err)?;
+            if g.geometry.is_none() {
+                g.geometry = Some(std::sync::Arc::new(std::mem::take(&mut model.geometry)));
+            }
+            g.model = Some(model);
+        }
+        Ok(())
+    }
+
     fn vector(
         &self,
         py: Python<'_>,
@@ -815,14 +829,7 @@ impl PySimulation {
                 .map(|b| b.iter().filter_map(parse).collect())
                 .ok_or_else(|| PyRuntimeError::new_err("the finished run recorded no bodies"));
         }
-        if g.integ.is_none() && g.model.is_none() {
-            let kind = &self.kind;
-            let mut model = py.detach(|| kind.build()).map_err(py_err)?;
-            if g.geometry.is_none() {
-                g.geometry = Some(std::sync::Arc::new(std::mem::take(&mut model.geometry)));
-            }
-            g.model = Some(model);
-        }
+        self.ensure_model(py, &mut g)?;
         let geo = match &g.geometry {
             Some(geo) => geo.clone(),
             None => {
@@ -864,14 +871,7 @@ impl PySimulation {
                 "this simulation has finished its run: make a new one with scene.simulation()",
             ));
         }
-        if g.integ.is_none() && g.model.is_none() {
-            let kind = &self.kind;
-            let mut model = py.detach(|| kind.build()).map_err(py_err)?;
-            if g.geometry.is_none() {
-                g.geometry = Some(std::sync::Arc::new(std::mem::take(&mut model.geometry)));
-            }
-            g.model = Some(model);
-        }
+        self.ensure_model(py, &mut g)?;
         let n = match (&g.integ, &g.model) {
             (Some(i), _) => i.state().q.len(),
             (None, Some(m)) => m.problem.q0.len(),
