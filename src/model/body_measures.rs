@@ -7,9 +7,10 @@
 //! `m = Σ_{i,j ∈ b, d} M_ij` (the component-`d` block's sum, the same for every `d`),
 //! `c_d = Σ M_ij x_j / m`, `p_d = Σ M_ij v_j`, and `L = Σ_i (x_i − c) × (M v)_i`.
 //! With the consistent mass of isoparametric cells these are the integrals `∫ρ`,
-//! `∫ρx / ∫ρ`, `∫ρv` and `∫ρ (x − c) × v` of the interpolated fields exactly (the
-//! cells' mass integrands are integrated exactly and `Σ N_i x_i = x`); with a lumped
-//! or redistributed mass they are the discrete model's own. The sums cover the kept
+//! `∫ρx / ∫ρ`, `∫ρv` and `∫ρ (x − c) × v` of the interpolated fields (`Σ N_i x_i = x`)
+//! to the mass matrix's own quadrature: exactly for tri3, tet4 and parallelepiped quad4
+//! and hex8 cells, whose `ρ N_i N_j det J` it integrates exactly; with a lumped or
+//! redistributed mass they are the discrete model's own. The sums cover the kept
 //! dofs: a fixed or prescribed component adds nothing (exact for free bodies, which
 //! are the ones whose momentum a user expects to be conserved). A plane body has `L`
 //! along z only; a rod (one component) has no angular momentum.
