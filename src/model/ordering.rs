@@ -3,8 +3,8 @@
 //! and, with the `metis` feature, METIS' multilevel nested dissection of the node
 //! graph (`crate::linalg::metis`), which the scene asks for with
 //! `scheme.ordering = "metis"` ([`OrderingKind`], [`candidate`]). A node's dofs stay
-//! together, so the dof factor is the node graph's pattern with 3×3 blocks and
-//! [`node_fill`] compares orders at a ninth of the cost.
+//! together, so the dof factor is the node graph's pattern with 3×3 blocks (the tests
+//! compare orders there, `node_fill`, at a ninth of the cost).
 //!
 //! The geometric order splits the nodes recursively at the median coordinate along
 //! the longest extent of the current part; the nodes of the upper half that share a
@@ -161,7 +161,9 @@ pub fn metis_nested_dissection(geom: &Geometry, ndof: usize) -> Result<Vec<usize
 
 /// The entries of the Cholesky factor of the node graph's pattern (with its diagonal)
 /// under `order` (position → node), from faer's symbolic analysis; `None` if it fails.
-pub fn node_fill(xadj: &[usize], adj: &[usize], order: &[usize]) -> Option<usize> {
+/// The tests' yardstick (the run compares orders at the dof level, `linalg::plan`).
+#[cfg(test)]
+fn node_fill(xadj: &[usize], adj: &[usize], order: &[usize]) -> Option<usize> {
     use faer::sparse::SymbolicSparseColMat;
     use faer::sparse::linalg::cholesky::{
         CholeskySymbolicParams, SymmetricOrdering, factorize_symbolic_cholesky,
