@@ -13,7 +13,8 @@
 //! redistributed mass they are the discrete model's own. The sums cover the kept
 //! dofs: a fixed or prescribed component adds nothing (exact for free bodies, which
 //! are the ones whose momentum a user expects to be conserved). A plane body has `L`
-//! along z only; a rod (one component) has no angular momentum.
+//! along z only; a rod (one component) has no angular momentum; an axisymmetric scene
+//! is not measured (its radial dofs carry no momentum of the revolved body).
 
 use super::geometry::Geometry;
 use crate::linalg::SparseMatrix;
@@ -71,7 +72,14 @@ impl BodyMeasures {
     pub fn new(geom: &Geometry, ndof: usize) -> Option<Self> {
         let dim = geom.dim;
         let fits = |n: usize| u32::try_from(n).is_ok_and(|n| n < NONE);
+        // an axisymmetric body's dofs are the half-section's (r, z): summing its radial
+        // components gives no momentum of the ring, so no such scene is measured
+        let axisymmetric = geom
+            .bodies
+            .iter()
+            .any(|(_, f)| matches!(f, crate::model::solid::Formulation::Axisymmetric));
         if !(1..=3).contains(&dim)
+            || axisymmetric
             || geom.bodies.is_empty()
             || !fits(ndof)
             || !fits(geom.points.len())
