@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Where the distributed factor pays (issue 19 §2; README "One large run on several
+# Where the distributed factor pays (issue 19 §2; docs/sweeps.md, "One large run on several
 # ranks"): hex8 cubes of n³ cells (1 m, steel, falling flat at 0.1 m/s on a rigid floor
 # with their (n+1)² bottom nodes, Algorithm 2, h = 1e-6 s, 5 steps) run with the serial
 # factor (faer's supernodal Cholesky, rayon on the machine's cores) and with MUMPS over

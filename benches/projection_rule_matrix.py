@@ -8,7 +8,7 @@ the paper's rule runs with Newton's law on every contact, `energy_consistent_res
 and writes one row per run to OUT/matrix.csv: exit code, largest energy excess (relative
 to the run's energy scale, `energy_balance.excess_max` of summary.json), largest
 violation, caps, mean and max Newton iterations, rounds redone with complementarity, wall
-time. Prints a Markdown table of the verdicts (README, "Algorithm 2's position rule").
+time. Prints a Markdown table of the verdicts (docs/bar.md, "Algorithm 2's position rule").
 
 A cell is `ok` when the run exits 0 with no cap and an energy excess <= 1e-6 (round-off:
 every clean run of the matrix stays below 2e-13); otherwise it names what failed.

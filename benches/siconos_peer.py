@@ -79,7 +79,7 @@ def main():
     ok = True
     with tempfile.TemporaryDirectory() as tmp:
         # the paper's rules, which Siconos implements: Newton's law with e on every
-        # contact, the forecast's active set alone (README, "Algorithm 2's position rule")
+        # contact, the forecast's active set alone (docs/bar.md, "Algorithm 2's position rule")
         for scheme, args in [("moreau-jean", ["--scheme", "moreau-jean", "--newton-restitution",
                                               "--no-activation-closure"]),
                              # Siconos' projection kicks the tip node and the bar gains

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# 3-D scaling study for the README: a slender hex8 bar (n × 8 × 8 cells, square section
+# 3-D scaling study for the user guide (docs/speed.md): a slender hex8 bar (n × 8 × 8 cells, square section
 # of area π·1e-4 m², ν = 0) hitting a rigid wall with its 81 end-face nodes, Algorithm 2,
 # h = 5e-8 s, for n = 40, 400, 4000 (1.0e4, 9.7e4, 9.7e5 dofs), with rayon on 1 and on
 # 2 threads. Prints one row per run from summary.json: model build (mesh + parallel

@@ -6,7 +6,7 @@
 //! Hertz (quasi-static, frictionless): `E* = E/(1 − ν²)`,
 //! `δ_max = (15 m v² / (16 E* √R))^{2/5}`, `F_max = (4/3) E* √R δ_max^{3/2}`,
 //! `t_c = 2.9432 δ_max / v`: 2300.9 N and 5.224e-5 s with m = (4/3)πR³ρ. The issue asks
-//! for both within 3 %. Measured (README, "Hertz impact"): on this mesh at h = 2.5e-8 s
+//! for both within 3 %. Measured (docs/scenes.md, "Hertz impact"): on this mesh at h = 2.5e-8 s
 //! the peak force is 1.86 % above and the contact 1.80 % shorter; halving the pole size
 //! twice moves them by 0.4 %, while the step matters more (6.2 % at h = 1e-7, 3.2 % at
 //! 5e-8, 2.2 % at 2.5e-8, 1.9 % at 1.25e-8 on the 2 655-node mesh): the discrete
@@ -118,7 +118,7 @@ fn scene_impact(file: &str, kind: &str) -> (f64, f64) {
 /// wall (the symmetry plane): peak force `2300.9 · 0.5^{6/5}` = 1001.5 N and contact time
 /// `5.224e-5 · 0.5^{−1/5}` = 6.001e-5 s. The issue asks for 5 %. Measured at
 /// h = 2.5e-8 s: Moreau–Jean +1.71 % and −1.68 %, Algorithm 2 +1.56 % and −1.18 %
-/// (README, "Contact between bodies"); the step error falls with h as for one ball
+/// (docs/bodies.md, "Contact between bodies"); the step error falls with h as for one ball
 /// (+6.3 %, +3.1 %, +1.7 %, +1.4 % on the peak at h = 1e-7, 5e-8, 2.5e-8, 1.25e-8): 3 %
 /// here.
 #[test]

@@ -1,7 +1,7 @@
 //! FCLIB and Siconos `.dat` problems (issue 11 §4): read, solve, compare with the
 //! reference solutions of `tests/data/fclib/README.md` (printed there to 12 digits: solved
 //! to a residual of 1e-12, r must match to 1e-9, the last printed digit), and every file
-//! to Siconos' residual 1e-8 with the solver the README recommends for it. HDF5 files need the
+//! to Siconos' residual 1e-8 with the solver the user guide recommends (docs/friction.md, "FCLIB") for it. HDF5 files need the
 //! `hdf5` feature; the `.dat` files are read without it.
 
 use std::path::{Path, PathBuf};
@@ -303,7 +303,7 @@ fn fclib_hdf5_problems_converge_to_1e8() {
     {
         assert!((a - b).abs() <= 1e-9, "r = {:?}", s.r);
     }
-    // the README's recommendation: NSGS on the finite-element and box problems, the
+    // the user guide's recommendation (docs/friction.md): NSGS on the finite-element and box problems, the
     // Newton solver on local_problem_test (where NSGS stalls at 2e-4, as Siconos' does)
     for (name, solver) in [
         (

@@ -3,7 +3,7 @@
 //! after the accumulation at t = 3, Algorithm 1 with the explicit forecast keeps
 //! switching the contact, while Algorithm 2 and the free forecast bring the ball to rest.
 //! These reproductions run the paper's rules ([`SchemeParams::paper_rules`]); the last
-//! test holds the default rules (README, "Algorithm 2's position rule") to the same
+//! test holds the default rules (docs/bar.md, "Algorithm 2's position rule") to the same
 //! closed form.
 
 use signorini::analytic::ball::BouncingBall;

@@ -171,7 +171,7 @@ fn corner_gaps_and_jacobians_are_consistent() {
     }
 }
 
-/// The default rules on the rocking block (README, "Algorithm 2's position rule"): the
+/// The default rules on the rocking block (docs/bar.md, "Algorithm 2's position rule"): the
 /// same rest without oscillation as Fig. 9 (d) — no corner switches after t = 1, the
 /// block flat on both corners (θ = 0 to 1e-12, centre at l/2 to 1e-12) — reached
 /// a little later, since a corner caught again while separating takes e = 1

@@ -218,7 +218,7 @@ fn regression_nsgs_cycles_at_large_mu_and_newton_solves_it() {
     let (r, u, res) = solve(FrictionSolverKind::Newton, &w, &q, &bl);
     assert!(res <= 1e-10);
     check_cone(&bl, &q, &r, &u);
-    // and NSGS indeed does not converge on it (the limitation the README states)
+    // and NSGS indeed does not converge on it (the limitation docs/friction.md states)
     let op = DenseOperator::new(k, &w);
     let (mut r2, mut u2) = (vec![0.0; k], vec![0.0; k]);
     let info = FrictionSolver::with_capacity(k)

@@ -149,7 +149,7 @@ fn issue_step_finishes_without_caps_under_every_scheme() {
 /// slides 4.8 % and 6.6 % too far there, so only a loose 10 % on Algorithm 2 (measured
 /// 0.44 % and 0.18 %). Algorithm 2 at 5e-4 hit 4 caps in 900 steps where eq. 65 has no
 /// solution for the index set; those rounds are now redone with complementarity (7 in
-/// the run; README, "Algorithm 2 with friction").
+/// the run; docs/friction.md, "Algorithm 2 with friction").
 #[test]
 fn coarse_steps_finish_without_caps_under_the_projection_schemes() {
     for (h, kind) in [

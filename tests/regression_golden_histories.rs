@@ -12,7 +12,7 @@
 //! that are round-off around zero, such as a violation of 1e-40 m next to 0). Any change
 //! of the arithmetic of the frictionless path beyond reordering shows up far above it.
 //!
-//! Issue 33 changed three default rules (README, "Algorithm 2's position rule"): the
+//! Issue 33 changed three default rules (docs/bar.md, "Algorithm 2's position rule"): the
 //! files above are the paper's rules' ([`SchemeParams::paper_rules`]), which reproduce
 //! every one of them to 1e-15 of its scale; under the default rules Moreau–Jean,
 //! Schatzman–Paoli, the trapezoidal rule and Algorithm 1 still do (their single bar

@@ -1,7 +1,7 @@
 //! Issue 34: sweeps that mislabelled runs, dropped axes, compared runs of different
 //! lengths sample by sample, ran one point twice, mixed records of two grids, deleted a
 //! user's file, or read their own numbers back one ulp off. Each is refused (exit 2,
-//! naming what the user wrote) or handled as the README states.
+//! naming what the user wrote) or handled as the user guide states (docs/sweeps.md).
 
 mod common;
 

@@ -48,7 +48,7 @@ fn table_without_timings(dir: &Path) -> String {
 /// The grid is the product of its axes (2 schemes × 2 steps × 2 refinements), each run
 /// measured against the bar's closed form: the impulse trace ends at the run's total
 /// impulse (its error against 2 ρ S L |v0| is the summary's own to 1e-9), the plateau
-/// force of the finer runs is within 1 % of E S |v0|/c0 (the README's bar runs give
+/// force of the finer runs is within 1 % of E S |v0|/c0 (the guide's bar runs (docs/bar.md) give
 /// 0.01 %; 40–80 elements at Courant 0.4–1.7 stay below 1 %), and the projection scheme
 /// does not penetrate (1e-12 m; Moreau–Jean penetrates |v0|(1−θ)h = 1e-7 m at h = 2e-6).
 #[test]

@@ -214,7 +214,7 @@ impl Delassus {
 mod tests {
     use super::*;
 
-    /// The zone storage decisions at the sizes the README quotes: the two 8³ cubes keep
+    /// The zone storage decisions at the sizes the user guide quotes (docs/bodies.md): the two 8³ cubes keep
     /// `Y`, `E`; the two 20³ cubes (54 243 dofs, 2 646 zone dofs, 441 rows, with `W_D`)
     /// would need 2.3 GB of `n × z` blocks and keep the flexibilities (112 MB); the two
     /// 40³ cubes (408 483 dofs, 10 086 zone dofs, 1 681 rows) keep the flexibilities

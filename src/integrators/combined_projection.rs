@@ -10,7 +10,7 @@
 //! the last ([`ProjectionRule::Persistent`]); the paper's eq. 67–70 hold every row with
 //! `P > 0` ([`ProjectionRule::Paper`]), which pulls a node that carries its first impulse
 //! onto the obstacle and, on elastic bodies, throws it off through the feedback of eq.
-//! 56a (issue 33; README, "Algorithm 2's position rule"); `AllActive` holds every active
+//! 56a (issue 33; docs/bar.md, "Algorithm 2's position rule"); `AllActive` holds every active
 //! row, as Siconos does (its `P > 0` test is commented out), and `Complementarity` none.
 //!
 //! Eq. 65 need not have a solution for an index set (rows with `P > 0` held at `g = 0`
@@ -19,7 +19,7 @@
 //! `P = 0` and `τ < 0`. Such a round is redone with Algorithm 1's rule, `0 ≤ g ⊥ τ ≥ 0`
 //! on every active row (eq. 58), and counted in
 //! [`StepStats::complementarity_fallbacks`]: the step is then a direct-projection step,
-//! exact at position level with `τ ≥ 0` wherever `P = 0` (README, "Algorithm 2 with
+//! exact at position level with `τ ≥ 0` wherever `P = 0` (docs/friction.md, "Algorithm 2 with
 //! friction on undamped elastic bodies").
 
 use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};

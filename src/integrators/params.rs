@@ -110,7 +110,7 @@ pub enum Forecast {
 /// and on elastic bodies that pull, fed back through `−hθK N G τ` (eq. 56a), throws the
 /// node off at tens of m/s (1 m/s Hertz impact). On contact between bodies eq. 65 then
 /// often has no solution for the set and the round is redone with complementarity: 20–40
-/// Newton iterations a step where the default takes 8 (README, "Algorithm 2's position
+/// Newton iterations a step where the default takes 8 (docs/bar.md, "Algorithm 2's position
 /// rule", has the matrix of scenes × steps that chose the default).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
@@ -254,7 +254,7 @@ pub struct SchemeParams {
     /// (1e-6) where the scheme's discrete energy is exact — linear structures, and
     /// large-deformation bodies under `energy_momentum` — and
     /// [`THETA_METHOD_MAX_ENERGY_EXCESS`] (1e-2) for large-deformation bodies under the
-    /// θ-method, whose energy error is bounded but not round-off. Measured (README,
+    /// θ-method, whose energy error is bounded but not round-off. Measured (docs/bar.md,
     /// "Algorithm 2's position rule"): every committed scene at 1×–8× its step under every
     /// scheme that ends stays below 1.6e-13 of its scale; what grows more is not the
     /// scheme's solution (an impact law adding energy, an unconverged Newton loop with caps
@@ -328,7 +328,7 @@ impl SchemeParams {
     }
 
     /// These parameters with the paper's rules where the defaults depart from them
-    /// (README, "Algorithm 2's position rule"): Algorithm 2 holds every row with
+    /// (docs/bar.md, "Algorithm 2's position rule"): Algorithm 2 holds every row with
     /// `P > 0` at `g = 0` (eq. 68, [`ProjectionRule::Paper`]), Moreau–Jean's active set
     /// is the forecast's alone (eq. 61/62), and Newton's law takes `e` on every row
     /// (eq. 18d). The reproductions of the paper's figures and tables run with these.

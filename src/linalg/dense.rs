@@ -12,7 +12,7 @@ use super::*;
 /// contact, the academic examples' two; no call overhead); larger blocks go to faer's
 /// blocked, vectorized Cholesky and triangular solves. Measured on the 98 304-dof cube
 /// with 1024 active contacts (`benches/cube_setup.toml`): the loop made the LCP and
-/// MLCP 1.4 s of a 2.07 s step; see README for faer's.
+/// MLCP 1.4 s of a 2.07 s step; see docs/speed.md for faer's.
 pub struct DenseCholesky {
     pub(super) capacity: usize,
     pub(super) mem: MemBuffer,

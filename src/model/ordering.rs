@@ -97,7 +97,7 @@ pub enum OrderingKind {
     /// METIS' multilevel nested dissection of the node graph (feature `metis`): 3–15 %
     /// fewer factor entries than the geometric order on the cubes, plate and rail,
     /// hence a smaller factor and a faster set-up, but steps up to a tenth slower
-    /// (README, "Orderings").
+    /// (docs/bodies.md, "Orderings").
     Metis,
     /// AMD alone.
     Amd,
