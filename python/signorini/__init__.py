@@ -27,7 +27,7 @@ import numpy as np
 
 from . import fclib
 from ._signorini import BadInput, Cancelled, RunFailed, SignoriniError, _Scene, _Simulation
-from ._signorini import __version__
+from ._signorini import HDF5, __version__
 
 __all__ = [
     "Scene",
@@ -39,6 +39,7 @@ __all__ = [
     "RunFailed",
     "Cancelled",
     "fclib",
+    "HDF5",
     "__version__",
 ]
 
@@ -564,8 +565,11 @@ def _progress_adapter(progress: Optional[Callable[..., None]]) -> Optional[Calla
 
 
 class Simulation:
-    """One run of a scene: :meth:`run` for the whole run as the CLI makes it (files
-    included), or :meth:`step` for step-by-step control. Not both."""
+    """One run of a scene, taken whole by :meth:`run` (as the CLI makes it, files
+    included) or step by step by :meth:`step`, or both: the run opens at the first call
+    (:meth:`start` opens it into a directory without stepping), every step goes through
+    the same checks and observers, the history grows as it goes, and the step that
+    reaches the scene's end forms the summary."""
 
     __slots__ = ("scene", "_inner", "_mesh")
 
@@ -607,11 +611,11 @@ class Simulation:
         """Sets the displacements ``q`` (m) and/or velocities ``v`` (m/s): one value per
         unknown (as :attr:`q`) or one row per point (``(N, dim)``, as
         :meth:`Mesh.nodal` gives; 0 or NaN where a component is fixed or prescribed).
-        Before the first :meth:`step` it replaces the scene's initial state (a per-node
-        initial field); between steps, the current state, whose gaps and contact data
-        are evaluated again at the new ``q``. For :meth:`step` runs: :meth:`run` starts
-        from the scene's own initial state and refuses a simulation whose state was
-        set."""
+        Before the first :meth:`step` or :meth:`run` it replaces the scene's initial
+        state (a per-node initial field; the summary's initial energy and body measures
+        are of it); between steps, the current state, whose gaps and contact data are
+        evaluated again at the new ``q``, and the run's energy balance starts again from
+        it (the energy the edit gives or takes is no work of the forces)."""
         m = self.mesh
         qd = None if q is None else m.dofs(q, "q")
         vd = None if v is None else m.dofs(v, "v")
@@ -624,25 +628,47 @@ class Simulation:
         fields: Optional[bool] = None,
         plots: Optional[bool] = None,
     ) -> "Simulation":
-        """Runs the whole scene with the GIL released. With ``out``, writes what the CLI
-        writes there (``history.csv``, ``summary.json``, fields, plots); without, keeps
-        the history in memory only. ``progress(step, total)`` — or
+        """Runs the scene to its end with the GIL released. With ``out``, writes what the
+        CLI writes there (``history.csv``, ``summary.json``, fields, plots); without,
+        keeps the history in memory only. On a simulation already stepped (or a run
+        interrupted) it goes on from the step reached, where that run writes (``out``
+        must then be None or that directory). ``progress(step, total)`` — or
         ``progress(step, total, info)``, ``info`` a dict of ``time`` (simulated, s),
         ``elapsed`` (wall s since the first step), ``steps_per_second``, ``eta`` (s) and
         the step's ``newton_iterations``, ``projection_iterations``,
         ``index_set_iterations``, ``lcp_iterations``, ``max_violation`` (m), ``caps_hit``
         — is called up to 1000 times. Ctrl-C stops after the current step, leaves
         ``out`` readable (the history and the frames so far) and raises
-        ``KeyboardInterrupt``."""
+        ``KeyboardInterrupt``; the state reached is kept, and :meth:`step` or
+        :meth:`run` goes on from it."""
         self._inner.run(
             None if out is None else os.fspath(out), _progress_adapter(progress), fields, plots
         )
         return self
 
-    def step(self, n: int = 1) -> int:
-        """Takes ``n`` steps (the first call builds the integrator) and returns the steps
-        done; :attr:`stats` has the last step's statistics."""
-        return self._inner.step(n)
+    def start(
+        self,
+        out: Optional[PathLike] = None,
+        fields: Optional[bool] = None,
+        plots: Optional[bool] = None,
+    ) -> "Simulation":
+        """Opens the run without stepping: with ``out``, the steps that follow write what
+        the CLI writes there (history, frames as the scene or ``fields`` asks, and at
+        the last step ``summary.json`` and the plots); without, the history is kept in
+        memory, which is what the first :meth:`step` does by itself."""
+        self._inner.start(None if out is None else os.fspath(out), fields, plots)
+        return self
+
+    def step(self, n: int = 1, progress: Optional[Callable[..., None]] = None) -> int:
+        """Takes ``n`` steps (the first call opens the run, in memory unless
+        :meth:`start` gave a directory) and returns the steps done. Each step is checked
+        and recorded as in :meth:`run` (:attr:`history` grows); the step that reaches
+        the scene's end forms :attr:`summary`. :attr:`stats` has the last step's
+        statistics. ``progress`` as in :meth:`run` (called at the run's report steps
+        that fall in these ``n``; an exception in it stops after the current step and
+        propagates, the state reached kept). Ctrl-C and :meth:`cancel` stop within about
+        50 ms whatever a step costs, and while the first call builds the model."""
+        return self._inner.step(n, _progress_adapter(progress))
 
     def cancel(self) -> None:
         """Asks the :meth:`step` or :meth:`run` running in another thread to stop after
@@ -700,19 +726,27 @@ class Simulation:
 
     @property
     def summary(self) -> Dict[str, Any]:
-        """``summary.json`` of the run, as a dict (after :meth:`run`)."""
+        """``summary.json`` of the run, as a dict: formed when the run reaches its last
+        step, by :meth:`run` or by :meth:`step`."""
         s = self._inner.summary_json
         if s is None:
-            raise RuntimeError("no summary: run() writes it (step() does not)")
+            raise RuntimeError(
+                f"no summary yet: it is formed at the run's last step "
+                f"({self.steps_done} of {self.steps_total} done)"
+            )
         return json.loads(s)
 
     @property
     def history(self) -> "History":
         """``history.csv`` of the run as a :class:`History`: a dict of ``float64`` arrays,
-        one per column in the file's order (after :meth:`run`; the same numbers, bit for
-        bit), with the per-contact columns also as ``(steps, contacts)`` arrays, units,
-        and ``to_pandas()`` / ``to_xarray()``."""
-        return History(self._inner.history_columns())
+        one per column in the file's order (the same numbers, bit for bit), with the
+        per-contact columns also as ``(steps, contacts)`` arrays, units, and
+        ``to_pandas()`` / ``to_xarray()``. The whole run's once it has ended; the rows
+        so far while :meth:`step` goes through it."""
+        cols = self._inner.history_columns()
+        if cols is None:
+            raise RuntimeError("no history yet: take a step() or run() first")
+        return History(cols)
 
     @property
     def probes(self) -> Dict[str, Dict[str, Any]]:
@@ -736,7 +770,7 @@ class Simulation:
 
     @property
     def out(self) -> Optional[str]:
-        """The output directory of ``run(out=…)``."""
+        """The output directory of ``run(out=…)`` or ``start(out=…)`` (None in memory)."""
         o = self._inner.out
         return None if o is None else os.fspath(o)
 
@@ -747,7 +781,9 @@ class Simulation:
         ``velocity``, ``contact_force``, ``gap``, ``stress`` …); else the ``.pvd`` path
         (ParaView, meshio, VTK)."""
         if self.out is None:
-            raise RuntimeError("no frames: run(out=...) writes them (an in-memory run does not)")
+            raise RuntimeError(
+                "no frames: run(out=...) or start(out=...) writes them (an in-memory run does not)"
+            )
         pvd = os.path.join(self.out, "fields.pvd")
         if not os.path.exists(pvd):
             raise RuntimeError(

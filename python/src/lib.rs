@@ -1,7 +1,8 @@
 //! `signorini._signorini`: the Rust side of the Python package (issue 20). It holds no
 //! solver of its own: scenes are the library's `Scene` / `BarScene`, runs go through
-//! the library's `run_scene` / `run_bar` (the CLI's code path, so a run writes the
-//! CLI's files byte for byte), and stepping goes through the library's integrators.
+//! the library's `app::Session` (the CLI's code path, so a run writes the CLI's files
+//! byte for byte), and `step(n)` advances the same session `n` steps at a time: the same
+//! checks, history and summary as `run()`, and one simulation may mix both.
 //! The pure-Python layer (`signorini/__init__.py`) turns keyword arguments into scene
 //! overrides and JSON into dicts; this module moves arrays and releases the GIL.
 //!
@@ -18,9 +19,10 @@ use pyo3::exceptions::{PyException, PyRuntimeError};
 use pyo3::prelude::*;
 
 use signorini::Error;
+use signorini::app::Session;
 use signorini::integrators::{Integrator, State, StepStats};
 use signorini::io::OutputOptions;
-use signorini::run::{Output, Progress, RunChecks};
+use signorini::run::{Output, Progress};
 use signorini::scene::bar::BarScene;
 use signorini::scene::file::Scene as FileScene;
 
@@ -80,6 +82,12 @@ fn check_vector(
     Ok(())
 }
 
+/// A built model, with its report when it comes from a scene file.
+type Built = (
+    signorini::scene::Model,
+    Option<signorini::scene::file::ModelReport>,
+);
+
 /// A scene file's scene, or the built-in impacting bar (its own parameter set).
 #[derive(Clone)]
 enum Kind {
@@ -95,19 +103,36 @@ impl Kind {
         }
     }
 
-    /// The model (mesh, assembly, contacts), as a run builds it.
-    fn build(&self) -> Result<signorini::scene::Model, Error> {
+    /// The model (mesh, assembly, contacts), as a run builds it, with a scene file's
+    /// report.
+    fn build(&self) -> Result<Built, Error> {
         match self {
-            Kind::File(s) => Ok(s.build()?.0),
-            Kind::Bar(b) => b.build(),
+            Kind::File(s) => s.build().map(|(m, r)| (m, Some(r))),
+            Kind::Bar(b) => Ok((b.build()?, None)),
         }
     }
 
-    /// The scheme's parameters and the step.
-    fn scheme_and_step(&self) -> (&signorini::integrators::SchemeParams, f64) {
+    /// Opens the run (a [`Session`]) into `out`, from `built` where given.
+    fn session(
+        &self,
+        built: Option<Built>,
+        out: Output,
+        progress: &mut dyn Progress,
+    ) -> Result<Session, Error> {
         match self {
-            Kind::File(s) => (&s.scheme, s.time.dt),
-            Kind::Bar(b) => (&b.scheme, b.dt),
+            Kind::File(s) => {
+                let built = built.map(|(m, r)| (m, r.expect("a scene file's model has a report")));
+                Session::scene(s, built, Some(out), progress, None)
+            }
+            Kind::Bar(b) => Session::bar(b, built.map(|b| b.0), Some(out), progress, None),
+        }
+    }
+
+    /// The scene's output options.
+    fn output(&self) -> OutputOptions {
+        match self {
+            Kind::File(s) => s.output.clone(),
+            Kind::Bar(_) => OutputOptions::default(),
         }
     }
 
@@ -315,13 +340,16 @@ struct PyProgress {
     cancel: std::sync::Arc<std::sync::atomic::AtomicBool>,
     /// When the first step began, and its index (the rate and the ETA count from there).
     started: Option<(std::time::Instant, usize)>,
+    /// Look for Ctrl-C at each report (`run()`); `step(n)` looks between its chunks
+    /// instead, so that without a callback a report costs nothing.
+    signals: bool,
 }
 
 impl PyProgress {
     /// `callback(step, total, info)`: `info` the simulated time, the wall time since
     /// the first step, the steps per second, the ETA and the step's statistics.
     fn call(&mut self, step: usize, total: usize, time: f64, st: Option<&StepStats>) {
-        if self.error.is_some() {
+        if self.error.is_some() || (self.callback.is_none() && !self.signals) {
             return;
         }
         let (t0, first) = *self
@@ -380,6 +408,9 @@ impl Progress for PyProgress {
     }
 }
 
+/// History columns handed to Python: `(name, array)` in the CSV's order.
+type NamedArrays = Vec<(String, Py<PyArray1<f64>>)>;
+
 /// A history read back from `history.csv`: column names and values by column.
 type Columns = Vec<(String, Vec<f64>)>;
 
@@ -413,37 +444,121 @@ fn read_history(dir: &Path) -> Result<Columns, Error> {
 /// longer (a mesh's step, a long chunk) runs with the GIL released.
 const GIL_RELEASE_AFTER: f64 = 50e-6;
 
-/// `step(n)` checks for Ctrl-C about this often (s), whatever a step costs.
+/// `step(n)` checks for Ctrl-C about this often (s), whatever a step costs; model
+/// building too.
 const INTERRUPT_EVERY: f64 = 0.05;
+
+/// Runs `work` (building a model, factoring `M̂`: seconds on a large mesh, with no place
+/// to stop inside faer's factorization) on a thread of its own, the GIL released, while
+/// this thread wakes every [`INTERRUPT_EVERY`] s for Ctrl-C and `cancel()`. Interrupted,
+/// it returns at once; the abandoned work runs to its end in the background and its
+/// result is handed to `abandon` there (which drops it, its memory then freed). The
+/// thread sets the run's subnormal mode.
+fn interruptible<T: Send + 'static>(
+    py: Python<'_>,
+    cancel: &std::sync::atomic::AtomicBool,
+    what: &str,
+    work: impl FnOnce() -> T + Send + 'static,
+    abandon: impl FnOnce(T) + Send + 'static,
+) -> PyResult<T> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .name("signorini-build".into())
+        .spawn(move || {
+            let _flush = signorini::linalg::FlushGuard::for_run();
+            if let Err(std::sync::mpsc::SendError(v)) = tx.send(work()) {
+                abandon(v);
+            }
+        })
+        .map_err(|e| PyRuntimeError::new_err(format!("{what}: cannot start a thread: {e}")))?;
+    let wait = std::time::Duration::from_secs_f64(INTERRUPT_EVERY);
+    let mut rx = rx;
+    loop {
+        // the receiver is not Sync: it goes to the GIL-free wait and back
+        let (r, back) = py.detach(move || (rx.recv_timeout(wait), rx));
+        rx = back;
+        match r {
+            Ok(v) => return Ok(v),
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                py.check_signals()?;
+                if cancel.swap(false, std::sync::atomic::Ordering::Relaxed) {
+                    return Err(Cancelled::new_err(format!(
+                        "{what} cancelled: nothing was kept (the work started finishes in \
+                         the background and is dropped)"
+                    )));
+                }
+            }
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                return Err(PyRuntimeError::new_err(format!(
+                    "{what}: the building thread stopped without a result (a panic: please \
+                     report it)"
+                )));
+            }
+        }
+    }
+}
 
 #[derive(Default)]
 struct SimState {
     /// The last chunk's seconds per step (0 before the first: the first chunk of a
     /// new simulation runs with the GIL released).
     step_seconds: f64,
-    integ: Option<Box<dyn Integrator>>,
-    checks: Option<RunChecks>,
+    /// The run between its first step and its last: opened by the first `step()` or
+    /// `run()`, advanced by both, finished (and dropped) at the last step.
+    session: Option<Session>,
+    /// Where the session writes: `run(out=…)`'s or `start(out=…)`'s directory, or a
+    /// temporary one (`temporary`), removed once the history is read back at the end.
+    dir: Option<PathBuf>,
+    temporary: bool,
+    /// The last step's statistics, kept when the session ends.
     last: Option<StepStats>,
     finished: Option<State>,
     summary: Option<String>,
     history: Option<Columns>,
     out: Option<PathBuf>,
-    /// The model built for `mesh` before the first `step()`, which then integrates it
-    /// instead of building it again.
-    model: Option<signorini::scene::Model>,
-    /// The mesh and dof map of the built model (kept once the integrator has the rest).
+    /// The model built for `mesh`, `bodies` or `set_state` before the first step, which
+    /// the session then integrates instead of building it again.
+    model: Option<Built>,
+    /// The mesh and dof map of the built model.
     geometry: Option<std::sync::Arc<signorini::model::geometry::Geometry>>,
-    /// `set_state` changed the scene's initial state: `run()`, which starts from the
-    /// scene's, is refused.
-    state_set: bool,
 }
 
 impl SimState {
+    fn integ(&self) -> Option<&dyn Integrator> {
+        self.session.as_ref().map(|s| s.integrator())
+    }
+
     fn state(&self) -> Option<&State> {
-        self.integ
-            .as_ref()
-            .map(|i| i.state())
-            .or(self.finished.as_ref())
+        self.integ().map(|i| i.state()).or(self.finished.as_ref())
+    }
+
+    /// Ends the session advanced to its last step: the summary, the history read back
+    /// (the temporary directory removed), the final state.
+    fn finish(&mut self) -> Result<(), Error> {
+        let session = self.session.take().expect("a session to finish");
+        self.last = session.last_stats().copied().or(self.last);
+        let r = session.finish()?;
+        let dir = self.dir.take().expect("a session has a directory");
+        let history = read_history(&dir)?;
+        if self.temporary {
+            let _ = std::fs::remove_dir_all(&dir);
+        } else {
+            self.out = Some(dir);
+        }
+        self.summary = Some(serde_json::to_string(&r.summary).expect("summaries serialize"));
+        self.history = Some(history);
+        self.finished = Some(r.state);
+        Ok(())
+    }
+}
+
+impl Drop for SimState {
+    fn drop(&mut self) {
+        // the session's writer threads end (and its lock goes) before the directory
+        drop(self.session.take());
+        if let (true, Some(dir)) = (self.temporary, self.dir.take()) {
+            let _ = std::fs::remove_dir_all(dir);
+        }
     }
 }
 
@@ -483,18 +598,106 @@ impl PySimulation {
         })
     }
 
-    /// Builds the model (the GIL released) where neither an integrator nor a model
-    /// exists yet, its geometry kept for `mesh()`; the first `step()` integrates it.
+    /// Builds the model (the GIL released) where neither a run nor a model exists yet,
+    /// a copy of its geometry kept for `mesh()` (the run measures, checks and writes
+    /// frames on the model's own); the first `step()` or `run()` integrates it.
     fn ensure_model(&self, py: Python<'_>, g: &mut SimState) -> PyResult<()> {
-        if g.integ.is_none() && g.model.is_none() {
-            let kind = &self.kind;
-            let mut model = py.detach(|| kind.build()).map_err(py_err)?;
+        if g.session.is_none() && g.finished.is_none() && g.model.is_none() {
+            let kind = self.kind.clone();
+            let built = interruptible(
+                py,
+                &self.cancel,
+                "building the model",
+                move || kind.build(),
+                drop,
+            )?
+            .map_err(py_err)?;
             if g.geometry.is_none() {
-                g.geometry = Some(std::sync::Arc::new(std::mem::take(&mut model.geometry)));
+                g.geometry = Some(std::sync::Arc::new(built.0.geometry.clone()));
             }
-            g.model = Some(model);
+            g.model = Some(built);
         }
         Ok(())
+    }
+
+    /// Opens the run (the GIL released) into `out`, or into a temporary directory with
+    /// no fields, plots or HDF5 (the history alone, read back at the end); integrates
+    /// the model built for `mesh()` / `set_state()` where there is one.
+    fn open(
+        &self,
+        py: Python<'_>,
+        g: &mut SimState,
+        out: Option<PathBuf>,
+        fields: Option<bool>,
+        plots: Option<bool>,
+    ) -> PyResult<()> {
+        let mut options = self.kind.output();
+        let temporary = out.is_none();
+        let dir = out.unwrap_or_else(temp_dir);
+        if temporary {
+            options.fields = false;
+            options.plots = false;
+            options.hdf5 = Some(false);
+        }
+        if let Some(f) = fields {
+            options.fields = f;
+        }
+        if let Some(p) = plots {
+            options.plots = p;
+        }
+        let (kind, built, known) = (self.kind.clone(), g.model.take(), g.geometry.is_some());
+        let (target, abandoned) = (dir.clone(), dir.clone());
+        let opened = interruptible(
+            py,
+            &self.cancel,
+            "opening the run",
+            move || {
+                let built = match built {
+                    Some(b) => b,
+                    None => kind.build()?,
+                };
+                // `mesh()` after the run opens reads this copy
+                let geometry = (!known).then(|| built.0.geometry.clone());
+                let s = kind.session(
+                    Some(built),
+                    Output {
+                        dir: &target,
+                        options: &options,
+                    },
+                    &mut signorini::run::Quiet,
+                )?;
+                Ok((s, geometry))
+            },
+            move |r: Result<_, Error>| {
+                // the session's writers stop and its lock goes before its directory
+                drop(r);
+                if temporary {
+                    let _ = std::fs::remove_dir_all(&abandoned);
+                }
+            },
+        )
+        .inspect_err(|_| {
+            if temporary {
+                let _ = std::fs::remove_dir_all(&dir);
+            }
+        })?;
+        match opened {
+            Ok((s, geometry)) => {
+                if let Some(geo) = geometry {
+                    g.geometry = Some(std::sync::Arc::new(geo));
+                }
+                g.session = Some(s);
+                g.dir = Some(dir);
+                g.temporary = temporary;
+                Ok(())
+            }
+            Err(e) => {
+                if temporary {
+                    let _ = std::fs::remove_dir_all(&dir);
+                }
+                Err(py_err(e))
+            }
+        }
     }
 
     fn vector(
@@ -521,12 +724,15 @@ impl PySimulation {
         }
     }
 
-    /// Runs the whole scene with the GIL released, writing into `out` what the CLI
-    /// writes (a temporary directory, removed afterwards, when `out` is None: then
-    /// only the history is kept, in memory). `fields` / `plots` override the scene's
-    /// output options when given. `progress(step, total)` is called at most 1000
-    /// times; Ctrl-C (or an exception in `progress`) stops the run after the current
-    /// step, leaves `out` readable and raises.
+    /// Runs the scene to its end with the GIL released, writing into `out` what the CLI
+    /// writes (a temporary directory, removed afterwards, when `out` is None: then only
+    /// the history is kept, in memory). `fields` / `plots` override the scene's output
+    /// options when given. On a simulation already stepped (or a run interrupted) it
+    /// goes on from the step reached, into the directory that run opened.
+    /// `progress(step, total)` is called at most 1000 times; Ctrl-C (or an exception in
+    /// `progress`, or `cancel()`) stops the run after the current step, leaves the files
+    /// so far readable and raises: the state reached is kept, and `step()` or `run()`
+    /// goes on from it.
     #[pyo3(signature = (out=None, progress=None, fields=None, plots=None))]
     fn run(
         &self,
@@ -537,147 +743,146 @@ impl PySimulation {
         plots: Option<bool>,
     ) -> PyResult<()> {
         let mut g = self.lock()?;
-        if g.integ.is_some() || g.finished.is_some() {
+        if g.finished.is_some() {
             return Err(PyRuntimeError::new_err(
-                "run() makes a whole run from t = 0: this simulation has already stepped or \
-                 run; make a new one with scene.simulation()",
+                "this simulation has run to its end; make a new one with scene.simulation()",
             ));
-        }
-        if g.state_set {
-            return Err(PyRuntimeError::new_err(
-                "run() starts from the scene's initial state, and set_state() changed it: \
-                 step() through the run instead, or give the scene the motion \
-                 (`velocity`, `angular_velocity` of its bodies)",
-            ));
-        }
-        let mut options = match &self.kind {
-            Kind::File(s) => s.output.clone(),
-            Kind::Bar(_) => OutputOptions::default(),
-        };
-        let temporary = out.is_none();
-        let dir = out.unwrap_or_else(temp_dir);
-        if temporary {
-            options.fields = false;
-            options.plots = false;
-            options.hdf5 = Some(false);
-        }
-        if let Some(f) = fields {
-            options.fields = f;
-        }
-        if let Some(p) = plots {
-            options.plots = p;
         }
         let mut prog = PyProgress {
             callback: progress,
             error: None,
             cancel: self.cancel.clone(),
             started: None,
+            signals: true,
         };
-        // a run builds its own model (the CLI's path): one built for `mesh` is freed
-        g.model = None;
-        let kind = &self.kind;
-        let result = py.detach(|| {
-            let o = Output {
-                dir: &dir,
-                options: &options,
-            };
-            match kind {
-                Kind::File(s) => signorini::app::run_scene(s, Some(o), &mut prog),
-                Kind::Bar(b) => signorini::app::run_bar(b, Some(o), &mut prog),
-            }
-        });
-        let r = match result {
-            Ok(r) => r,
-            Err(e) => {
-                if temporary {
-                    let _ = std::fs::remove_dir_all(&dir);
+        let _flush = signorini::linalg::FlushGuard::for_run();
+        match (&g.session, &g.dir) {
+            (None, _) => self.open(py, &mut g, out, fields, plots)?,
+            (Some(_), Some(dir)) => {
+                let same = |a: &Path, b: &Path| {
+                    std::fs::canonicalize(a).ok() == std::fs::canonicalize(b).ok()
+                };
+                let opened_by = if g.temporary {
+                    "in memory".to_string()
+                } else {
+                    format!("into {}", dir.display())
+                };
+                if out.as_deref().is_some_and(|o| g.temporary || !same(o, dir)) {
+                    return Err(PyRuntimeError::new_err(format!(
+                        "run(out=…): this simulation's run is already open {opened_by} (by \
+                         step(), start() or an interrupted run()); run() goes on there: call \
+                         it without `out`, or make a new simulation"
+                    )));
                 }
-                return Err(match (e, prog.error.take()) {
-                    (Error::Interrupted { .. }, Some(pe)) => pe,
-                    (Error::Interrupted { step, time }, None) => {
-                        self.cancel
-                            .store(false, std::sync::atomic::Ordering::Relaxed);
-                        Cancelled::new_err(format!(
-                            "run() cancelled after step {step} (t = {time:e} s){}",
-                            if temporary {
-                                String::new()
-                            } else {
-                                format!(": the history and frames so far are in {}", dir.display())
-                            }
-                        ))
-                    }
-                    (e, _) => py_err(e),
-                });
+                if fields.is_some() || plots.is_some() {
+                    return Err(PyRuntimeError::new_err(format!(
+                        "run(fields=…, plots=…): this simulation's run is already open \
+                         {opened_by}, with its outputs chosen; give them to start() or to \
+                         the first run()"
+                    )));
+                }
             }
-        };
-        let history = read_history(&dir).map_err(py_err)?;
-        if temporary {
-            let _ = std::fs::remove_dir_all(&dir);
-        } else {
-            g.out = Some(dir);
+            (Some(_), None) => unreachable!("a session has a directory"),
         }
-        g.summary = Some(serde_json::to_string(&r.summary).expect("summaries serialize"));
-        g.history = Some(history);
-        g.finished = Some(r.state);
-        Ok(())
+        let session = g.session.as_mut().expect("opened above");
+        let total = session.progress().1;
+        let result = py.detach(|| session.advance(total, &mut prog));
+        if let Err(e) = result {
+            // the files so far readable; the state kept for step() or run() to go on
+            let synced = session.sync();
+            return Err(match (e, prog.error.take()) {
+                (Error::Interrupted { .. }, Some(pe)) => pe,
+                (Error::Interrupted { step, time }, None) => {
+                    self.cancel
+                        .store(false, std::sync::atomic::Ordering::Relaxed);
+                    Cancelled::new_err(format!(
+                        "run() cancelled after step {step} (t = {time:e} s): the state \
+                         reached is kept, and step() or run() goes on from it{}",
+                        if g.temporary {
+                            String::new()
+                        } else {
+                            format!(
+                                "; the history and frames so far are in {}",
+                                g.dir.as_ref().expect("open").display()
+                            )
+                        }
+                    ))
+                }
+                (e, _) => py_err(synced.err().unwrap_or(e)),
+            });
+        }
+        g.finish().map_err(py_err)
     }
 
-    /// Takes `n` steps (building the integrator at the first call) with the GIL
-    /// released; returns the steps done. Stepping past the scene's end is refused.
-    /// The statistics stay in Rust until asked for (`stats_json`): a Python loop of
+    /// Opens the run without taking a step: into `out` (the CLI's files, frames and
+    /// plots as the scene asks unless `fields` / `plots` say otherwise), or in memory
+    /// (the history alone) when `out` is None, which is what the first `step()` does by
+    /// itself. Refused once the run is open.
+    #[pyo3(signature = (out=None, fields=None, plots=None))]
+    fn start(
+        &self,
+        py: Python<'_>,
+        out: Option<PathBuf>,
+        fields: Option<bool>,
+        plots: Option<bool>,
+    ) -> PyResult<()> {
+        let mut g = self.lock()?;
+        if g.session.is_some() || g.finished.is_some() {
+            return Err(PyRuntimeError::new_err(
+                "start(): this simulation's run is already open (by step(), start() or run())",
+            ));
+        }
+        let _flush = signorini::linalg::FlushGuard::for_run();
+        self.open(py, &mut g, out, fields, plots)
+    }
+
+    /// Takes `n` steps (opening the run at the first call, in memory unless `start()`
+    /// gave a directory) with the GIL released; returns the steps done. Every step goes
+    /// through the run's checks and observers, as in `run()`: the history grows, and the
+    /// step that reaches the scene's end finishes the run (the summary, the history read
+    /// back). Stepping past the end is refused. `progress` is called as in `run()` (at
+    /// most 1000 times over the whole run); without it a report costs nothing. The
+    /// statistics stay in Rust until asked for (`stats_json`): a Python loop of
     /// `step(1)` pays no conversion per step.
-    fn step(&self, py: Python<'_>, n: usize) -> PyResult<usize> {
+    #[pyo3(signature = (n, progress=None))]
+    fn step(&self, py: Python<'_>, n: usize, progress: Option<Py<PyAny>>) -> PyResult<usize> {
         let mut g = self.lock()?;
         // the run's subnormal mode while building and stepping; this thread's own
         // (Python's, numpy's) is put back on return. The pool's workers are set once,
         // with the integrator, and keep the mode (waking them costs more than a step)
-        let _flush = if g.integ.is_none() {
+        let _flush = if g.session.is_none() {
             signorini::linalg::FlushGuard::for_run()
         } else {
             signorini::linalg::FlushGuard::for_caller()
         };
-        if g.finished.is_some() {
-            return Err(PyRuntimeError::new_err(
-                "this simulation has run to its end; make a new one with scene.simulation()",
-            ));
+        if let Some(s) = &g.finished {
+            return match n {
+                0 => Ok(s.step),
+                _ => Err(BadInput::new_err(format!(
+                    "step({n}): the scene makes {} steps and {} are done (the run has ended: \
+                     its summary and history are formed)",
+                    self.kind.steps(),
+                    s.step
+                ))),
+            };
         }
-        if g.integ.is_none() {
-            let kind = &self.kind;
-            let cached = g.model.take();
-            // a model built for `mesh()` or `bodies()` gave its geometry away already:
-            // the run's checks measure that one (not the emptied field)
-            let known = g.geometry.clone();
-            let built = py.detach(|| -> Result<_, Error> {
-                let mut model = match cached {
-                    Some(m) => m,
-                    None => kind.build()?,
-                };
-                let (params, dt) = kind.scheme_and_step();
-                let geometry = match known {
-                    Some(geo) => geo,
-                    None => std::sync::Arc::new(std::mem::take(&mut model.geometry)),
-                };
-                let checks = RunChecks::new(params, geometry.size());
-                Ok((model.into_integrator(params, dt)?, checks, geometry))
-            });
-            let (integ, checks, geometry) = built.map_err(py_err)?;
-            g.integ = Some(integ);
-            g.checks = Some(checks);
-            g.geometry = Some(geometry);
+        let mut prog = PyProgress {
+            callback: progress,
+            error: None,
+            cancel: self.cancel.clone(),
+            started: None,
+            signals: false,
+        };
+        if g.session.is_none() {
+            self.open(py, &mut g, None, None, None)?;
         }
-        let total = self.kind.steps();
         let SimState {
-            integ,
-            checks,
-            last,
+            session,
             step_seconds,
             ..
         } = &mut *g;
-        let (integ, checks) = (
-            integ.as_mut().expect("built"),
-            checks.as_ref().expect("built"),
-        );
-        let done = integ.state().step;
+        let session = session.as_mut().expect("opened above");
+        let (done, total) = session.progress();
         if n > total - done.min(total) {
             return Err(BadInput::new_err(format!(
                 "step({n}): the scene makes {total} steps and {done} are done"
@@ -695,24 +900,8 @@ impl PySimulation {
                 1
             };
             let chunk = (n - taken).min(by_time);
-            let cancel = &self.cancel;
-            let mut work = || -> Result<Option<StepStats>, Error> {
-                let mut st = None;
-                for _ in 0..chunk {
-                    if cancel.swap(false, std::sync::atomic::Ordering::Relaxed) {
-                        let s = integ.state();
-                        return Err(Error::Interrupted {
-                            step: s.step,
-                            time: s.time,
-                        });
-                    }
-                    integ.prepare()?;
-                    let s = integ.step()?;
-                    checks.check(integ.as_ref(), &s)?;
-                    st = Some(s);
-                }
-                Ok(st)
-            };
+            let until = done + taken + chunk;
+            let mut work = || session.advance(until, &mut prog);
             // releasing and taking back the GIL costs about a microsecond: worth it when
             // the chunk is expected to take longer than GIL_RELEASE_AFTER
             let t0 = std::time::Instant::now();
@@ -723,19 +912,33 @@ impl PySimulation {
             };
             *step_seconds = t0.elapsed().as_secs_f64() / chunk as f64;
             match r {
-                Ok(s) => *last = s.or(*last),
+                Ok(()) => {}
                 Err(Error::Interrupted { step, time }) => {
+                    if let Some(e) = prog.error.take() {
+                        // an exception in the callback (or Ctrl-C seen by it)
+                        return Err(e);
+                    }
+                    self.cancel
+                        .store(false, std::sync::atomic::Ordering::Relaxed);
                     return Err(Cancelled::new_err(format!(
                         "step() cancelled after step {step} (t = {time:e} s): the state \
                          reached is kept, and step() goes on from it"
                     )));
                 }
-                Err(e) => return Err(py_err(e)),
+                Err(e) => {
+                    // the history so far readable
+                    let synced = session.sync();
+                    return Err(py_err(synced.err().unwrap_or(e)));
+                }
             }
             taken += chunk;
             py.check_signals()?;
         }
-        Ok(integ.state().step)
+        let (done, total) = session.progress();
+        if done == total {
+            g.finish().map_err(py_err)?;
+        }
+        Ok(done)
     }
 
     /// The mesh of the model and where each nodal displacement component is in `q`
@@ -744,11 +947,20 @@ impl PySimulation {
     fn mesh(&self, py: Python<'_>) -> PyResult<MeshArrays> {
         let mut g = self.lock()?;
         if g.geometry.is_none() {
-            let kind = &self.kind;
-            let mut model = py.detach(|| kind.build()).map_err(py_err)?;
-            g.geometry = Some(std::sync::Arc::new(std::mem::take(&mut model.geometry)));
-            if g.integ.is_none() && g.finished.is_none() {
-                g.model = Some(model);
+            if g.session.is_none() && g.finished.is_none() {
+                self.ensure_model(py, &mut g)?;
+            } else {
+                // a finished run's model is gone: its geometry is built again
+                let kind = self.kind.clone();
+                let built = interruptible(
+                    py,
+                    &self.cancel,
+                    "building the model",
+                    move || kind.build(),
+                    drop,
+                )?
+                .map_err(py_err)?;
+                g.geometry = Some(std::sync::Arc::new(built.0.geometry));
             }
         }
         let geo = g.geometry.clone().expect("built");
@@ -815,7 +1027,7 @@ impl PySimulation {
         let mut g = self.lock()?;
         let row =
             |s: &signorini::model::BodyState| (s.mass, s.centre, s.momentum, s.angular_momentum);
-        if g.integ.is_none() && g.finished.is_some() {
+        if g.finished.is_some() {
             let summary = g.summary.clone().unwrap_or_default();
             let v: serde_json::Value = serde_json::from_str(&summary).unwrap_or_default();
             let parse = |b: &serde_json::Value| -> Option<BodyRow> {
@@ -830,18 +1042,10 @@ impl PySimulation {
                 .ok_or_else(|| PyRuntimeError::new_err("the finished run recorded no bodies"));
         }
         self.ensure_model(py, &mut g)?;
-        let geo = match &g.geometry {
-            Some(geo) => geo.clone(),
-            None => {
-                let model = g.model.as_mut().expect("built above");
-                let geo = std::sync::Arc::new(std::mem::take(&mut model.geometry));
-                g.geometry = Some(geo.clone());
-                geo
-            }
-        };
-        let (sys, q, v) = match (&g.integ, &g.model) {
+        let geo = g.geometry.clone().expect("built with the model");
+        let (sys, q, v) = match (g.integ(), &g.model) {
             (Some(i), _) => (i.system(), &i.state().q, &i.state().v),
-            (None, Some(m)) => (&m.problem.system, &m.problem.q0, &m.problem.v0),
+            (None, Some((m, _))) => (&m.problem.system, &m.problem.q0, &m.problem.v0),
             (None, None) => unreachable!("built above"),
         };
         let Some(mut bm) = signorini::model::BodyMeasures::new(&geo, q.len()) else {
@@ -866,15 +1070,15 @@ impl PySimulation {
     #[pyo3(signature = (q=None, v=None))]
     fn set_state(&self, py: Python<'_>, q: Option<Vec<f64>>, v: Option<Vec<f64>>) -> PyResult<()> {
         let mut g = self.lock()?;
-        if g.finished.is_some() && g.integ.is_none() {
+        if g.finished.is_some() {
             return Err(PyRuntimeError::new_err(
                 "this simulation has finished its run: make a new one with scene.simulation()",
             ));
         }
         self.ensure_model(py, &mut g)?;
-        let n = match (&g.integ, &g.model) {
+        let n = match (g.integ(), &g.model) {
             (Some(i), _) => i.state().q.len(),
-            (None, Some(m)) => m.problem.q0.len(),
+            (None, Some((m, _))) => m.problem.q0.len(),
             (None, None) => unreachable!("built above"),
         };
         for (name, x) in [("q", &q), ("v", &v)] {
@@ -888,8 +1092,9 @@ impl PySimulation {
             }
         }
         let st = &mut *g;
-        match (&mut st.integ, &mut st.model) {
-            (Some(integ), _) => {
+        match (&mut st.session, &mut st.model) {
+            (Some(session), _) => {
+                let integ = session.integrator_mut();
                 let mut saved = integ.save();
                 for (name, x) in [("q", q), ("v", v)] {
                     if let Some(x) = x {
@@ -899,8 +1104,10 @@ impl PySimulation {
                     }
                 }
                 integ.restore(&saved).map_err(py_err)?;
+                // the energy the edit gave or took is no work of the run's forces
+                session.state_replaced();
             }
-            (None, Some(m)) => {
+            (None, Some((m, _))) => {
                 if let Some(q) = q {
                     m.problem.q0 = q;
                 }
@@ -910,7 +1117,6 @@ impl PySimulation {
             }
             (None, None) => unreachable!("built above"),
         }
-        g.state_set = true;
         Ok(())
     }
 
@@ -957,30 +1163,48 @@ impl PySimulation {
     /// The last step's statistics as JSON (`None` before a step).
     #[getter]
     fn stats_json(&self) -> PyResult<Option<String>> {
-        Ok(self
-            .lock()?
-            .last
-            .map(|s| serde_json::to_string(&s).expect("statistics serialize")))
+        let g = self.lock()?;
+        let last = g
+            .session
+            .as_ref()
+            .and_then(|s| s.last_stats().copied())
+            .or(g.last);
+        Ok(last.map(|s| serde_json::to_string(&s).expect("statistics serialize")))
     }
     /// The summary as JSON (after `run()`).
     #[getter]
     fn summary_json(&self) -> PyResult<Option<String>> {
         Ok(self.lock()?.summary.clone())
     }
-    /// The output directory of `run(out=…)`.
+    /// The output directory of `run(out=…)` or `start(out=…)` (`None` in memory).
     #[getter]
     fn out(&self) -> PyResult<Option<PathBuf>> {
-        Ok(self.lock()?.out.clone())
-    }
-    /// The history after `run()`: `[(column, array)]` in the CSV's order.
-    fn history_columns(&self, py: Python<'_>) -> PyResult<Vec<(String, Py<PyArray1<f64>>)>> {
         let g = self.lock()?;
-        let h = g.history.as_ref().ok_or_else(|| {
-            PyRuntimeError::new_err("no history: run() records it (step() does not)")
-        })?;
-        Ok(h.iter()
-            .map(|(name, v)| (name.clone(), v.clone().into_pyarray(py).unbind()))
-            .collect())
+        Ok(g.out.clone().or(g.dir.clone().filter(|_| !g.temporary)))
+    }
+    /// The history, `[(column, array)]` in the CSV's order: the whole run's once it has
+    /// ended, the rows so far while `step()` goes through it (read back from the run's
+    /// directory, its writers flushed first); `None` before the first step.
+    fn history_columns(&self, py: Python<'_>) -> PyResult<Option<NamedArrays>> {
+        let mut g = self.lock()?;
+        let st = &mut *g;
+        let so_far;
+        let h = match (&mut st.session, &st.dir, &st.history) {
+            (Some(s), Some(dir), _) => {
+                let dir = dir.clone();
+                so_far = py
+                    .detach(|| s.sync().and_then(|_| read_history(&dir)))
+                    .map_err(py_err)?;
+                &so_far
+            }
+            (None, _, Some(h)) => h,
+            _ => return Ok(None),
+        };
+        Ok(Some(
+            h.iter()
+                .map(|(name, v)| (name.clone(), v.clone().into_pyarray(py).unbind()))
+                .collect(),
+        ))
     }
 }
 
@@ -1125,7 +1349,7 @@ fn fclib_solve_arrays(
 }
 
 /// `fclib.solve(path, …)`: a problem file as `signorini fclib` reads it (`.dat`; FCLIB
-/// HDF5 needs the `hdf5` feature, which the wheel leaves out).
+/// HDF5 where the package is built with the feature `hdf5`, as the wheels are).
 #[pyfunction]
 #[pyo3(signature = (path, solver, tol, max_iter, residual, warm))]
 fn fclib_solve_file(
@@ -1171,5 +1395,8 @@ fn _signorini(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("RunFailed", py.get_type::<RunFailed>())?;
     m.add("Cancelled", py.get_type::<Cancelled>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // built with HDF5 inside (the wheels): FCLIB `.hdf5` problems, VTKHDF frames and
+    // HDF5 histories (`output.hdf5` of a scene)
+    m.add("HDF5", cfg!(feature = "hdf5"))?;
     Ok(())
 }

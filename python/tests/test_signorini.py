@@ -95,7 +95,9 @@ def test_arrays_have_the_documented_shapes_and_dtypes():
     assert sim.steps_done == 100
     with pytest.raises(signorini.BadInput, match="makes 100 steps"):
         sim.step(1)
-    with pytest.raises(RuntimeError, match="already stepped"):
+    # the step that reached the end formed the summary, as run() does
+    assert sim.summary["steps"] == 100
+    with pytest.raises(RuntimeError, match="run to its end"):
         sim.run()
 
 
@@ -555,10 +557,13 @@ def test_set_state_gives_a_per_node_initial_field_and_resets_between_steps():
     sim.set_state(v=np.zeros_like(sim.v))
     sim.step(10)
     assert np.abs(sim.bodies()["momentum"]).max() <= 1e-15
+    # run() starts from a state set before it (the summary's initial measures are its)
     sim2 = signorini.Scene.from_dict(_box()).simulation()
-    sim2.set_state(q=np.zeros(sim2.mesh.points.size))
-    with pytest.raises(RuntimeError, match="set_state"):
-        sim2.run()
+    sim2.set_state(v=v)
+    sim2.run()
+    assert sim2.summary["bodies"][0]["initial"]["angular_momentum"][2] == pytest.approx(
+        b0["angular_momentum"][0][2], rel=1e-12
+    )
 
 
 def test_set_state_refuses_what_it_cannot_take():
@@ -653,7 +658,7 @@ def test_frames_open_in_one_call(tmp_path):
     installed, a reader whose time values are the `.pvd`'s); before a run with files, a
     clear error."""
     sim = signorini.Scene.from_dict(_box({"velocity": [0.0, 0.0, -1.0]})).simulation()
-    with pytest.raises(RuntimeError, match="run\\(out=...\\) writes them"):
+    with pytest.raises(RuntimeError, match="start\\(out=...\\) writes them"):
         sim.frames()
     sim.run(out=tmp_path / "run", plots=False)
     pvd = sim.frames(reader=False)
@@ -683,3 +688,151 @@ def test_progress_gets_the_time_the_statistics_and_the_eta():
     two = []
     scene.simulation().run(progress=lambda k, n: two.append(k))
     assert two == [k for k, _, _ in calls]
+
+
+# timings and memory: the only summary fields that differ between two runs of one scene
+_TIMINGS = {
+    "wall_seconds", "seconds_per_step", "output_seconds", "frame_seconds",
+    "frame_wait_seconds", "model_seconds", "integrator_seconds", "peak_memory_bytes",
+}
+
+
+def _same_run(a, b, ignore=()):
+    """Two finished simulations of one scene: the histories equal bit for bit, column by
+    column, and the summaries equal but for the timings (and the keys in `ignore`)."""
+    ha, hb = a.history, b.history
+    assert list(ha) == list(hb)
+    for k in ha:
+        assert np.array_equal(ha[k], hb[k], equal_nan=True), k
+    sa, sb = a.summary, b.summary
+    skip = _TIMINGS | set(ignore)
+    assert {k: v for k, v in sa.items() if k not in skip} == {
+        k: v for k, v in sb.items() if k not in skip
+    }
+
+
+@pytest.mark.parametrize("make", ["bar", "box"])
+def test_step_keeps_the_history_and_summary_of_run(make, tmp_path):
+    """Issue 37: `step()` goes through the run's own loop (checks, observers, history,
+    summary): stepped in uneven chunks, run after some steps, or run again after an
+    interrupt, a simulation ends with the history of one `run()` bit for bit and its
+    summary but for the timings; the history mid-way holds the rows so far."""
+    def scene():
+        if make == "bar":
+            return signorini.Scene.bar(elements=50, dt=2e-6, t_end=2e-4)
+        return signorini.Scene.from_dict(_box({"velocity": [0.0, 0.0, -1.0]}))
+
+    whole = scene().simulation()
+    whole.run()
+    total = whole.steps_total
+
+    stepped = scene().simulation()
+    stepped.step(7)
+    mid = stepped.history
+    assert len(mid.time) == 7
+    for k in mid:
+        assert np.array_equal(mid[k], whole.history[k][:7], equal_nan=True), k
+    with pytest.raises(RuntimeError, match="no summary yet"):
+        stepped.summary
+    stepped.step(total - 7 - 3)
+    stepped.step(3)
+    _same_run(whole, stepped)
+
+    mixed = scene().simulation()
+    mixed.step(total // 3)
+    mixed.run()
+    _same_run(whole, mixed)
+
+    def stop(k, n):
+        if k >= n // 2:
+            raise ValueError("stop here")
+
+    resumed = scene().simulation()
+    with pytest.raises(ValueError, match="stop here"):
+        resumed.run(out=tmp_path / make, progress=stop)
+    half = resumed.steps_done
+    assert 0 < half < total
+    # the files so far readable while the run is open
+    rows = (tmp_path / make / "history.csv").read_text().splitlines()
+    assert len(rows) == 1 + half
+    with pytest.raises(RuntimeError, match="already open"):
+        resumed.run(out=tmp_path / "elsewhere")
+    resumed.run()
+    # it wrote frames (and, with HDF5, its file) into `out`, the in-memory run none
+    _same_run(whole, resumed, ignore={"frames", "memory_planned_bytes"})
+    assert resumed.summary["frames"] > 0
+    assert resumed.out == os.fspath(tmp_path / make)
+    assert json.loads((tmp_path / make / "summary.json").read_text())["steps"] == total
+    rows = (tmp_path / make / "history.csv").read_text().splitlines()
+    assert len(rows) == 1 + total
+
+
+def test_start_opens_a_run_with_files_for_step(tmp_path):
+    """Issue 37: `start(out=…)` then `step()`: the CLI's files in the directory, the
+    frames readable by `frames()` during the run and the summary written at the last
+    step; a second `start()` is refused."""
+    sim = signorini.Scene.from_dict(_box({"velocity": [0.0, 0.0, -1.0]})).simulation()
+    sim.start(out=tmp_path / "s", plots=False)
+    with pytest.raises(RuntimeError, match="already open"):
+        sim.start()
+    sim.step(10)
+    assert sim.out == os.fspath(tmp_path / "s")
+    assert len(sim.history.time) == 10
+    sim.step(sim.steps_total - 10)
+    for f in ("history.csv", "summary.json", "fields.pvd"):
+        assert (tmp_path / "s" / f).exists(), f
+    assert json.loads((tmp_path / "s" / "summary.json").read_text())["steps"] == sim.steps_total
+
+
+def test_step_takes_a_progress_callback():
+    """Issue 37: `step(n, progress=…)` reports as `run()` does (a 100-step run reports
+    every step) over the steps it takes, with the info dict; an exception in the callback
+    stops after that step and propagates, the state reached kept."""
+    sim = signorini.Scene.bar(elements=50, dt=2e-6, t_end=2e-4).simulation()
+    seen = []
+    sim.step(40, progress=lambda k, n, info: seen.append((k, n, info["time"])))
+    assert [k for k, _, _ in seen] == list(range(1, 41)) and all(n == 100 for _, n, _ in seen)
+    assert seen[-1][2] == pytest.approx(40 * 2e-6, rel=1e-12)
+
+    def fail(k, n):
+        if k == 55:
+            raise ValueError("enough")
+
+    with pytest.raises(ValueError, match="enough"):
+        sim.step(60, progress=fail)
+    assert sim.steps_done == 55
+    assert sim.step(45) == 100 and sim.summary["steps"] == 100
+
+
+def test_cancel_stops_model_building():
+    """Issue 37: the first `step()` builds the model and factors M̂ (a 26³ hex8 cube:
+    seconds, with no place to stop inside the factorization); `cancel()` from another
+    thread returns it within 50 ms polls. The bound asserted is 1 s (the poll is 50 ms;
+    the margin is for a loaded CI machine, not the design); nothing is kept."""
+    d = {
+        "time": {"dt": 1e-5, "t_end": 1e-4},
+        "scheme": {"kind": "moreau-jean"},
+        "bodies": [{
+            "name": "cube",
+            "mesh": {"generator": "box", "cell": "hex8", "cells": [26, 26, 26], "size": [1, 1, 1]},
+            "material": {"young": 1e7, "poisson": 0.3, "density": 1000.0},
+        }],
+    }
+    sim = signorini.Scene.from_dict(d).simulation()
+    caught = []
+
+    def work():
+        try:
+            sim.step(1)
+        except signorini.Cancelled as e:
+            caught.append((time.monotonic(), str(e)))
+
+    t = threading.Thread(target=work)
+    t.start()
+    time.sleep(0.3)
+    t0 = time.monotonic()
+    sim.cancel()
+    t.join(timeout=30)
+    assert len(caught) == 1, caught
+    assert caught[0][0] - t0 < 1.0
+    assert "cancelled" in caught[0][1] and sim.steps_done == 0

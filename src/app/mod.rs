@@ -12,7 +12,7 @@ use std::time::Instant;
 use crate::error::Error;
 use crate::run::checkpoint::{self, Checkpoint};
 use crate::run::{
-    Checkpointing, Output, Progress, RunChecks, RunResult, finish, probes, run_checkpointed,
+    Checkpointing, Output, Progress, RunChecks, RunInProgress, RunResult, finish, probes,
 };
 use crate::scene::bar::BarScene;
 use source::RunSource;
@@ -43,45 +43,7 @@ fn run_bar_from(
     resume: Option<&Checkpoint>,
 ) -> Result<RunResult, Error> {
     let _flush = crate::linalg::FlushGuard::for_run();
-    let t0 = Instant::now();
-    progress.phase("building the model");
-    let mut model = scene.build()?;
-    let geometry = std::mem::take(&mut model.geometry);
-    announce_integrator(&model, progress);
-    let t1 = Instant::now();
-    let mut integ = model.into_integrator(&scene.scheme, scene.dt)?;
-    let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
-    let parameters = serde_json::to_value(scene).expect("scene serializes");
-    let checks = RunChecks::new(&scene.scheme, geometry.size());
-    let ckpt =
-        (resume.is_some() || out.is_some_and(|o| o.options.checkpoint_every > 0)).then(|| {
-            Checkpointing {
-                source: RunSource::Bar {
-                    scene: scene.clone(),
-                }
-                .to_value(),
-                // the bar reads no file
-                inputs: Vec::new(),
-                resume,
-            }
-        });
-    run_checkpointed(
-        integ.as_mut(),
-        scene.steps(),
-        scene.elements,
-        scene.scheme.theta,
-        &checks,
-        scene.analytic(),
-        parameters,
-        out.map(|o| (o, geometry)),
-        progress,
-        ckpt,
-        probes::ProbeSet::default(),
-    )
-    .and_then(|r| {
-        let planned = scene.memory().total();
-        finish(r, setup, planned, out)
-    })
+    Session::bar(scene, None, out, progress, resume)?.run_to_end(progress)
 }
 
 /// Runs a scene file; writes into `out.dir` if given. Errors raised while building name
@@ -102,70 +64,243 @@ fn run_scene_from(
     resume: Option<&Checkpoint>,
 ) -> Result<RunResult, Error> {
     let _flush = crate::linalg::FlushGuard::for_run();
-    let t0 = Instant::now();
-    progress.phase("building the model (mesh, assembly, contacts)");
-    let (mut model, report) = scene.build()?;
-    let probes = probes::ProbeSet::new(&model.probes, &model.geometry);
-    let mut bodies = BodyRecord::start(scene, &model);
-    let geometry = std::mem::take(&mut model.geometry);
-    // the run's memory ledger, checked before anything is factored
-    let mut plan = model.plan(&scene.scheme, scene.time.dt)?;
-    let (m, rows) = (model.problem.contacts.len(), model.problem.contacts.rows());
-    if let Some(o) = out {
-        plan.add_history(report.dofs, m, (rows - m) / m.max(1), o.options.hdf5());
+    Session::scene(scene, None, out, progress, resume)?.run_to_end(progress)
+}
+
+/// A run of the bar or of a scene file, held between steps: the integrator, the
+/// driver's [`RunInProgress`] (observers, writers, the directory's lock) and what the
+/// summary needs (set-up times, the memory plan, the bodies' initial measures).
+/// [`run_bar`] and [`run_scene`] are a session advanced to its end in one call; the
+/// Python package's `step(n)` advances one `n` steps at a time, with the same checks,
+/// history, frames and summary.
+pub struct Session {
+    integ: Box<dyn crate::integrators::Integrator>,
+    run: RunInProgress,
+    checks: RunChecks,
+    setup: [f64; 2],
+    planned: u64,
+    bodies: Option<BodyRecord>,
+    out: Option<(std::path::PathBuf, crate::io::OutputOptions)>,
+}
+
+impl Session {
+    /// Builds the bar's model (or takes `model`, built by [`BarScene::build`]) and its
+    /// integrator, and opens the run into `out` (from `resume`'s state when given).
+    pub fn bar(
+        scene: &BarScene,
+        model: Option<crate::scene::Model>,
+        out: Option<Output>,
+        progress: &mut dyn Progress,
+        resume: Option<&Checkpoint>,
+    ) -> Result<Session, Error> {
+        let t0 = Instant::now();
+        let mut model = match model {
+            Some(m) => m,
+            None => {
+                progress.phase("building the model");
+                scene.build()?
+            }
+        };
+        let geometry = std::mem::take(&mut model.geometry);
+        announce_integrator(&model, progress);
+        let t1 = Instant::now();
+        let mut integ = model.into_integrator(&scene.scheme, scene.dt)?;
+        let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
+        let parameters = serde_json::to_value(scene).expect("scene serializes");
+        let checks = RunChecks::new(&scene.scheme, geometry.size());
+        let ckpt =
+            (resume.is_some() || out.is_some_and(|o| o.options.checkpoint_every > 0)).then(|| {
+                Checkpointing {
+                    source: RunSource::Bar {
+                        scene: scene.clone(),
+                    }
+                    .to_value(),
+                    // the bar reads no file
+                    inputs: Vec::new(),
+                    resume,
+                }
+            });
+        let run = RunInProgress::start(
+            integ.as_mut(),
+            scene.steps(),
+            scene.elements,
+            scene.scheme.theta,
+            &checks,
+            scene.analytic(),
+            parameters,
+            out.map(|o| (o, geometry)),
+            ckpt,
+            probes::ProbeSet::default(),
+        )?;
+        Ok(Session {
+            integ,
+            run,
+            checks,
+            setup,
+            planned: scene.memory().total(),
+            bodies: None,
+            out: out.map(|o| (o.dir.to_path_buf(), o.options.clone())),
+        })
     }
-    plan.ledger.check(
-        "scene",
-        format!("{} dofs, {m} contacts ({rows} rows)", report.dofs),
-    )?;
-    announce_integrator(&model, progress);
-    let t1 = Instant::now();
-    let mut integ = model.into_integrator(&scene.scheme, scene.time.dt)?;
-    let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
-    let parameters = serde_json::to_value(scene).expect("scene serializes");
-    let checks = RunChecks::new(&scene.scheme, geometry.size());
-    // what a checkpoint rebuilds from: only formed when the run writes checkpoints
-    let ckpt = match resume {
-        Some(c) => Some(Checkpointing {
-            source: c.source.clone(),
-            inputs: Vec::new(),
-            resume,
-        }),
-        None if out.is_some_and(|o| o.options.checkpoint_every > 0) => {
-            let source = RunSource::Scene {
-                file: scene.file.clone().unwrap_or_default(),
-                toml: toml::to_string(scene).map_err(|e| {
-                    Error::Numerical(format!(
-                        "the scene does not serialize for a checkpoint: {e}"
-                    ))
-                })?,
-                base_dir: std::path::absolute(&scene.base_dir).unwrap_or(scene.base_dir.clone()),
-            };
-            Some(Checkpointing {
-                inputs: source.input_files()?,
-                source: source.to_value(),
-                resume: None,
-            })
+
+    /// Builds a scene file's model (or takes `built`, from
+    /// [`Scene::build`](crate::scene::file::Scene::build), whose initial state may have
+    /// been edited), checks the run's memory plan, builds the integrator and opens the
+    /// run into `out` (from `resume`'s state when given).
+    pub fn scene(
+        scene: &crate::scene::file::Scene,
+        built: Option<(crate::scene::Model, crate::scene::file::ModelReport)>,
+        out: Option<Output>,
+        progress: &mut dyn Progress,
+        resume: Option<&Checkpoint>,
+    ) -> Result<Session, Error> {
+        let t0 = Instant::now();
+        let (mut model, report) = match built {
+            Some(b) => b,
+            None => {
+                progress.phase("building the model (mesh, assembly, contacts)");
+                scene.build()?
+            }
+        };
+        let probes = probes::ProbeSet::new(&model.probes, &model.geometry);
+        let bodies = BodyRecord::start(scene, &model);
+        let geometry = std::mem::take(&mut model.geometry);
+        // the run's memory ledger, checked before anything is factored
+        let mut plan = model.plan(&scene.scheme, scene.time.dt)?;
+        let (m, rows) = (model.problem.contacts.len(), model.problem.contacts.rows());
+        if let Some(o) = out {
+            plan.add_history(report.dofs, m, (rows - m) / m.max(1), o.options.hdf5());
         }
-        None => None,
-    };
-    run_checkpointed(
-        integ.as_mut(),
-        scene.steps(),
-        report.cells,
-        scene.scheme.theta,
-        &checks,
-        scene.reference.map(|r| r.impacting_bar),
-        parameters,
-        out.map(|o| (o, geometry)),
-        progress,
-        ckpt,
-        probes,
-    )
-    .and_then(|mut r| {
-        r.summary.bodies = bodies.finish(integ.system(), &r.state);
-        finish(r, setup, plan.ledger.total(), out)
-    })
+        plan.ledger.check(
+            "scene",
+            format!("{} dofs, {m} contacts ({rows} rows)", report.dofs),
+        )?;
+        announce_integrator(&model, progress);
+        let t1 = Instant::now();
+        let mut integ = model.into_integrator(&scene.scheme, scene.time.dt)?;
+        let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
+        let parameters = serde_json::to_value(scene).expect("scene serializes");
+        let checks = RunChecks::new(&scene.scheme, geometry.size());
+        // what a checkpoint rebuilds from: only formed when the run writes checkpoints
+        let ckpt = match resume {
+            Some(c) => Some(Checkpointing {
+                source: c.source.clone(),
+                inputs: Vec::new(),
+                resume,
+            }),
+            None if out.is_some_and(|o| o.options.checkpoint_every > 0) => {
+                let source = RunSource::Scene {
+                    file: scene.file.clone().unwrap_or_default(),
+                    toml: toml::to_string(scene).map_err(|e| {
+                        Error::Numerical(format!(
+                            "the scene does not serialize for a checkpoint: {e}"
+                        ))
+                    })?,
+                    base_dir: std::path::absolute(&scene.base_dir)
+                        .unwrap_or(scene.base_dir.clone()),
+                };
+                Some(Checkpointing {
+                    inputs: source.input_files()?,
+                    source: source.to_value(),
+                    resume: None,
+                })
+            }
+            None => None,
+        };
+        let run = RunInProgress::start(
+            integ.as_mut(),
+            scene.steps(),
+            report.cells,
+            scene.scheme.theta,
+            &checks,
+            scene.reference.map(|r| r.impacting_bar),
+            parameters,
+            out.map(|o| (o, geometry)),
+            ckpt,
+            probes,
+        )?;
+        Ok(Session {
+            integ,
+            run,
+            checks,
+            setup,
+            planned: plan.ledger.total(),
+            bodies: Some(bodies),
+            out: out.map(|o| (o.dir.to_path_buf(), o.options.clone())),
+        })
+    }
+
+    /// The integrator, at the state of the last step taken.
+    pub fn integrator(&self) -> &dyn crate::integrators::Integrator {
+        self.integ.as_ref()
+    }
+
+    /// The integrator, to replace its state between steps (then call
+    /// [`Session::state_replaced`]).
+    pub fn integrator_mut(&mut self) -> &mut dyn crate::integrators::Integrator {
+        self.integ.as_mut()
+    }
+
+    /// Steps taken so far, and the run's total.
+    pub fn progress(&self) -> (usize, usize) {
+        (self.integ.state().step, self.run.steps())
+    }
+
+    /// Steps up to step `until` (at most the last) with the run's checks and observers;
+    /// after an error (an interrupt among them) the session stays where it stopped.
+    pub fn advance(&mut self, until: usize, progress: &mut dyn Progress) -> Result<(), Error> {
+        self.run
+            .advance(self.integ.as_mut(), until, &self.checks, progress)
+    }
+
+    /// The statistics of the last step taken (`None` before the first).
+    pub fn last_stats(&self) -> Option<&crate::integrators::StepStats> {
+        self.run.last_stats()
+    }
+
+    /// Makes the history and frames on disk whole without ending the run.
+    pub fn sync(&mut self) -> Result<(), Error> {
+        self.run.sync()
+    }
+
+    /// The integrator's state was replaced between steps: the energy balance restarts
+    /// from it.
+    pub fn state_replaced(&mut self) {
+        self.run.state_replaced(self.integ.as_ref());
+    }
+
+    /// Advances to the last step and [`finish`](Session::finish)es; asked to stop, it
+    /// closes the writers (the files so far readable) and returns the interrupt.
+    pub fn run_to_end(mut self, progress: &mut dyn Progress) -> Result<RunResult, Error> {
+        progress.start(self.run.steps());
+        if let Err(e) = self.advance(self.run.steps(), progress) {
+            if matches!(e, Error::Interrupted { .. }) {
+                self.run.close_writers()?;
+            }
+            return Err(e);
+        }
+        self.finish()
+    }
+
+    /// Ends a session advanced to its last step: closes the outputs and writes
+    /// `summary.json` and the plots where the run writes files.
+    pub fn finish(self) -> Result<RunResult, Error> {
+        let Session {
+            mut integ,
+            run,
+            setup,
+            planned,
+            mut bodies,
+            out,
+            ..
+        } = self;
+        let mut r = run.finish(integ.as_mut())?;
+        if let Some(b) = bodies.as_mut() {
+            r.summary.bodies = b.finish(integ.system(), &r.state);
+        }
+        let out = out.as_ref().map(|(dir, options)| Output { dir, options });
+        finish(r, setup, planned, out)
+    }
 }
 
 /// Each body's measures at the start of a scene's run, for its summary's `bodies`.

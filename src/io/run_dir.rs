@@ -207,3 +207,17 @@ pub(super) fn part_path(path: &Path) -> PathBuf {
     s.push(".part");
     PathBuf::from(s)
 }
+
+/// Publishes the rows written so far of a file still being written as `path.part`: a
+/// copy of the part, renamed onto `path` (so a reader sees the old copy or the new one,
+/// never half of one). The part goes on growing, and the run's end renames it onto
+/// `path` as usual. A run asked to stop mid-way (the Python package's interrupted
+/// `run()`, which may go on later) leaves its history readable this way.
+pub fn publish_part(path: &Path) -> Result<(), Error> {
+    let part = part_path(path);
+    let mut snapshot = path.as_os_str().to_owned();
+    snapshot.push(".snapshot");
+    let snapshot = PathBuf::from(snapshot);
+    std::fs::copy(&part, &snapshot).map_err(|e| Error::write(&snapshot, e))?;
+    std::fs::rename(&snapshot, path).map_err(|e| Error::write(path, e))
+}

@@ -238,11 +238,25 @@ pub fn drive(
     observers: &mut [&mut dyn Observer],
     progress: &mut dyn Progress,
 ) -> Result<(), Error> {
+    progress.start(steps);
+    drive_to(integ, steps, steps, checks, observers, progress)
+}
+
+/// [`drive`] stopping at step `until` of a run of `steps` (the observers' `last` is the
+/// run's last step, progress is reported against `steps`): a run taken in parts, as the
+/// Python package's `step(n)` takes it, goes through the same loop as a whole one.
+pub fn drive_to(
+    integ: &mut dyn Integrator,
+    until: usize,
+    steps: usize,
+    checks: &RunChecks,
+    observers: &mut [&mut dyn Observer],
+    progress: &mut dyn Progress,
+) -> Result<(), Error> {
     // at most 1000 calls (and the last step): ⌈steps / 1000⌉ apart
     let report_every = steps.div_ceil(1000).max(1);
     let first = integ.state().step;
-    progress.start(steps);
-    for k in first..steps {
+    for k in first..until.min(steps) {
         integ.prepare()?;
         let st = integ.step()?;
         checks.check(integ, &st)?;

@@ -17,7 +17,7 @@ mod observers;
 pub mod probes;
 pub mod summary;
 
-pub use driver::{Observer, Progress, Quiet, RunChecks, drive};
+pub use driver::{Observer, Progress, Quiet, RunChecks, drive, drive_to};
 pub use observers::{ENERGY_CHECK_STRIDE, FORCE_TRACE_MAX_STEPS};
 pub use summary::{
     ContactSummary, EnergyBalance, FrictionSummary, Iterations, MeanMax, NewtonLoops, RunResult,
@@ -98,7 +98,9 @@ pub fn run(
 }
 
 /// [`run`], writing checkpoints when `out.options.checkpoint_every > 0` (then `ckpt`
-/// says what to rebuild), or resuming from `ckpt.resume`, and reading `probes`.
+/// says what to rebuild), or resuming from `ckpt.resume`, and reading `probes`:
+/// [`RunInProgress::start`], one [`RunInProgress::advance`] to the last step and
+/// [`RunInProgress::finish`]. Asked to stop, it leaves the history and frames readable.
 #[allow(clippy::too_many_arguments)]
 pub fn run_checkpointed(
     integ: &mut dyn Integrator,
@@ -111,301 +113,465 @@ pub fn run_checkpointed(
     out: Option<(Output, Geometry)>,
     progress: &mut dyn Progress,
     ckpt: Option<Checkpointing>,
-    mut probes: probes::ProbeSet,
+    probes: probes::ProbeSet,
 ) -> Result<RunResult, Error> {
-    let h = integ.dt();
-    let m = integ.state().gap.len();
-    let resume = ckpt.as_ref().and_then(|c| c.resume);
-    if let Some(c) = resume {
-        if c.steps != steps || c.integrator.step >= steps {
-            return Err(Error::invalid(
-                "checkpoint steps",
-                format!("{} (at step {})", c.steps, c.integrator.step),
-                &format!("the scene makes {steps} steps"),
-            ));
-        }
-        integ.restore(&c.integrator)?;
-    }
-    let t0 = Instant::now();
-    let mut writers = Writers {
-        history: None,
-        frames: None,
-        frame_stride: usize::MAX,
-        history_stride: usize::MAX,
-        closed_before: false,
-        frame_count: 0,
-        seconds: 0.0,
-    };
-    let mut plan = None;
-    let energy0 = match resume {
-        Some(c) => c.run.energy0.0,
-        None => {
-            let s = integ.state();
-            integ.system().total_energy(s.time, &s.q, &s.v)
-        }
-    };
-    // held until the run returns: a second run into the same directory is refused
-    let mut _lock = None;
-    if let Some((o, geom)) = out {
-        o.options.validate()?;
-        _lock = Some(crate::io::RunLock::acquire(o.dir)?);
-        let geom_outlines = geom.outlines.clone();
-        let hist_path = o.dir.join("history.csv");
-        // solid and plane bodies: each one's centre and momenta per row (a rod's are its
-        // summary's release velocity)
-        let bodies = (geom.dim >= 2)
-            .then(|| crate::model::BodyMeasures::new(&geom, integ.state().q.len()))
-            .flatten();
-        let hist = match resume {
-            Some(c) => HistoryWriter::resume(
-                &hist_path,
-                c.run.history_bytes,
-                c.run.history_rows,
-                o.options.contact_columns.per_contact(m),
-                bodies,
-            )?,
-            None => {
-                crate::io::prepare_run_dir(o.dir)?;
-                HistoryWriter::create(
-                    &hist_path,
-                    m,
-                    integ.state().tangent_dim,
-                    o.options.contact_columns.per_contact(m),
-                    bodies,
-                )?
-            }
-        };
-        let h5 = crate::io::Hdf5Output::open(o.dir, o.options, resume.is_some())?;
-        let hist = h5.attach_history(
-            hist,
-            (m, integ.state().tangent_dim),
-            integ.name(),
-            h,
-            theta,
-            &parameters,
-            resume.map(|c| c.run.history_rows as usize),
-        )?;
-        // a model without field geometry (the academic examples) writes no frames
-        if o.options.fields && !geom.points.is_empty() {
-            let w = match resume {
-                Some(c) => FrameWriter::resume(
-                    o.dir,
-                    "fields",
-                    geom,
-                    integ.jacobian(),
-                    o.options.encoding,
-                    c.run.frames,
-                )?,
-                None => FrameWriter::create(
-                    o.dir,
-                    "fields",
-                    geom,
-                    integ.jacobian(),
-                    o.options.encoding,
-                )?,
-            };
-            if !geom_outlines.is_empty() {
-                crate::io::frames::write_outlines(&o.dir.join("obstacles.vtu"), &geom_outlines)?;
-            }
-            let w = h5.attach_frames(w, resume.map(|c| c.run.frames))?;
-            let s = integ.state();
-            let mut w =
-                FrameStream::spawn_with_statuses(w, s.q.len(), m, s.status.len(), FRAME_POOL);
-            if resume.is_none() {
-                w.push(s, integ.jacobian(), h)?;
-                writers.frame_count += 1;
-            }
-            writers.frames = Some(w);
-        }
-        writers.history = Some(history_thread::History::new(
-            hist,
-            integ.shared_system(),
-            integ.state(),
-        ));
-        writers.frame_stride = o.options.frame_stride(steps);
-        writers.history_stride = o.options.history_stride;
-        let every = resume.map_or(o.options.checkpoint_every, |c| c.every);
-        if let Some(c) = ckpt.as_ref().filter(|_| every > 0) {
-            let (inputs, out_dir) = match resume {
-                Some(r) => (r.inputs.clone(), r.out_dir.clone()),
-                None => (
-                    c.inputs.clone(),
-                    std::fs::canonicalize(o.dir).map_err(|e| Error::io(o.dir, e))?,
-                ),
-            };
-            plan = Some(CheckpointPlan {
-                every,
-                dir: o.dir.to_path_buf(),
-                source: c.source.clone(),
-                output: o.options.clone(),
-                steps,
-                energy0,
-                inputs,
-                out_dir,
-                abort_after: std::env::var("SIGNORINI_ABORT_AFTER_STEP")
-                    .ok()
-                    .and_then(|v| v.parse().ok()),
-            });
-        }
-    }
-    let mut output_seconds = t0.elapsed().as_secs_f64();
-    let mut obs = RunObserver {
-        acc: Acc::default(),
-        tracker: ContactTracker::new(steps, plan.is_none(), reference.is_some()),
-        writers,
-        h,
-        plan,
-        probes: probes::ProbeSet::default(),
-        // Schatzman–Paoli's velocity is a central difference: its discrete energy is
-        // not the θ-method's, whose balance the check reads
-        energy: crate::integrators::SchemeKind::parse(integ.name())
-            .is_none_or(|k| k.capabilities().theta_energy)
-            .then(|| {
-                let s = integ.state();
-                EnergyCheck {
-                    audit: crate::model::energy::EnergyAudit::new(
-                        integ.system(),
-                        s.time,
-                        &s.q,
-                        &s.v,
-                    ),
-                    theta,
-                    max: checks.energy_excess_limit(
-                        integ.system().linearity() == crate::model::system::Linearity::Linear,
-                    ),
-                    caps_allowed: checks.allow_caps,
-                }
-            }),
-    };
-    {
-        let s = integ.state();
-        let saved: Option<Vec<Vec<f64>>> =
-            resume.map(|c| c.run.probes.iter().map(|f| f.0.clone()).collect());
-        probes.start(s.time, h, &s.q, saved.as_deref());
-    }
-    obs.probes = probes;
-    if let Some(c) = resume {
-        obs.restore(&c.run);
-        if let Some(e) = obs.energy.as_mut() {
-            e.audit
-                .restore(c.run.energy_audit.map(|b| b.0), &integ.state().q);
-        }
-    }
-    let start = Instant::now();
-    if let Err(e) = drive(integ, steps, checks, &mut [&mut obs], progress) {
+    let mut run = RunInProgress::start(
+        integ, steps, elements, theta, checks, reference, parameters, out, ckpt, probes,
+    )?;
+    progress.start(steps);
+    if let Err(e) = run.advance(integ, steps, checks, progress) {
         if matches!(e, Error::Interrupted { .. }) {
             // asked to stop: leave the history and the frames (with their .pvd) readable
-            if let Some(w) = obs.writers.history.take() {
-                w.finish()?;
-            }
-            if let Some(f) = obs.writers.frames.take() {
-                f.finish()?;
-            }
+            run.close_writers()?;
         }
         return Err(e);
     }
-    let t_fin = Instant::now();
-    let RunObserver {
-        acc,
-        tracker,
-        mut writers,
-        plan,
-        energy,
-        probes,
-        ..
-    } = obs;
-    let energy_balance = energy.map(|e| EnergyBalance {
-        supplied_work: e.audit.work(),
-        excess_max: acc.energy_excess,
-    });
-    output_seconds += writers.seconds;
-    let history_thread = matches!(writers.history, Some(history_thread::History::Thread(_)));
-    if let Some(w) = writers.history.take() {
-        w.finish()?;
-    }
-    let (frame_count, frame_seconds, frame_wait) = match writers.frames.take() {
-        Some(f) => {
-            let wait = f.waited_seconds();
-            let w = f.finish()?;
-            (w.frames().len(), w.busy_seconds(), wait)
-        }
-        None => (0, 0.0, 0.0),
-    };
-    // the run is complete: its checkpoint would only resume a finished run
-    if let Some(p) = plan {
-        let path = p.dir.join(checkpoint::FILE);
-        if path.exists() {
-            std::fs::remove_file(&path).map_err(|e| Error::write(&path, e))?;
-        }
-    }
-    output_seconds += t_fin.elapsed().as_secs_f64();
-    let wall = start.elapsed().as_secs_f64();
-    let s = integ.state();
-    let sys = integ.system();
-    let energy1 = sys.total_energy(s.time, &s.q, &s.v);
-    let contact = reference.map(|r| contact_summary(&tracker, h, sys, &s.v, r));
-    let summary = Summary {
-        scheme: integ.name().to_string(),
-        elements,
-        dofs: s.q.len(),
-        dt: h,
-        theta,
-        steps,
-        t_end: s.time,
-        wall_seconds: wall,
-        seconds_per_step: wall / steps.max(1) as f64,
-        output_seconds,
-        frames: frame_count,
-        frame_seconds,
-        frame_wait_seconds: frame_wait,
-        max_violation: acc.violation,
-        contact,
-        iterations: acc.iterations(steps),
-        caps_hit: acc.caps,
-        newton_loops: NewtonLoops {
-            coupled_solves: acc.loops[0],
-            stalls: acc.loops[1],
-            steps_with_held_rows: acc.loops[2],
-            complementarity_fallbacks: acc.loops[3],
-        },
-        friction: acc.friction(s.tangent_dim > 0),
-        // set by `finish`
-        memory_planned_bytes: 0,
-        peak_memory_bytes: None,
-        matrix_free: (acc.global[0] > 0).then(|| summary::MatrixFreeSummary {
-            solves: acc.global[0],
-            products: acc.global[1],
-            products_per_solve: acc.global[1] as f64 / acc.global[0] as f64,
-        }),
-        nonlinear: (sys.linearity() != crate::model::system::Linearity::Linear).then(|| {
-            summary::NonlinearSummary {
-                factorizations: acc.factorizations,
-                factorizations_per_step: acc.factorizations as f64 / steps.max(1) as f64,
-                assembly_seconds: acc.assembly_seconds,
-                factorization_seconds: acc.factorization_seconds,
+    run.finish(integ)
+}
+
+/// A run between its start and its end: the observers of [`drive`] (statistics, the
+/// contact measurement, the history and frame writers, checkpoints, the energy balance,
+/// probes), the run directory's lock and what the summary needs. The integrator stays
+/// the caller's and is lent to each call. [`run_checkpointed`] advances it to the end in
+/// one call; the Python package's `step(n)` advances it `n` steps at a time, so both
+/// write the same history and summary.
+pub struct RunInProgress {
+    obs: RunObserver,
+    steps: usize,
+    elements: usize,
+    theta: f64,
+    reference: Option<ImpactingBar>,
+    parameters: serde_json::Value,
+    energy0: f64,
+    /// Seconds spent opening the outputs and, at the end, closing them.
+    output_seconds: f64,
+    /// Seconds spent in [`RunInProgress::advance`] (the summary's wall time).
+    stepping_seconds: f64,
+    /// The last step's statistics.
+    last: Option<crate::integrators::StepStats>,
+    /// `history.csv` of a run that writes files.
+    history_path: Option<std::path::PathBuf>,
+    /// Held until the run ends: a second run into the same directory is refused.
+    _lock: Option<crate::io::RunLock>,
+}
+
+impl RunInProgress {
+    /// Opens the outputs (history, frames, HDF5, the lock) and the observers for a run
+    /// of `steps` steps of `integ` from its current state, or from `ckpt.resume`'s.
+    #[allow(clippy::too_many_arguments)]
+    pub fn start(
+        integ: &mut dyn Integrator,
+        steps: usize,
+        elements: usize,
+        theta: f64,
+        checks: &RunChecks,
+        reference: Option<ImpactingBar>,
+        parameters: serde_json::Value,
+        out: Option<(Output, Geometry)>,
+        ckpt: Option<Checkpointing>,
+        mut probes: probes::ProbeSet,
+    ) -> Result<RunInProgress, Error> {
+        let h = integ.dt();
+        let m = integ.state().gap.len();
+        let resume = ckpt.as_ref().and_then(|c| c.resume);
+        if let Some(c) = resume {
+            if c.steps != steps || c.integrator.step >= steps {
+                return Err(Error::invalid(
+                    "checkpoint steps",
+                    format!("{} (at step {})", c.steps, c.integrator.step),
+                    &format!("the scene makes {steps} steps"),
+                ));
             }
-        }),
-        max_lcp_residual: acc.lcp_res,
-        energy: [energy0, energy1],
-        energy_balance,
-        probes: probes.summaries(reference.as_ref()),
-        // set by the application, which knows the bodies
-        bodies: Vec::new(),
-        arithmetic: crate::linalg::arithmetic().name().to_string(),
-        subnormals: crate::linalg::subnormals::current_thread()
-            .name()
-            .to_string(),
-        history_thread,
-        path: integ.path(),
-        model_seconds: 0.0,
-        integrator_seconds: 0.0,
-        parameters,
-    };
-    Ok(RunResult {
-        summary,
-        force: tracker.trace.unwrap_or_default(),
-        state: integ.state().clone(),
-    })
+            integ.restore(&c.integrator)?;
+        }
+        let t0 = Instant::now();
+        let mut writers = Writers {
+            history: None,
+            frames: None,
+            frame_stride: usize::MAX,
+            history_stride: usize::MAX,
+            closed_before: false,
+            frame_count: 0,
+            seconds: 0.0,
+        };
+        let mut plan = None;
+        let energy0 = match resume {
+            Some(c) => c.run.energy0.0,
+            None => {
+                let s = integ.state();
+                integ.system().total_energy(s.time, &s.q, &s.v)
+            }
+        };
+        // held until the run returns: a second run into the same directory is refused
+        let mut _lock = None;
+        let mut history_path = None;
+        if let Some((o, geom)) = out {
+            o.options.validate()?;
+            _lock = Some(crate::io::RunLock::acquire(o.dir)?);
+            let geom_outlines = geom.outlines.clone();
+            let hist_path = o.dir.join("history.csv");
+            history_path = Some(hist_path.clone());
+            // solid and plane bodies: each one's centre and momenta per row (a rod's are its
+            // summary's release velocity)
+            let bodies = (geom.dim >= 2)
+                .then(|| crate::model::BodyMeasures::new(&geom, integ.state().q.len()))
+                .flatten();
+            let hist = match resume {
+                Some(c) => HistoryWriter::resume(
+                    &hist_path,
+                    c.run.history_bytes,
+                    c.run.history_rows,
+                    o.options.contact_columns.per_contact(m),
+                    bodies,
+                )?,
+                None => {
+                    crate::io::prepare_run_dir(o.dir)?;
+                    HistoryWriter::create(
+                        &hist_path,
+                        m,
+                        integ.state().tangent_dim,
+                        o.options.contact_columns.per_contact(m),
+                        bodies,
+                    )?
+                }
+            };
+            let h5 = crate::io::Hdf5Output::open(o.dir, o.options, resume.is_some())?;
+            let hist = h5.attach_history(
+                hist,
+                (m, integ.state().tangent_dim),
+                integ.name(),
+                h,
+                theta,
+                &parameters,
+                resume.map(|c| c.run.history_rows as usize),
+            )?;
+            // a model without field geometry (the academic examples) writes no frames
+            if o.options.fields && !geom.points.is_empty() {
+                let w = match resume {
+                    Some(c) => FrameWriter::resume(
+                        o.dir,
+                        "fields",
+                        geom,
+                        integ.jacobian(),
+                        o.options.encoding,
+                        c.run.frames,
+                    )?,
+                    None => FrameWriter::create(
+                        o.dir,
+                        "fields",
+                        geom,
+                        integ.jacobian(),
+                        o.options.encoding,
+                    )?,
+                };
+                if !geom_outlines.is_empty() {
+                    crate::io::frames::write_outlines(
+                        &o.dir.join("obstacles.vtu"),
+                        &geom_outlines,
+                    )?;
+                }
+                let w = h5.attach_frames(w, resume.map(|c| c.run.frames))?;
+                let s = integ.state();
+                let mut w =
+                    FrameStream::spawn_with_statuses(w, s.q.len(), m, s.status.len(), FRAME_POOL);
+                if resume.is_none() {
+                    w.push(s, integ.jacobian(), h)?;
+                    writers.frame_count += 1;
+                }
+                writers.frames = Some(w);
+            }
+            writers.history = Some(history_thread::History::new(
+                hist,
+                integ.shared_system(),
+                integ.state(),
+            ));
+            writers.frame_stride = o.options.frame_stride(steps);
+            writers.history_stride = o.options.history_stride;
+            let every = resume.map_or(o.options.checkpoint_every, |c| c.every);
+            if let Some(c) = ckpt.as_ref().filter(|_| every > 0) {
+                let (inputs, out_dir) = match resume {
+                    Some(r) => (r.inputs.clone(), r.out_dir.clone()),
+                    None => (
+                        c.inputs.clone(),
+                        std::fs::canonicalize(o.dir).map_err(|e| Error::io(o.dir, e))?,
+                    ),
+                };
+                plan = Some(CheckpointPlan {
+                    every,
+                    dir: o.dir.to_path_buf(),
+                    source: c.source.clone(),
+                    output: o.options.clone(),
+                    steps,
+                    energy0,
+                    inputs,
+                    out_dir,
+                    abort_after: std::env::var("SIGNORINI_ABORT_AFTER_STEP")
+                        .ok()
+                        .and_then(|v| v.parse().ok()),
+                });
+            }
+        }
+        let output_seconds = t0.elapsed().as_secs_f64();
+        let mut obs = RunObserver {
+            acc: Acc::default(),
+            tracker: ContactTracker::new(steps, plan.is_none(), reference.is_some()),
+            writers,
+            h,
+            plan,
+            probes: probes::ProbeSet::default(),
+            // Schatzman–Paoli's velocity is a central difference: its discrete energy is
+            // not the θ-method's, whose balance the check reads
+            energy: crate::integrators::SchemeKind::parse(integ.name())
+                .is_none_or(|k| k.capabilities().theta_energy)
+                .then(|| {
+                    let s = integ.state();
+                    EnergyCheck {
+                        audit: crate::model::energy::EnergyAudit::new(
+                            integ.system(),
+                            s.time,
+                            &s.q,
+                            &s.v,
+                        ),
+                        theta,
+                        max: checks.energy_excess_limit(
+                            integ.system().linearity() == crate::model::system::Linearity::Linear,
+                        ),
+                        caps_allowed: checks.allow_caps,
+                    }
+                }),
+        };
+        {
+            let s = integ.state();
+            let saved: Option<Vec<Vec<f64>>> =
+                resume.map(|c| c.run.probes.iter().map(|f| f.0.clone()).collect());
+            probes.start(s.time, h, &s.q, saved.as_deref());
+        }
+        obs.probes = probes;
+        if let Some(c) = resume {
+            obs.restore(&c.run);
+            if let Some(e) = obs.energy.as_mut() {
+                e.audit
+                    .restore(c.run.energy_audit.map(|b| b.0), &integ.state().q);
+            }
+        }
+        Ok(RunInProgress {
+            obs,
+            steps,
+            elements,
+            theta,
+            reference,
+            parameters,
+            energy0,
+            output_seconds,
+            stepping_seconds: 0.0,
+            last: None,
+            history_path,
+            _lock,
+        })
+    }
+
+    /// The steps of the whole run.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// Steps `integ` through [`drive_to`] up to step `until` (at most the run's last),
+    /// with every check and observer of a whole run; an error leaves the run where it
+    /// stopped (an interrupted run can advance again).
+    pub fn advance(
+        &mut self,
+        integ: &mut dyn Integrator,
+        until: usize,
+        checks: &RunChecks,
+        progress: &mut dyn Progress,
+    ) -> Result<(), Error> {
+        let start = Instant::now();
+        let last = &mut self.last;
+        let mut keep = |_: &dyn Integrator, st: &crate::integrators::StepStats, _: bool| {
+            *last = Some(*st);
+            Ok(())
+        };
+        let r = drive_to(
+            integ,
+            until.min(self.steps),
+            self.steps,
+            checks,
+            &mut [&mut self.obs, &mut keep],
+            progress,
+        );
+        self.stepping_seconds += start.elapsed().as_secs_f64();
+        r
+    }
+
+    /// The statistics of the last step taken (`None` before the first).
+    pub fn last_stats(&self) -> Option<&crate::integrators::StepStats> {
+        self.last.as_ref()
+    }
+
+    /// Makes the history and the frames on disk whole (every queued row and frame
+    /// written and flushed, `history.csv` holding the rows so far, the `.pvd` listing
+    /// the frames) without ending the run.
+    pub fn sync(&mut self) -> Result<(), Error> {
+        if let Some(w) = self.obs.writers.history.as_mut() {
+            w.sync()?;
+            if let Some(path) = &self.history_path {
+                crate::io::publish_part(path)?;
+            }
+        }
+        if let Some(f) = self.obs.writers.frames.as_mut() {
+            f.sync()?;
+        }
+        Ok(())
+    }
+
+    /// Closes the history and frame writers (an interrupted run's last act: its files
+    /// stay readable, and it cannot advance any more).
+    pub fn close_writers(&mut self) -> Result<(), Error> {
+        if let Some(w) = self.obs.writers.history.take() {
+            w.finish()?;
+        }
+        if let Some(f) = self.obs.writers.frames.take() {
+            f.finish()?;
+        }
+        Ok(())
+    }
+
+    /// The state of `integ` was replaced between steps (the Python package's
+    /// `set_state`): the energy balance starts again from it, since the energy given or
+    /// taken by the edit is no work of the run's forces.
+    pub fn state_replaced(&mut self, integ: &dyn Integrator) {
+        if let Some(e) = self.obs.energy.as_mut() {
+            let s = integ.state();
+            e.audit = crate::model::energy::EnergyAudit::new(integ.system(), s.time, &s.q, &s.v);
+        }
+    }
+
+    /// Ends a run advanced to its last step: closes the writers, removes a checkpoint
+    /// that would only resume a finished run, and forms the [`Summary`].
+    pub fn finish(self, integ: &mut dyn Integrator) -> Result<RunResult, Error> {
+        let done = integ.state().step;
+        if done < self.steps {
+            return Err(Error::Numerical(format!(
+                "the run was finished at step {done} of {}",
+                self.steps
+            )));
+        }
+        let RunInProgress {
+            obs,
+            steps,
+            elements,
+            theta,
+            reference,
+            parameters,
+            energy0,
+            mut output_seconds,
+            stepping_seconds: wall,
+            _lock,
+            ..
+        } = self;
+        let h = obs.h;
+        let t_fin = Instant::now();
+        let RunObserver {
+            acc,
+            tracker,
+            mut writers,
+            plan,
+            energy,
+            probes,
+            ..
+        } = obs;
+        let energy_balance = energy.map(|e| EnergyBalance {
+            supplied_work: e.audit.work(),
+            excess_max: acc.energy_excess,
+        });
+        output_seconds += writers.seconds;
+        let history_thread = matches!(writers.history, Some(history_thread::History::Thread(_)));
+        if let Some(w) = writers.history.take() {
+            w.finish()?;
+        }
+        let (frame_count, frame_seconds, frame_wait) = match writers.frames.take() {
+            Some(f) => {
+                let wait = f.waited_seconds();
+                let w = f.finish()?;
+                (w.frames().len(), w.busy_seconds(), wait)
+            }
+            None => (0, 0.0, 0.0),
+        };
+        // the run is complete: its checkpoint would only resume a finished run
+        if let Some(p) = plan {
+            let path = p.dir.join(checkpoint::FILE);
+            if path.exists() {
+                std::fs::remove_file(&path).map_err(|e| Error::write(&path, e))?;
+            }
+        }
+        output_seconds += t_fin.elapsed().as_secs_f64();
+        let s = integ.state();
+        let sys = integ.system();
+        let energy1 = sys.total_energy(s.time, &s.q, &s.v);
+        let contact = reference.map(|r| contact_summary(&tracker, h, sys, &s.v, r));
+        let summary = Summary {
+            scheme: integ.name().to_string(),
+            elements,
+            dofs: s.q.len(),
+            dt: h,
+            theta,
+            steps,
+            t_end: s.time,
+            wall_seconds: wall,
+            seconds_per_step: wall / steps.max(1) as f64,
+            output_seconds,
+            frames: frame_count,
+            frame_seconds,
+            frame_wait_seconds: frame_wait,
+            max_violation: acc.violation,
+            contact,
+            iterations: acc.iterations(steps),
+            caps_hit: acc.caps,
+            newton_loops: NewtonLoops {
+                coupled_solves: acc.loops[0],
+                stalls: acc.loops[1],
+                steps_with_held_rows: acc.loops[2],
+                complementarity_fallbacks: acc.loops[3],
+            },
+            friction: acc.friction(s.tangent_dim > 0),
+            // set by `finish`
+            memory_planned_bytes: 0,
+            peak_memory_bytes: None,
+            matrix_free: (acc.global[0] > 0).then(|| summary::MatrixFreeSummary {
+                solves: acc.global[0],
+                products: acc.global[1],
+                products_per_solve: acc.global[1] as f64 / acc.global[0] as f64,
+            }),
+            nonlinear: (sys.linearity() != crate::model::system::Linearity::Linear).then(|| {
+                summary::NonlinearSummary {
+                    factorizations: acc.factorizations,
+                    factorizations_per_step: acc.factorizations as f64 / steps.max(1) as f64,
+                    assembly_seconds: acc.assembly_seconds,
+                    factorization_seconds: acc.factorization_seconds,
+                }
+            }),
+            max_lcp_residual: acc.lcp_res,
+            energy: [energy0, energy1],
+            energy_balance,
+            probes: probes.summaries(reference.as_ref()),
+            // set by the application, which knows the bodies
+            bodies: Vec::new(),
+            arithmetic: crate::linalg::arithmetic().name().to_string(),
+            subnormals: crate::linalg::subnormals::current_thread()
+                .name()
+                .to_string(),
+            history_thread,
+            path: integ.path(),
+            model_seconds: 0.0,
+            integrator_seconds: 0.0,
+            parameters,
+        };
+        Ok(RunResult {
+            summary,
+            force: tracker.trace.unwrap_or_default(),
+            state: integ.state().clone(),
+        })
+    }
 }
 
 /// Completes a run: records the set-up times, writes `summary.json` and the plots.
