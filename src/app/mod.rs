@@ -2,7 +2,9 @@
 //! library calls. It sits above the scenes (it builds a scene's model and integrator)
 //! and below the studies and the CLI; it hands the driver (`crate::run`) an integrator
 //! and, for checkpoints, what it needs to rebuild the run ([`source::RunSource`], which
-//! the driver saves without reading).
+//! the driver saves without reading). A run held between steps is a [`Session`] (model,
+//! integrator, memory plan, the driver's run in progress): `run_bar` and `run_scene`
+//! advance one to its end in one call, the Python package's `step(n)` `n` steps at a time.
 
 pub mod source;
 

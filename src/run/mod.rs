@@ -4,9 +4,12 @@
 //! `run_scene`, `resume`) builds the integrator and hands it down with what a checkpoint
 //! must keep to rebuild the run (opaque here).
 //!
-//! Every run goes through one step loop, [`drive`]: it checks each state
-//! ([`RunChecks`]) and hands it to observers (statistics, the contact measurement,
-//! history and frames, checkpoints). The loop reserves nothing per step: the integrator
+//! Every run goes through one step loop, [`drive`] (or [`drive_to`], to a given step):
+//! it checks each state ([`RunChecks`]) and hands it to observers (statistics, the
+//! contact measurement, history and frames, checkpoints). A run between its start and
+//! its end is a [`RunInProgress`]: opened once, advanced to its last step in one call
+//! ([`run_checkpointed`]) or in many (the Python package's `step(n)`), finished into its
+//! [`Summary`] — the same history and summary either way. The loop reserves nothing per step: the integrator
 //! works in its own buffers, the contact measurement keeps the first contact interval
 //! only (and the per-step force up to [`FORCE_TRACE_MAX_STEPS`], reserved once).
 
