@@ -704,6 +704,23 @@ class Simulation:
         return self._inner.contact_velocities
 
     @property
+    def tangent_impulses(self) -> np.ndarray:
+        """Friction impulses of the last step, ``(contacts, tangents)`` in each contact's
+        frame (N·s; ``tangents`` 1 in 2-D, 2 in 3-D, 0 without friction)."""
+        return self._inner.tangent_impulses.reshape(len(self.gaps), self._inner.tangent_dim)
+
+    @property
+    def slip_velocities(self) -> np.ndarray:
+        """Tangential (slip) velocities, ``(contacts, tangents)`` (m/s)."""
+        return self._inner.slip_velocities.reshape(len(self.gaps), self._inner.tangent_dim)
+
+    @property
+    def statuses(self) -> List[str]:
+        """Each contact's status after the last step: ``open``, ``stick``, ``slip`` or
+        ``frictionless`` (closed, μ = 0) in frictional scenes; empty otherwise."""
+        return self._inner.statuses
+
+    @property
     def time(self) -> float:
         """Time of the current state (s)."""
         return self._inner.time

@@ -1145,6 +1145,34 @@ impl PySimulation {
     fn contact_velocities(&self, py: Python<'_>) -> PyResult<Py<PyArray1<f64>>> {
         self.vector(py, |s| &s.local_velocity)
     }
+    /// Tangential (friction) impulses `P_T` of the last step (N·s), `tangent_dim` per
+    /// contact, contact after contact (owned copy; empty without friction).
+    #[getter]
+    fn tangent_impulses(&self, py: Python<'_>) -> PyResult<Py<PyArray1<f64>>> {
+        self.vector(py, |s| &s.tangent_impulse)
+    }
+    /// Tangential (slip) velocities `U_T` (m/s), `tangent_dim` per contact.
+    #[getter]
+    fn slip_velocities(&self, py: Python<'_>) -> PyResult<Py<PyArray1<f64>>> {
+        self.vector(py, |s| &s.tangent_velocity)
+    }
+    /// Tangents per contact: 0 without friction, 1 in 2-D, 2 in 3-D (0 before a state).
+    #[getter]
+    fn tangent_dim(&self) -> PyResult<usize> {
+        Ok(self.lock()?.state().map_or(0, |s| s.tangent_dim))
+    }
+    /// Open / stick / slip per contact (frictional scenes; empty otherwise).
+    #[getter]
+    fn statuses(&self) -> PyResult<Vec<String>> {
+        let g = self.lock()?;
+        let s = g
+            .state()
+            .ok_or_else(|| PyRuntimeError::new_err("no state yet: call run() or step() first"))?;
+        Ok(s.status
+            .iter()
+            .map(|c| format!("{c:?}").to_lowercase())
+            .collect())
+    }
     /// Time of the state (s).
     #[getter]
     fn time(&self) -> PyResult<f64> {

@@ -836,3 +836,30 @@ def test_cancel_stops_model_building():
     assert len(caught) == 1, caught
     assert caught[0][0] - t0 < 1.0
     assert "cancelled" in caught[0][1] and sim.steps_done == 0
+
+
+def test_step_gives_the_friction_impulses_and_statuses():
+    """Issue 37: from `step()`, each contact's friction impulse and slip velocity as
+    `(contacts, tangents)` arrays and its status: on the sliding block (μ = 0.3) 0.1 s in,
+    the base slides along +x, every closed contact's impulse lies in its cone
+    (|P_T| ≤ μ P_N to 1e-12 of P_N: the friction solver's tolerance is 1e-8 on the
+    residual, the projection onto the cone is exact), and the arrays equal the history's
+    last row bit for bit."""
+    root = pathlib.Path(__file__).resolve().parents[2]
+    sim = signorini.Scene.from_toml(root / "meshes" / "sliding_block.toml").simulation()
+    sim.step(500)                       # 0.1 s of the 0.34 s slide
+    pt, ut, pn = sim.tangent_impulses, sim.slip_velocities, sim.impulses
+    m = len(sim.gaps)
+    assert pt.shape == (m, 2) and ut.shape == (m, 2) and len(sim.statuses) == m
+    closed = pn > 0
+    assert closed.sum() > 0 and "slip" in sim.statuses
+    norm = np.linalg.norm(pt, axis=1)
+    assert np.all(norm[closed] <= 0.3 * pn[closed] * (1 + 1e-12))
+    for c in np.flatnonzero(np.array(sim.statuses) == "slip"):
+        assert norm[c] == pytest.approx(0.3 * pn[c], rel=1e-9)
+    h = sim.history
+    assert np.array_equal(h.per_contact("tangent_impulse")[-1], pt)
+    assert np.array_equal(h.per_contact("slip_velocity")[-1], ut)
+    bar = signorini.Scene.bar(elements=50, dt=2e-6, t_end=2e-4).simulation()
+    bar.step(1)
+    assert bar.tangent_impulses.shape == (1, 0) and bar.statuses == []
