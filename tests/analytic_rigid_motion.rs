@@ -357,3 +357,138 @@ velocity = [0.0, -1.0]
     let (model, _) = Scene::from_toml(text).unwrap().build().unwrap();
     assert!(BodyMeasures::new(&model.geometry, model.problem.q0.len()).is_none());
 }
+
+/// The rows of `model`'s initial velocity, one per point (`dof_of` maps each point's
+/// components to its dofs; every one is kept in these scenes).
+fn velocity_rows(model: &signorini::scene::Model) -> Vec<Vec<f64>> {
+    let g = &model.geometry;
+    (0..g.points.len())
+        .map(|p| {
+            (0..g.dim)
+                .map(|d| model.problem.v0[g.dof_of[p * g.dim + d].expect("free")])
+                .collect()
+        })
+        .collect()
+}
+
+/// A per-node `initial_velocity` (issue 37), inline or from a file, reproduces a rigid
+/// motion's initial velocities bit for bit when given its values (written in Rust's
+/// shortest round-trip form), so its mass, momentum and angular momentum `I ω` are the
+/// closed form's (1e-12, as above); a file with comments, commas and blank lines reads
+/// the same.
+#[test]
+fn a_nodal_velocity_field_gives_the_rigid_motion() {
+    let (a, b, c) = (0.4, 0.2, 0.1);
+    let m = RHO * a * b * c;
+    let w = 3.0;
+    let rigid = box_scene("velocity = [0.5, 0.0, 0.0]\nangular_velocity = [0.0, 0.0, 3.0]");
+    let (model, _) = Scene::from_toml(&rigid).unwrap().build().unwrap();
+    let rows = velocity_rows(&model);
+    let inline = format!(
+        "initial_velocity = [{}]",
+        rows.iter()
+            .map(|r| format!("{r:?}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let dir = std::env::temp_dir().join(format!("signorini-nodal-field-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut file = String::from("# vx, vy, vz per node\n\n");
+    for r in &rows {
+        file.push_str(&format!("{:?}, {:?}\t{:?}  # node\n", r[0], r[1], r[2]));
+    }
+    std::fs::write(dir.join("v0.csv"), file).unwrap();
+    for extra in [
+        inline,
+        r#"initial_velocity = { file = "v0.csv" }"#.to_string(),
+    ] {
+        let mut scene = Scene::from_toml(&box_scene(&extra)).unwrap();
+        scene.base_dir = dir.clone();
+        let (field, _) = scene.build().unwrap();
+        assert_eq!(field.problem.v0, model.problem.v0, "{}", &extra[..40]);
+        let p = &field.problem;
+        let mut bm = BodyMeasures::new(&field.geometry, p.q0.len()).unwrap();
+        let mut out = vec![BodyState::default(); 1];
+        bm.measure(&p.system.mass, &p.q0, &p.v0, &mut out);
+        let izz = m * (a * a + b * b) / 12.0;
+        assert!(close(out[0].mass, m, m));
+        assert!(close(out[0].momentum[0], m * 0.5, m * 0.5));
+        assert!(close(out[0].angular_momentum[2], izz * w, izz * w));
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// What a per-node field cannot be: each error names the key (or the file and line),
+/// the value and what was expected.
+#[test]
+fn bad_nodal_velocity_fields_are_refused_with_the_key_or_line() {
+    let dir = std::env::temp_dir().join(format!("signorini-bad-field-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // the 4 × 2 × 2 box has 45 nodes
+    let ok_row = "0.0, 0.0, 1.0\n";
+    std::fs::write(dir.join("short.csv"), ok_row.repeat(44)).unwrap();
+    std::fs::write(dir.join("long.csv"), ok_row.repeat(46)).unwrap();
+    std::fs::write(dir.join("cols.csv"), ok_row.repeat(3) + "1.0 2.0\n").unwrap();
+    std::fs::write(dir.join("word.csv"), ok_row.repeat(7) + "1.0 fast 2.0\n").unwrap();
+    let rows = |n: usize, row: &str| format!("initial_velocity = [{}]", vec![row; n].join(", "));
+    let cases = [
+        (rows(44, "[0.0, 0.0, 1.0]"), "initial_velocity", "44 rows"),
+        (
+            rows(45, "[0.0, 1.0]"),
+            "initial_velocity[0]",
+            "3 finite values",
+        ),
+        (
+            rows(44, "[0.0, 0.0, 1.0]").replace("= [", "= [[0.0, nan, 0.0], "),
+            "initial_velocity[0]",
+            "finite",
+        ),
+        (
+            rows(45, "[0.0, 0.0, 1.0]") + "\nvelocity = [1.0, 0.0, 0.0]",
+            "initial_velocity",
+            "one initial motion per body",
+        ),
+        (
+            rows(45, "[0.0, 0.0, 1.0]") + "\nfixed = [\"z0\"]",
+            "initial_velocity",
+            "is 0 where `fixed` holds",
+        ),
+        (
+            r#"initial_velocity = { file = "absent.csv" }"#.into(),
+            "absent.csv",
+            "",
+        ),
+        (
+            r#"initial_velocity = { file = "short.csv" }"#.into(),
+            "short.csv",
+            "44 rows",
+        ),
+        (
+            r#"initial_velocity = { file = "long.csv" }"#.into(),
+            "line 46",
+            "past the 45",
+        ),
+        (
+            r#"initial_velocity = { file = "cols.csv" }"#.into(),
+            "line 4",
+            "2 values",
+        ),
+        (
+            r#"initial_velocity = { file = "word.csv" }"#.into(),
+            "line 8",
+            "`fast` is not a finite number",
+        ),
+    ];
+    for (extra, key, expect) in cases {
+        let mut scene = Scene::from_toml(&box_scene(&extra)).unwrap();
+        scene.base_dir = dir.clone();
+        let e = scene.build().err().expect(key).to_string();
+        assert!(e.contains(key) && e.contains(expect), "{key}: {e}");
+        // a file's errors name the file (and the line); the others the key path
+        assert!(e.contains("bodies[0]") || e.contains(".csv"), "{key}: {e}");
+    }
+    // a checkpoint verifies the field's file with the mesh files
+    let scene = Scene::from_toml(&box_scene(r#"initial_velocity = { file = "v0.csv" }"#)).unwrap();
+    assert_eq!(scene.data_files(), vec![std::path::PathBuf::from("v0.csv")]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -47,7 +47,8 @@ impl RunSource {
         })
     }
 
-    /// The files the run reads: the scene file and its mesh files (none for the bar).
+    /// The files the run reads: the scene file and its mesh and field files (none for the
+    /// bar).
     pub fn input_files(&self) -> Result<Vec<InputFile>, Error> {
         match self {
             RunSource::Bar { .. } => Ok(Vec::new()),
@@ -61,7 +62,7 @@ impl RunSource {
                 if !file.as_os_str().is_empty() {
                     files.push(InputFile::of(file)?);
                 }
-                for path in scene.mesh_files() {
+                for path in scene.data_files() {
                     files.push(InputFile::of(&base_dir.join(path))?);
                 }
                 Ok(files)

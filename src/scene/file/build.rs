@@ -167,9 +167,15 @@ impl Scene {
                     &format!("needs {dim} finite values"),
                 )));
             }
-            match &b.angular_velocity {
-                None if b.rotation_center.is_none() => v0.extend((0..n).map(|i| vel[i % dim])),
-                omega => {
+            let first = v0.len();
+            match (&b.initial_velocity, &b.angular_velocity) {
+                (Some(field), _) => {
+                    v0.extend(nodal_field(b, field, &self.base_dir, n / dim, dim).map_err(at)?)
+                }
+                (None, None) if b.rotation_center.is_none() => {
+                    v0.extend((0..n).map(|i| vel[i % dim]))
+                }
+                (None, omega) => {
                     v0.extend(rigid_motion(b, mesh, &sys, dim, &vel, omega.as_deref()).map_err(at)?)
                 }
             }
@@ -181,6 +187,22 @@ impl Scene {
                         fx[v * dim + i] = true;
                     }
                 }
+            }
+            // a field's value on a fixed component would be dropped by the elimination:
+            // refused rather than lost
+            if b.initial_velocity.is_some()
+                && let Some(i) = (0..n).find(|&i| fx[i] && v0[first + i] != 0.0)
+            {
+                return Err(at(Error::invalid(
+                    "initial_velocity",
+                    format!(
+                        "{} at node {} component {}",
+                        v0[first + i],
+                        i / dim,
+                        i % dim
+                    ),
+                    "is 0 where `fixed` holds the node",
+                )));
             }
             fixed.extend(fx);
             let base = geometry.points.len();
@@ -601,6 +623,99 @@ fn keep_within(
         ));
     }
     Ok(kept)
+}
+
+/// The rows of `b`'s `initial_velocity`: `nodes` rows of `dim` finite values, inline or
+/// from its file (read within [`crate::limits::MAX_TEXT_BYTES`]), flattened node after
+/// node.
+fn nodal_field(
+    b: &BodySpec,
+    field: &super::NodalField,
+    base_dir: &std::path::Path,
+    nodes: usize,
+    dim: usize,
+) -> Result<Vec<f64>, Error> {
+    if b.velocity.is_some() || b.angular_velocity.is_some() || b.rotation_center.is_some() {
+        return Err(Error::invalid(
+            "initial_velocity",
+            "given with velocity, angular_velocity or rotation_center",
+            "one initial motion per body: the field, or the rigid motion",
+        ));
+    }
+    let expected = format!(
+        "one row per node of the body's mesh ({nodes}), {dim} finite value{} each (m/s)",
+        if dim == 1 { "" } else { "s" }
+    );
+    let mut out = Vec::with_capacity(nodes.saturating_mul(dim).min(1 << 24));
+    match field {
+        super::NodalField::Rows(rows) => {
+            if rows.len() != nodes {
+                return Err(Error::invalid(
+                    "initial_velocity",
+                    format!("{} rows", rows.len()),
+                    &expected,
+                ));
+            }
+            for (r, row) in rows.iter().enumerate() {
+                if row.len() != dim || row.iter().any(|x| !x.is_finite()) {
+                    return Err(Error::invalid(
+                        &format!("initial_velocity[{r}]"),
+                        format!("{row:?}"),
+                        &expected,
+                    ));
+                }
+                out.extend_from_slice(row);
+            }
+        }
+        super::NodalField::File { file } => {
+            let path = base_dir.join(file);
+            let text =
+                crate::limits::read_text(&path, "initial velocity", crate::limits::MAX_TEXT_BYTES)
+                    .map_err(|e| prefix("initial_velocity.file", e))?;
+            let mut rows = 0;
+            for (l, line) in text.lines().enumerate() {
+                let line = line.split('#').next().unwrap_or("").trim();
+                if line.is_empty() {
+                    continue;
+                }
+                let bad = |what: String| Error::bad_file(&path, format!("line {}", l + 1), what);
+                if rows == nodes {
+                    return Err(bad(format!("a row past the {nodes} expected: {expected}")));
+                }
+                let mut count = 0;
+                for tok in line.split(|c: char| c == ',' || c.is_whitespace()) {
+                    if tok.is_empty() {
+                        continue;
+                    }
+                    let x: f64 = tok
+                        .parse()
+                        .ok()
+                        .filter(|x: &f64| x.is_finite())
+                        .ok_or_else(|| bad(format!("`{tok}` is not a finite number")))?;
+                    count += 1;
+                    if count > dim {
+                        break;
+                    }
+                    out.push(x);
+                }
+                if count != dim {
+                    return Err(bad(format!(
+                        "{count}{} values: {expected}",
+                        if count > dim { " or more" } else { "" }
+                    )));
+                }
+                rows += 1;
+            }
+            if rows != nodes {
+                return Err(Error::bad_file(
+                    &path,
+                    "rows",
+                    format!("{rows} rows: {expected}"),
+                ));
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// The initial velocity of `b`'s dofs in the rigid motion its `velocity`,

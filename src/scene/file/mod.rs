@@ -178,9 +178,31 @@ pub struct BodySpec {
     /// default: the body's centre of mass.
     #[serde(default)]
     pub rotation_center: Option<Vec<f64>>,
+    /// A per-node initial velocity field (m/s) instead of a rigid motion: one row of
+    /// one value per component for every node of the body's mesh, in its order, given
+    /// inline (`[[vx, vy, vz], …]`, or a numpy array through the Python package's
+    /// `Scene.from_dict`) or as `{ file = "v0.csv" }` (relative to the scene's
+    /// directory; values separated by commas or white space, `#` starts a comment).
+    /// Excludes `velocity`, `angular_velocity` and `rotation_center`; zero on the
+    /// components `fixed` holds.
+    #[serde(default)]
+    pub initial_velocity: Option<NodalField>,
     /// Node sets held fixed (u = 0).
     #[serde(default)]
     pub fixed: Vec<String>,
+}
+
+/// A field with one row per node of a body's mesh (`initial_velocity`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum NodalField {
+    /// The rows, in the scene.
+    Rows(Vec<Vec<f64>>),
+    /// A text file of rows.
+    File {
+        /// Its path, relative to the scene's directory.
+        file: String,
+    },
 }
 
 fn default_formulation() -> Formulation {
@@ -452,15 +474,21 @@ impl Scene {
             .unwrap_or(0)
     }
 
-    /// The mesh files the scene reads, as written (relative to [`Scene::base_dir`]
-    /// unless absolute), once each.
-    pub fn mesh_files(&self) -> Vec<PathBuf> {
+    /// The files the scene reads besides itself (mesh files, `initial_velocity` files),
+    /// as written (relative to [`Scene::base_dir`] unless absolute), once each: what a
+    /// checkpoint verifies before it resumes.
+    pub fn data_files(&self) -> Vec<PathBuf> {
         let mut files: Vec<PathBuf> = Vec::new();
         for b in &self.bodies {
             if let MeshSpec::File { path } = &b.mesh
                 && !files.contains(path)
             {
                 files.push(path.clone());
+            }
+            if let Some(NodalField::File { file }) = &b.initial_velocity
+                && !files.iter().any(|f| f.as_os_str() == file.as_str())
+            {
+                files.push(PathBuf::from(file));
             }
         }
         files
