@@ -9,9 +9,10 @@
 //! contact measurement, history and frames, checkpoints). A run between its start and
 //! its end is a [`RunInProgress`]: opened once, advanced to its last step in one call
 //! ([`run_checkpointed`]) or in many (the Python package's `step(n)`), finished into its
-//! [`Summary`] — the same history and summary either way. The loop reserves nothing per step: the integrator
-//! works in its own buffers, the contact measurement keeps the first contact interval
-//! only (and the per-step force up to [`FORCE_TRACE_MAX_STEPS`], reserved once).
+//! [`Summary`] — the same history and summary either way. The loop reserves nothing
+//! per step: the integrator works in its own buffers, the contact measurement keeps the
+//! first contact interval only (and the per-step force up to
+//! [`FORCE_TRACE_MAX_STEPS`], reserved once).
 
 pub mod checkpoint;
 pub mod driver;

@@ -46,6 +46,7 @@
 //! contact sets, outlines).
 
 mod build;
+mod initial;
 mod mesh_spec;
 mod obstacle;
 mod parse;
