@@ -651,11 +651,15 @@ impl PySimulation {
                 )?;
             }
         }
+        let geo = g.geometry.clone().expect("built with the model");
+        let names = self.kind.body_names();
         let st = &mut *g;
         match (&mut st.session, &mut st.model) {
             (Some(session), _) => {
                 let integ = session.integrator_mut();
-                let mut saved = integ.save();
+                let before = integ.save();
+                let gaps = integ.state().gap.clone();
+                let mut saved = before.clone();
                 for (name, x) in [("q", q), ("v", v)] {
                     if let Some(x) = x {
                         saved
@@ -664,11 +668,21 @@ impl PySimulation {
                     }
                 }
                 integ.restore(&saved).map_err(py_err)?;
+                if let Err(e) = check_gaps(&gaps, &integ.state().gap, &geo, &names) {
+                    integ.restore(&before).map_err(py_err)?;
+                    return Err(e);
+                }
                 // the energy the edit gave or took is no work of the run's forces
                 session.state_replaced();
             }
             (None, Some((m, _))) => {
                 if let Some(q) = q {
+                    let p = &m.problem;
+                    let mut gaps = vec![0.0; p.contacts.len()];
+                    let mut after = gaps.clone();
+                    p.contacts.starting_gaps(&p.q0, &mut gaps);
+                    p.contacts.starting_gaps(&q, &mut after);
+                    check_gaps(&gaps, &after, &geo, &names)?;
                     m.problem.q0 = q;
                 }
                 if let Some(v) = v {
@@ -794,4 +808,44 @@ impl PySimulation {
                 .collect(),
         ))
     }
+}
+
+/// Refuses a `set_state(q=…)` that puts a contact deeper inside its obstacle or the
+/// other body than the state it replaces does, by more than 1e-9 of the model's size
+/// (the scenes' default `overlap_tolerance`): the check a scene's own start gets (a
+/// body may not start inside another or inside an obstacle), so that an edited state
+/// cannot run on silently from an overlap.
+fn check_gaps(
+    before: &[f64],
+    after: &[f64],
+    geo: &signorini::model::geometry::Geometry,
+    names: &[String],
+) -> PyResult<()> {
+    let tol = 1e-9 * geo.size();
+    let inside = |(a, b): (&f64, &f64)| *a < b.min(0.0) - tol;
+    let count = after.iter().zip(before).filter(|&p| inside(p)).count();
+    let Some((k, depth)) = after
+        .iter()
+        .zip(before)
+        .enumerate()
+        .filter(|&(_, p)| inside(p))
+        .map(|(k, (a, _))| (k, -a))
+        .max_by(|x, y| x.1.total_cmp(&y.1))
+    else {
+        return Ok(());
+    };
+    let what = match geo.contacts.get(k) {
+        Some(c) => format!(
+            "contact {k} (point {} of body {}) would be {depth:.3e} m inside {}",
+            c.point,
+            names.get(c.body).map_or("?", |b| b.as_str()),
+            c.target
+        ),
+        None => format!("contact {k} would be {depth:.3e} m inside its obstacle"),
+    };
+    Err(BadInput::new_err(format!(
+        "set_state(q=…): {what} ({count} contact(s) deeper than before; the deepest is \
+         named); expected every contact at most as deep as in the state it replaces (to \
+         {tol:.1e} m): move the bodies apart"
+    )))
 }
