@@ -34,6 +34,7 @@ impl Scene {
         self.validate()?;
         let mut systems = Vec::new();
         let mut v0 = Vec::new();
+        let mut q0 = Vec::new();
         let mut fixed = Vec::new();
         let mut cells = 0;
         let dim = self.bodies[0].dim();
@@ -168,10 +169,18 @@ impl Scene {
                 )));
             }
             let first = v0.len();
+            super::initial::one_initial_motion(b).map_err(at)?;
             match (&b.initial_velocity, &b.angular_velocity) {
                 (Some(field), _) => v0.extend(
-                    super::initial::nodal_field(b, field, &self.base_dir, n / dim, dim)
-                        .map_err(at)?,
+                    super::initial::nodal_field(
+                        "initial_velocity",
+                        "m/s",
+                        field,
+                        &self.base_dir,
+                        n / dim,
+                        dim,
+                    )
+                    .map_err(at)?,
                 ),
                 (None, None) if b.rotation_center.is_none() => {
                     v0.extend((0..n).map(|i| vel[i % dim]))
@@ -190,21 +199,26 @@ impl Scene {
                     }
                 }
             }
-            // a field's value on a fixed component would be dropped by the elimination:
-            // refused rather than lost
-            if b.initial_velocity.is_some()
-                && let Some(i) = (0..n).find(|&i| fx[i] && v0[first + i] != 0.0)
-            {
-                return Err(at(Error::invalid(
-                    "initial_velocity",
-                    format!(
-                        "{} at node {} component {}",
-                        v0[first + i],
-                        i / dim,
-                        i % dim
-                    ),
-                    "is 0 where `fixed` holds the node",
-                )));
+            if b.initial_velocity.is_some() {
+                super::initial::zero_where_fixed("initial_velocity", &v0[first..], &fx, dim)
+                    .map_err(at)?;
+            }
+            match &b.initial_displacement {
+                Some(field) => {
+                    let u = super::initial::nodal_field(
+                        "initial_displacement",
+                        "m",
+                        field,
+                        &self.base_dir,
+                        n / dim,
+                        dim,
+                    )
+                    .map_err(at)?;
+                    super::initial::zero_where_fixed("initial_displacement", &u, &fx, dim)
+                        .map_err(at)?;
+                    q0.extend(u);
+                }
+                None => q0.extend(std::iter::repeat_n(0.0, n)),
             }
             fixed.extend(fx);
             let base = geometry.points.len();
@@ -295,12 +309,14 @@ impl Scene {
             system.add_nonlinear_part(std::sync::Arc::new(part));
         }
         geometry.dof_of = map.clone();
-        let v0: Vec<f64> = v0
-            .iter()
-            .zip(&map)
-            .filter(|(_, m)| m.is_some())
-            .map(|(v, _)| *v)
-            .collect();
+        let kept = |x: Vec<f64>| -> Vec<f64> {
+            x.iter()
+                .zip(&map)
+                .filter(|(_, m)| m.is_some())
+                .map(|(v, _)| *v)
+                .collect()
+        };
+        let (v0, q0) = (kept(v0), kept(q0));
         // forces on node sets (after the elimination: loads on fixed dofs are dropped,
         // the supports carry them)
         for (fi, f) in self.forces.iter().enumerate() {
@@ -385,7 +401,7 @@ impl Scene {
                 .map_err(at)?;
                 check_starting_gaps(
                     set.0.as_ref(),
-                    system.ndof(),
+                    &q0,
                     c,
                     mesh,
                     &nodes,
@@ -432,7 +448,7 @@ impl Scene {
                 .map_err(at)?;
             check_starting_gaps(
                 set.as_ref(),
-                system.ndof(),
+                &q0,
                 c,
                 mesh,
                 &nodes,
@@ -475,7 +491,7 @@ impl Scene {
         }
         Ok((
             Model {
-                problem: Problem::new(system, contacts, vec![0.0; n], v0),
+                problem: Problem::new(system, contacts, q0, v0),
                 geometry,
                 probes,
             },

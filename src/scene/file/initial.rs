@@ -1,28 +1,23 @@
-//! A body's initial motion: the rigid motion of its `velocity`, `angular_velocity` and
-//! `rotation_center`, or its per-node `initial_velocity` field (inline rows or a text
-//! file), each checked against the body's kind, mesh and fixed components.
+//! A body's initial state: the rigid motion of its `velocity`, `angular_velocity` and
+//! `rotation_center`, or its per-node `initial_velocity` field, and its per-node
+//! `initial_displacement` (inline rows or a text file), each checked against the body's
+//! kind, mesh and fixed components.
 
 use super::*;
 
-/// The rows of `b`'s `initial_velocity`: `nodes` rows of `dim` finite values, inline or
-/// from its file (read within [`crate::limits::MAX_TEXT_BYTES`]), flattened node after
-/// node.
+/// The rows of a body's field `key` (`initial_velocity` in m/s, `initial_displacement`
+/// in m): `nodes` rows of `dim` finite values, inline or from its file (read within
+/// [`crate::limits::MAX_TEXT_BYTES`]), flattened node after node.
 pub(super) fn nodal_field(
-    b: &BodySpec,
+    key: &str,
+    unit: &str,
     field: &super::NodalField,
     base_dir: &std::path::Path,
     nodes: usize,
     dim: usize,
 ) -> Result<Vec<f64>, Error> {
-    if b.velocity.is_some() || b.angular_velocity.is_some() || b.rotation_center.is_some() {
-        return Err(Error::invalid(
-            "initial_velocity",
-            "given with velocity, angular_velocity or rotation_center",
-            "one initial motion per body: the field, or the rigid motion",
-        ));
-    }
     let expected = format!(
-        "one row per node of the body's mesh ({nodes}), {dim} finite value{} each (m/s)",
+        "one row per node of the body's mesh ({nodes}), {dim} finite value{} each ({unit})",
         if dim == 1 { "" } else { "s" }
     );
     let mut out = Vec::with_capacity(nodes.saturating_mul(dim).min(1 << 24));
@@ -30,7 +25,7 @@ pub(super) fn nodal_field(
         super::NodalField::Rows(rows) => {
             if rows.len() != nodes {
                 return Err(Error::invalid(
-                    "initial_velocity",
+                    key,
                     format!("{} rows", rows.len()),
                     &expected,
                 ));
@@ -38,7 +33,7 @@ pub(super) fn nodal_field(
             for (r, row) in rows.iter().enumerate() {
                 if row.len() != dim || row.iter().any(|x| !x.is_finite()) {
                     return Err(Error::invalid(
-                        &format!("initial_velocity[{r}]"),
+                        &format!("{key}[{r}]"),
                         format!("{row:?}"),
                         &expected,
                     ));
@@ -48,9 +43,8 @@ pub(super) fn nodal_field(
         }
         super::NodalField::File { file } => {
             let path = base_dir.join(file);
-            let text =
-                crate::limits::read_text(&path, "initial velocity", crate::limits::MAX_TEXT_BYTES)
-                    .map_err(|e| prefix("initial_velocity.file", e))?;
+            let text = crate::limits::read_text(&path, key, crate::limits::MAX_TEXT_BYTES)
+                .map_err(|e| prefix(&format!("{key}.file"), e))?;
             let mut rows = 0;
             for (l, line) in text.lines().enumerate() {
                 let line = line.split('#').next().unwrap_or("").trim();
@@ -169,4 +163,36 @@ pub(super) fn rigid_motion(
         omega,
         centre,
     ))
+}
+
+/// A per-node initial velocity replaces the rigid motion: both given is refused.
+pub(super) fn one_initial_motion(b: &BodySpec) -> Result<(), Error> {
+    if b.initial_velocity.is_some()
+        && (b.velocity.is_some() || b.angular_velocity.is_some() || b.rotation_center.is_some())
+    {
+        return Err(Error::invalid(
+            "initial_velocity",
+            "given with velocity, angular_velocity or rotation_center",
+            "one initial motion per body: the field, or the rigid motion",
+        ));
+    }
+    Ok(())
+}
+
+/// A field's value on a component `fixed` holds would be dropped by the elimination:
+/// refused rather than lost (`values` and `fixed` over the body's dofs, node-major).
+pub(super) fn zero_where_fixed(
+    key: &str,
+    values: &[f64],
+    fixed: &[bool],
+    dim: usize,
+) -> Result<(), Error> {
+    match (0..values.len()).find(|&i| fixed[i] && values[i] != 0.0) {
+        Some(i) => Err(Error::invalid(
+            key,
+            format!("{} at node {} component {}", values[i], i / dim, i % dim),
+            "is 0 where `fixed` holds the node",
+        )),
+        None => Ok(()),
+    }
 }

@@ -188,12 +188,18 @@ pub struct BodySpec {
     /// components `fixed` holds.
     #[serde(default)]
     pub initial_velocity: Option<NodalField>,
+    /// A per-node initial displacement field (m), given as `initial_velocity` is; zero
+    /// on the components `fixed` holds. The starting gaps are checked at it (no node
+    /// may start inside an obstacle or another body beyond `overlap_tolerance`).
+    #[serde(default)]
+    pub initial_displacement: Option<NodalField>,
     /// Node sets held fixed (u = 0).
     #[serde(default)]
     pub fixed: Vec<String>,
 }
 
-/// A field with one row per node of a body's mesh (`initial_velocity`).
+/// A field with one row per node of a body's mesh (`initial_velocity`,
+/// `initial_displacement`).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum NodalField {
@@ -475,7 +481,7 @@ impl Scene {
             .unwrap_or(0)
     }
 
-    /// The files the scene reads besides itself (mesh files, `initial_velocity` files),
+    /// The files the scene reads besides itself (mesh files, initial field files),
     /// as written (relative to [`Scene::base_dir`] unless absolute), once each: what a
     /// checkpoint verifies before it resumes.
     pub fn data_files(&self) -> Vec<PathBuf> {
@@ -486,10 +492,12 @@ impl Scene {
             {
                 files.push(path.clone());
             }
-            if let Some(NodalField::File { file }) = &b.initial_velocity
-                && !files.iter().any(|f| f.as_os_str() == file.as_str())
-            {
-                files.push(PathBuf::from(file));
+            for field in [&b.initial_velocity, &b.initial_displacement] {
+                if let Some(NodalField::File { file }) = field
+                    && !files.iter().any(|f| f.as_os_str() == file.as_str())
+                {
+                    files.push(PathBuf::from(file));
+                }
             }
         }
         files

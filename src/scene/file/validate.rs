@@ -333,12 +333,12 @@ impl Scene {
     }
 }
 
-/// Refuses contact `c` when one of its nodes starts inside `against` deeper than its
-/// `overlap_tolerance` ([`ContactSpec::overlap_tolerance`]), naming the deepest node by
+/// Refuses contact `c` when one of its nodes starts (at the initial displacements `q0`)
+/// inside `against` deeper than its `overlap_tolerance` ([`ContactSpec::overlap_tolerance`]), naming the deepest node by
 /// its file tag, its depth and how many start inside.
 pub(super) fn check_starting_gaps(
     set: &dyn ContactSet,
-    ndof: usize,
+    q0: &[f64],
     c: &ContactSpec,
     mesh: &Mesh,
     nodes: &[usize],
@@ -350,7 +350,7 @@ pub(super) fn check_starting_gaps(
         None => 1e-9 * size,
     };
     let mut gap = vec![0.0; set.len()];
-    set.starting_gaps(&vec![0.0; ndof], &mut gap);
+    set.starting_gaps(q0, &mut gap);
     let inside = gap.iter().filter(|&&g| g < -tol).count();
     let Some((k, &g)) = gap
         .iter()
