@@ -163,6 +163,9 @@ impl Integrator for Leaky {
     fn jacobian(&self) -> &ContactJacobian {
         self.0.jacobian()
     }
+    fn starting_gaps(&self, q: &[f64], gap: &mut [f64]) {
+        self.0.starting_gaps(q, gap)
+    }
     fn save(&self) -> IntegratorState {
         self.0.save()
     }

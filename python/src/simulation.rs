@@ -10,9 +10,9 @@ type NamedArrays = Vec<(String, Py<PyArray1<f64>>)>;
 /// A history read back from `history.csv`: column names and values by column.
 type Columns = Vec<(String, Vec<f64>)>;
 
-fn read_history(dir: &Path) -> Result<Columns, Error> {
-    let path = dir.join("history.csv");
-    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+/// The columns of the history file `path` (`history.csv`, or its `.part` mid-run).
+fn read_history(path: &Path) -> Result<Columns, Error> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let mut lines = text.lines();
     let mut cols: Columns = lines
         .next()
@@ -25,7 +25,7 @@ fn read_history(dir: &Path) -> Result<Columns, Error> {
             // Rust writes the shortest representation that reads back to the same bits
             c.1.push(v.parse().map_err(|_| {
                 Error::bad_file(
-                    &path,
+                    path,
                     format!("line {}", i + 2),
                     format!("`{v}` is not a number"),
                 )
@@ -99,7 +99,7 @@ impl SimState {
         self.last = session.last_stats().copied().or(self.last);
         let r = session.finish()?;
         let dir = self.dir.take().expect("a session has a directory");
-        let history = read_history(&dir)?;
+        let history = read_history(&dir.join("history.csv"))?;
         if self.temporary {
             let _ = std::fs::remove_dir_all(&dir);
         } else {
@@ -228,19 +228,15 @@ impl PySimulation {
                 )?;
                 Ok((s, geometry))
             },
+            // interrupted: the abandoned work removes its own temporary directory once
+            // it ends (its writers stopped and its lock gone first)
             move |r: Result<_, Error>| {
-                // the session's writers stop and its lock goes before its directory
                 drop(r);
                 if temporary {
                     let _ = std::fs::remove_dir_all(&abandoned);
                 }
             },
-        )
-        .inspect_err(|_| {
-            if temporary {
-                let _ = std::fs::remove_dir_all(&dir);
-            }
-        })?;
+        )?;
         match opened {
             Ok((s, geometry)) => {
                 if let Some(geo) = geometry {
@@ -657,9 +653,12 @@ impl PySimulation {
         match (&mut st.session, &mut st.model) {
             (Some(session), _) => {
                 let integ = session.integrator_mut();
-                let before = integ.save();
-                let gaps = integ.state().gap.clone();
-                let mut saved = before.clone();
+                if let Some(q) = &q {
+                    let m = integ.state().gap.len();
+                    let gaps = |x: &[f64], g: &mut [f64]| integ.starting_gaps(x, g);
+                    check_gaps(gaps, m, &integ.state().q, q, &geo, &names)?;
+                }
+                let mut saved = integ.save();
                 for (name, x) in [("q", q), ("v", v)] {
                     if let Some(x) = x {
                         saved
@@ -668,21 +667,14 @@ impl PySimulation {
                     }
                 }
                 integ.restore(&saved).map_err(py_err)?;
-                if let Err(e) = check_gaps(&gaps, &integ.state().gap, &geo, &names) {
-                    integ.restore(&before).map_err(py_err)?;
-                    return Err(e);
-                }
                 // the energy the edit gave or took is no work of the run's forces
                 session.state_replaced();
             }
             (None, Some((m, _))) => {
                 if let Some(q) = q {
                     let p = &m.problem;
-                    let mut gaps = vec![0.0; p.contacts.len()];
-                    let mut after = gaps.clone();
-                    p.contacts.starting_gaps(&p.q0, &mut gaps);
-                    p.contacts.starting_gaps(&q, &mut after);
-                    check_gaps(&gaps, &after, &geo, &names)?;
+                    let gaps = |x: &[f64], g: &mut [f64]| p.contacts.starting_gaps(x, g);
+                    check_gaps(gaps, p.contacts.len(), &p.q0, &q, &geo, &names)?;
                     m.problem.q0 = q;
                 }
                 if let Some(v) = v {
@@ -791,15 +783,18 @@ impl PySimulation {
         let mut g = self.lock()?;
         let st = &mut *g;
         let so_far;
-        let h = match (&mut st.session, &st.dir, &st.history) {
-            (Some(s), Some(dir), _) => {
-                let dir = dir.clone();
+        let h = match (&mut st.session, &st.history) {
+            (Some(s), _) => {
+                // the rows so far, read from the file being written (no copy of it)
                 so_far = py
-                    .detach(|| s.sync().and_then(|_| read_history(&dir)))
+                    .detach(|| match s.history_so_far()? {
+                        Some(part) => read_history(&part),
+                        None => Ok(Vec::new()),
+                    })
                     .map_err(py_err)?;
                 &so_far
             }
-            (None, _, Some(h)) => h,
+            (None, Some(h)) => h,
             _ => return Ok(None),
         };
         Ok(Some(
@@ -810,23 +805,29 @@ impl PySimulation {
     }
 }
 
-/// Refuses a `set_state(q=…)` that puts a contact deeper inside its obstacle or the
+/// Refuses a `set_state(q=…)` from `current` to `new` that puts one of the `m` contacts
+/// (`gaps` measures them as a scene's start is checked) deeper inside its obstacle or the
 /// other body than the state it replaces does, by more than 1e-9 of the model's size
 /// (the scenes' default `overlap_tolerance`): the check a scene's own start gets (a
 /// body may not start inside another or inside an obstacle), so that an edited state
 /// cannot run on silently from an overlap.
 fn check_gaps(
-    before: &[f64],
-    after: &[f64],
+    gaps: impl Fn(&[f64], &mut [f64]),
+    m: usize,
+    current: &[f64],
+    new: &[f64],
     geo: &signorini::model::geometry::Geometry,
     names: &[String],
 ) -> PyResult<()> {
+    let (mut before, mut after) = (vec![0.0; m], vec![0.0; m]);
+    gaps(current, &mut before);
+    gaps(new, &mut after);
     let tol = 1e-9 * geo.size();
     let inside = |(a, b): (&f64, &f64)| *a < b.min(0.0) - tol;
-    let count = after.iter().zip(before).filter(|&p| inside(p)).count();
+    let count = after.iter().zip(&before).filter(|&p| inside(p)).count();
     let Some((k, depth)) = after
         .iter()
-        .zip(before)
+        .zip(&before)
         .enumerate()
         .filter(|&(_, p)| inside(p))
         .map(|(k, (a, _))| (k, -a))

@@ -614,6 +614,19 @@ def test_a_scene_from_numpy_arrays_runs_as_the_generated_one():
         signorini.Scene.from_dict(bad).simulation().step(1)
 
 
+def _cancel_in_thread(sim, work, delay=0.3):
+    """Runs `work` on a thread, calls `sim.cancel()` `delay` s later and waits (30 s at
+    most) for the thread to end; returns the monotonic time of the cancel."""
+    t = threading.Thread(target=work)
+    t.start()
+    time.sleep(delay)
+    t0 = time.monotonic()
+    sim.cancel()
+    t.join(timeout=30)
+    assert not t.is_alive()
+    return t0
+
+
 def test_cancel_stops_a_step_or_a_run_in_another_thread(tmp_path):
     """Issue 37: `cancel()` from another thread stops `step(n)` after the step it is
     taking, keeping the state (stepping goes on from it), and stops `run(out=…)` leaving
@@ -634,14 +647,9 @@ def test_cancel_stops_a_step_or_a_run_in_another_thread(tmp_path):
             except signorini.Cancelled as e:
                 caught.append(e)
 
-        t = threading.Thread(target=work)
-        t.start()
-        time.sleep(0.3)
-        t0 = time.monotonic()
-        sim.cancel()
-        t.join(timeout=30)
+        t0 = _cancel_in_thread(sim, work)
         waited = time.monotonic() - t0
-        assert not t.is_alive() and len(caught) == 1, (mode, caught)
+        assert len(caught) == 1, (mode, caught)
         assert waited < 2.0, (mode, waited)
         assert "cancelled" in str(caught[0])
         if mode == "step":
@@ -827,12 +835,7 @@ def test_cancel_stops_model_building():
         except signorini.Cancelled as e:
             caught.append((time.monotonic(), str(e)))
 
-    t = threading.Thread(target=work)
-    t.start()
-    time.sleep(0.3)
-    t0 = time.monotonic()
-    sim.cancel()
-    t.join(timeout=30)
+    t0 = _cancel_in_thread(sim, work)
     assert len(caught) == 1, caught
     assert caught[0][0] - t0 < 1.0
     assert "cancelled" in caught[0][1] and sim.steps_done == 0
@@ -903,3 +906,32 @@ def test_set_state_cannot_start_a_body_inside_an_obstacle():
         sim.set_state(q=down)
     assert np.array_equal(sim.q, q)
     sim.step(1)
+
+
+def test_set_state_cannot_push_one_body_deep_inside_another():
+    """Between bodies the starting gaps read a node's depth inside the other body even
+    far from the facet it would meet (not the contact search's cap): a striker moved 0.1 m
+    into its 0.2 m target is refused before the first step and between steps."""
+    def body(name, x0):
+        return {
+            "name": name,
+            "mesh": {"generator": "box", "cell": "hex8", "cells": [4, 2, 2],
+                     "size": [0.2, 0.05, 0.05], "origin": [x0, 0.0, 0.0]},
+            "material": {"young": 1e7, "poisson": 0.0, "density": 1000.0},
+        }
+    d = {
+        "time": {"dt": 1e-5, "t_end": 1e-4},
+        "scheme": {"kind": "moreau-jean"},
+        "bodies": [body("striker", -0.2), body("target", 0.0)],
+        "contacts": [{"body": "striker", "nodes": "x1",
+                      "target": {"body": "target", "surface": "x0"}}],
+    }
+    sim = signorini.Scene.from_dict(d).simulation()
+    m = sim.mesh
+    push = np.zeros((len(m.points), 3))
+    push[m.point_body == 0, 0] = 0.1
+    with pytest.raises(signorini.BadInput, match=r"of body striker\) would be 1\.000e-1 m inside target"):
+        sim.set_state(q=push)
+    sim.step(1)
+    with pytest.raises(signorini.BadInput, match="inside target"):
+        sim.set_state(q=sim.q + m.dofs(push))

@@ -260,6 +260,12 @@ impl Session {
         self.run.last_stats()
     }
 
+    /// The history file being written, its rows so far flushed
+    /// ([`RunInProgress::history_so_far`]).
+    pub fn history_so_far(&mut self) -> Result<Option<std::path::PathBuf>, Error> {
+        self.run.history_so_far()
+    }
+
     /// Makes the history and frames on disk whole without ending the run.
     pub fn sync(&mut self) -> Result<(), Error> {
         self.run.sync()

@@ -82,6 +82,10 @@ pub trait Integrator: Send {
     /// A one-line description of the solution path taken (factorization, Delassus
     /// data, Newton or not), for summaries.
     fn path(&self) -> String;
+    /// The gap of each contact at `q` as a scene's start is checked
+    /// ([`ContactSet::starting_gaps`]: a node far inside another body reads its depth,
+    /// not the search's cap), for a state replaced between steps. It may allocate.
+    fn starting_gaps(&self, q: &[f64], gap: &mut [f64]);
     /// The contact Jacobian `G` of the last evaluation (at the end of the last step;
     /// for nonlinear gaps, at the last Newton iterate), for the output of `G P / h`.
     fn jacobian(&self) -> &crate::contact::ContactJacobian;

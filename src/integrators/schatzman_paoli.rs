@@ -325,6 +325,9 @@ impl Integrator for SchatzmanPaoli {
     fn jacobian(&self) -> &crate::contact::ContactJacobian {
         &self.del.jac
     }
+    fn starting_gaps(&self, q: &[f64], gap: &mut [f64]) {
+        self.contacts.starting_gaps(q, gap)
+    }
     fn path(&self) -> String {
         format!(
             "M + h²θK + (hθ/2)C factored once ({}, n = {}); {} contact(s), {}; {}",

@@ -202,7 +202,8 @@ pub fn prepare_run_dir(dir: &Path) -> Result<(), Error> {
     Ok(())
 }
 
-pub(super) fn part_path(path: &Path) -> PathBuf {
+/// The name a file has while it is written: `path` with `.part` appended.
+pub fn part_path(path: &Path) -> PathBuf {
     let mut s = path.as_os_str().to_owned();
     s.push(".part");
     PathBuf::from(s)

@@ -412,6 +412,19 @@ impl RunInProgress {
         self.last.as_ref()
     }
 
+    /// The history file as it is being written (`history.csv.part`), every queued row
+    /// written and flushed: the rows so far, to read without ending the run (`None`
+    /// for a run that writes no files).
+    pub fn history_so_far(&mut self) -> Result<Option<std::path::PathBuf>, Error> {
+        match (self.obs.writers.history.as_mut(), &self.history_path) {
+            (Some(w), Some(path)) => {
+                w.sync()?;
+                Ok(Some(crate::io::part_path(path)))
+            }
+            _ => Ok(None),
+        }
+    }
+
     /// Makes the history and the frames on disk whole (every queued row and frame
     /// written and flushed, `history.csv` holding the rows so far, the `.pvd` listing
     /// the frames) without ending the run.

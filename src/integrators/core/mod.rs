@@ -166,6 +166,9 @@ macro_rules! delegate_to_core {
         fn jacobian(&self) -> &$crate::contact::ContactJacobian {
             &self.core.del.jac
         }
+        fn starting_gaps(&self, q: &[f64], gap: &mut [f64]) {
+            self.core.contacts.starting_gaps(q, gap)
+        }
         fn save(&self) -> $crate::integrators::saved::IntegratorState {
             self.core.state.save(self.name())
         }
