@@ -109,7 +109,7 @@ impl Session {
         let mut integ = model.into_integrator(&scene.scheme, scene.dt)?;
         let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
         let parameters = serde_json::to_value(scene).expect("scene serializes");
-        let checks = RunChecks::new(&scene.scheme, geometry.size());
+        let checks = RunChecks::for_geometry(&scene.scheme, &geometry);
         let ckpt =
             (resume.is_some() || out.is_some_and(|o| o.options.checkpoint_every > 0)).then(|| {
                 Checkpointing {
@@ -182,7 +182,7 @@ impl Session {
         let mut integ = model.into_integrator(&scene.scheme, scene.time.dt)?;
         let setup = [(t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()];
         let parameters = serde_json::to_value(scene).expect("scene serializes");
-        let checks = RunChecks::new(&scene.scheme, geometry.size());
+        let checks = RunChecks::for_geometry(&scene.scheme, &geometry);
         // what a checkpoint rebuilds from: only formed when the run writes checkpoints
         let ckpt = match resume {
             Some(c) => Some(Checkpointing {

@@ -23,8 +23,76 @@
 //! Algorithms 1 and 2 and the tolerances move: [`EnergyAudit::excess`] measures it
 //! against the run's energy scale. Written here because the balance is the scheme's own,
 //! not a library's.
+//!
+//! The scale is the largest of what the run met (`|E|`, the kinetic energy, `Σ|ΔW|`) and a
+//! floor from the scene's own magnitudes ([`EnergyFloor`]): a body that holds nothing
+//! but round-off (clamped, resting under gravity, displaced rigidly) would otherwise
+//! measure its round-off against itself and "gain 100 % of its energy". The floor is the
+//! largest of
+//!
+//! - the work the constant forces (gravity) do over the model's size `L` (the diagonal of
+//!   its bounding box): `L Σ|f_i|`, that is `m g L` for a body under gravity;
+//! - the work each time-dependent load does over `L` at its largest factor:
+//!   `L Σ_l max|φ_l| Σ|b_l|`;
+//! - the elastic energy of the model at a uniform strain of the Newton tolerance `ε`:
+//!   `½ m c² ε²` with `m` the mass of the kept dofs and `c² = E/ρ` the largest of its
+//!   bodies' (`½ E V ε²` for one body).
+//!
+//! The first two are what the scene can supply and hold at any moment, so an energy that
+//! grows by a fraction of them is no round-off; the third is the energy of a strain the
+//! Newton loop does not resolve.
 
 use super::LinearSystem;
+
+/// The scene's magnitudes the energy scale's floor is made of (module doc).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EnergyFloor {
+    /// The model's size `L` (m): the diagonal of its bounding box (0 without geometry).
+    pub size: f64,
+    /// The largest `c² = E/ρ` of the model's bodies (m²/s²; 0 without bodies).
+    pub wave_speed_sq: f64,
+    /// The strain the Newton loop does not resolve (its relative tolerance).
+    pub strain: f64,
+}
+
+impl EnergyFloor {
+    /// The floor (J) on `sys` (module doc): the largest of `L Σ|f|`, `L Σ max|φ| Σ|b|`
+    /// and `½ m c² ε²`; non-finite or negative terms count as 0.
+    pub fn joules(&self, sys: &LinearSystem) -> f64 {
+        let l = if self.size.is_finite() {
+            self.size.max(0.0)
+        } else {
+            0.0
+        };
+        let mut constant: f64 = sys.force.iter().map(|f| f.abs()).sum();
+        if let Some(p) = &sys.prescribed {
+            constant += p.force.iter().map(|f| f.abs()).sum::<f64>();
+        }
+        let loads: f64 = sys
+            .loads
+            .iter()
+            .map(|ld| ld.time.max_abs() * ld.values.iter().map(|b| b.abs()).sum::<f64>())
+            .sum();
+        // the mass of the kept dofs: `1ᵀ M 1` over one displacement component
+        let m_ref = sys.mass.as_ref();
+        let mut mass = 0.0;
+        for j in 0..m_ref.ncols() {
+            if sys.component.get(j).copied().unwrap_or(0) != 0 {
+                continue;
+            }
+            for k in m_ref.col_ptr()[j]..m_ref.col_ptr()[j + 1] {
+                if sys.component.get(m_ref.row_idx()[k]).copied().unwrap_or(0) == 0 {
+                    mass += m_ref.val()[k];
+                }
+            }
+        }
+        let elastic = 0.5 * mass * self.wave_speed_sq * self.strain * self.strain;
+        [l * constant, l * loads, elastic]
+            .into_iter()
+            .filter(|x| x.is_finite() && *x > 0.0)
+            .fold(0.0, f64::max)
+    }
+}
 
 /// What [`EnergyAudit::excess`] measured.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,6 +122,8 @@ pub struct EnergyAudit {
     work_abs: f64,
     /// Largest `|E|` and kinetic energy met at the checks (J).
     e_max: f64,
+    /// The scale's floor from the scene's magnitudes ([`EnergyFloor`], J).
+    floor: f64,
     /// `q` at the last step, kept only on the dofs loaded or coupled to prescribed ones.
     q_prev: Vec<f64>,
     /// Those dofs.
@@ -65,8 +135,9 @@ pub struct EnergyAudit {
 }
 
 impl EnergyAudit {
-    /// Starts the balance at `(t, q, v)`.
-    pub fn new(sys: &LinearSystem, t: f64, q: &[f64], v: &[f64]) -> Self {
+    /// Starts the balance at `(t, q, v)`, its scale floored at `floor`
+    /// ([`EnergyFloor::joules`]).
+    pub fn new(sys: &LinearSystem, t: f64, q: &[f64], v: &[f64], floor: f64) -> Self {
         let n = sys.ndof();
         let mut touched = vec![false; n];
         for l in &sys.loads {
@@ -103,12 +174,22 @@ impl EnergyAudit {
             work: 0.0,
             work_abs: 0.0,
             e_max: e0.abs(),
+            floor: if floor.is_finite() {
+                floor.max(0.0)
+            } else {
+                0.0
+            },
             q_prev,
             rows,
             vp_a: vec![0.0; np],
             vp_b: vec![0.0; np],
             scratch,
         }
+    }
+
+    /// The scale's floor (J).
+    pub fn floor(&self) -> f64 {
+        self.floor
     }
 
     /// The energy at the start (J).
@@ -173,7 +254,7 @@ impl EnergyAudit {
     }
 
     /// `E − E₀ − W` at `(t, q, v)` (the end of the last [`EnergyAudit::advance`])
-    /// relative to the run's energy scale `max(|E| met, kinetic energy met, Σ|ΔW|)`;
+    /// relative to the run's energy scale `max(|E| met, kinetic energy met, Σ|ΔW|, floor)`;
     /// positive: energy appeared that nothing supplied. Also returns the absolute excess
     /// (J), the kinetic and the potential energy. Allocates nothing.
     pub fn excess(&mut self, sys: &LinearSystem, t: f64, q: &[f64], v: &[f64]) -> Excess {
@@ -185,6 +266,7 @@ impl EnergyAudit {
         let scale = self
             .e_max
             .max(self.work_abs + (self.extra - self.extra0).abs())
+            .max(self.floor)
             .max(f64::MIN_POSITIVE);
         let excess = e - self.e0 - self.work();
         Excess {

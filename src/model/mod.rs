@@ -265,6 +265,12 @@ impl TimeFunction {
         anti(t) - anti(0.0)
     }
 
+    /// The largest `|φ(t)|` over all `t` (a piecewise-linear function held constant
+    /// beyond its points reaches it at a point).
+    pub fn max_abs(&self) -> f64 {
+        self.points.iter().map(|p| p.1.abs()).fold(0.0, f64::max)
+    }
+
     /// The value at `t`.
     pub fn eval(&self, t: f64) -> f64 {
         let p = &self.points;

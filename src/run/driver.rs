@@ -59,6 +59,9 @@ pub struct RunChecks {
     pub max_energy_excess: Option<f64>,
     /// `scheme.energy_momentum` (the default limit of large-deformation bodies).
     pub energy_momentum: bool,
+    /// The scene's magnitudes that floor the energy check's scale
+    /// ([`crate::model::energy::EnergyFloor`]).
+    pub energy_floor: crate::model::energy::EnergyFloor,
 }
 
 /// How each command spells `scheme.allow_caps = true`, for the messages.
@@ -94,7 +97,28 @@ impl RunChecks {
             friction_solver: params.friction.solver,
             max_energy_excess: params.max_energy_excess,
             energy_momentum: params.energy_momentum,
+            energy_floor: crate::model::energy::EnergyFloor {
+                size: if size.is_finite() { size.max(0.0) } else { 0.0 },
+                wave_speed_sq: 0.0,
+                strain: params.newton.tol,
+            },
         }
+    }
+
+    /// [`RunChecks::new`] on a model with this geometry: its size, and the largest wave
+    /// speed `E/ρ` of its bodies for the energy floor.
+    pub fn for_geometry(
+        params: &crate::integrators::SchemeParams,
+        geometry: &crate::model::geometry::Geometry,
+    ) -> Self {
+        let mut c = Self::new(params, geometry.size());
+        c.energy_floor.wave_speed_sq = geometry
+            .bodies
+            .iter()
+            .map(|(m, _)| m.young / m.density)
+            .filter(|c2| c2.is_finite())
+            .fold(0.0, f64::max);
+        c
     }
 
     /// Checks the state after a step; the error names the step, time and contact.

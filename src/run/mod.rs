@@ -335,6 +335,7 @@ impl RunInProgress {
                             s.time,
                             &s.q,
                             &s.v,
+                            checks.energy_floor.joules(integ.system()),
                         ),
                         theta,
                         max: checks.energy_excess_limit(
@@ -459,7 +460,9 @@ impl RunInProgress {
     pub fn state_replaced(&mut self, integ: &dyn Integrator) {
         if let Some(e) = self.obs.energy.as_mut() {
             let s = integ.state();
-            e.audit = crate::model::energy::EnergyAudit::new(integ.system(), s.time, &s.q, &s.v);
+            let floor = e.audit.floor();
+            e.audit =
+                crate::model::energy::EnergyAudit::new(integ.system(), s.time, &s.q, &s.v, floor);
         }
     }
 
@@ -500,6 +503,7 @@ impl RunInProgress {
         let energy_balance = energy.map(|e| EnergyBalance {
             supplied_work: e.audit.work(),
             excess_max: acc.energy_excess,
+            scale_floor: e.audit.floor(),
         });
         output_seconds += writers.seconds;
         let history_thread = matches!(writers.history, Some(history_thread::History::Thread(_)));

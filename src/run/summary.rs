@@ -129,6 +129,9 @@ pub struct EnergyBalance {
     /// Largest `(E − E₀ − W) / scale` met at the checks (0 when it never was positive); above
     /// `scheme.max_energy_excess` the run fails.
     pub excess_max: f64,
+    /// The floor of the energy scale from the scene's own magnitudes (J;
+    /// [`crate::model::energy::EnergyFloor`]).
+    pub scale_floor: f64,
 }
 
 /// One body's measures at the start and the end of a run (`summary.json`'s `bodies`).
