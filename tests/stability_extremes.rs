@@ -109,3 +109,40 @@ fn scene_extremes_verdicts_name_what_failed() {
     assert_eq!(c.verdict, Verdict::NotApplicable, "{c:?}");
     assert!(c.detail.contains("friction"), "{}", c.detail);
 }
+
+/// Issue 48: `study extremes` on the paper's examples reported the `h×1` cell's numbers
+/// under the labels `e=0`, `e=1`, `E×1e-3` and `E×1e3`, which it never applied. Now the
+/// restitution is the example's own key, the oscillator's spring stiffness is its
+/// modulus, and the rigid examples' `E×` cells are `not applicable` with the reason. The
+/// bouncing ball at e = 1 (Ballard's f = −2, q0 = 1) keeps bouncing: after `t_end = 5 s`
+/// it is in flight, never at the rest at q = 0 that e = ½ reaches at t = 3 (closed form).
+#[test]
+fn scene_extremes_apply_every_cell_they_report_on_the_examples() {
+    use signorini::scene::example::ExampleSpec;
+    use signorini::scene::file::Scene;
+    use signorini::study::extremes::{Extreme, Verdict, run_cell};
+    let ball = Scene::from_file(&scene_path("bouncing_ball.toml")).unwrap();
+    let elastic = Extreme::Restitution(1.0).apply(&ball).unwrap();
+    match elastic.example {
+        Some(ExampleSpec::BouncingBall { restitution, .. }) => assert_eq!(restitution, 1.0),
+        ref e => panic!("{e:?}"),
+    }
+    let r = signorini::app::run_scene(&elastic, None, &mut Quiet).unwrap();
+    let q_end = r.state.q[0];
+    assert!(q_end > 1e-3, "e = 1 came to rest: q = {q_end}");
+    let c = run_cell(
+        &ball,
+        Extreme::Stiffness(1e3),
+        SchemeKind::CombinedProjection,
+    );
+    assert_eq!(c.verdict, Verdict::NotApplicable, "{c:?}");
+    assert!(c.detail.contains("rigid"), "{}", c.detail);
+    let osc = Scene::from_file(&scene_path("oscillator.toml")).unwrap();
+    match Extreme::Stiffness(1e3).apply(&osc).unwrap().example {
+        Some(ExampleSpec::Oscillator { stiffness, .. }) => {
+            let k = 4.0 * std::f64::consts::PI * std::f64::consts::PI * 1e3;
+            assert!((stiffness - k).abs() <= 1e-12 * k, "{stiffness}");
+        }
+        ref e => panic!("{e:?}"),
+    }
+}

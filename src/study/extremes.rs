@@ -14,7 +14,9 @@
 //! - `failure`: any other failed run (non-finite state, a penetration past the model's
 //!   size, a solver error), with its message;
 //! - `not applicable`: the scheme refuses the scene (Schatzman–Paoli and the
-//!   position-level trapezoid take no friction nor prescribed velocities), with why;
+//!   position-level trapezoid take no friction nor prescribed velocities), or the extreme
+//!   has nothing to change in it (no contact for `e`, rigid bodies for `E`:
+//!   [`Extreme::apply`]), with why;
 //! - `beyond the model`: a cell inverted (`det F ≤ 0`) and the same run at a quarter of
 //!   the step inverts at the same time (within two of its steps or 5 %): the body is
 //!   crushed flat by the load, which no step size cures (the soft ball of
@@ -80,16 +82,41 @@ impl Extreme {
         }
     }
 
-    /// `base` with this extreme applied.
-    pub fn apply(self, base: &Scene) -> Scene {
+    /// `base` with this extreme applied, or why it does not apply to `base` (a scene
+    /// with no contact has no restitution to set; rigid bodies have no modulus): such a
+    /// cell is reported `not applicable` with the reason, never run unchanged under the
+    /// extreme's label. The paper's examples take their own keys: every example's
+    /// `restitution`, and the oscillator's spring `stiffness` for `E×f`.
+    pub fn apply(self, base: &Scene) -> Result<Scene, String> {
+        use crate::scene::example::ExampleSpec;
         let mut s = base.clone();
         match self {
             Extreme::Step(f) => s.time.dt *= f,
-            Extreme::Restitution(e) => s.contacts.iter_mut().for_each(|c| c.restitution = e),
             Extreme::Theta(t) => s.scheme.theta = t,
-            Extreme::Stiffness(f) => s.bodies.iter_mut().for_each(|b| b.material.young *= f),
+            Extreme::Restitution(e) => match s.example.as_mut() {
+                Some(
+                    ExampleSpec::BouncingBall { restitution, .. }
+                    | ExampleSpec::Oscillator { restitution, .. }
+                    | ExampleSpec::RockingBlock { restitution, .. }
+                    | ExampleSpec::SliderCrank { restitution, .. },
+                ) => *restitution = e,
+                None if s.contacts.is_empty() => {
+                    return Err("the scene has no contact: no restitution to set".into());
+                }
+                None => s.contacts.iter_mut().for_each(|c| c.restitution = e),
+            },
+            Extreme::Stiffness(f) => match s.example.as_mut() {
+                Some(ExampleSpec::Oscillator { stiffness, .. }) => *stiffness *= f,
+                Some(_) => {
+                    return Err("the example's bodies are rigid: no modulus to scale".into());
+                }
+                None if s.bodies.is_empty() => {
+                    return Err("the scene has no deformable body: no modulus to scale".into());
+                }
+                None => s.bodies.iter_mut().for_each(|b| b.material.young *= f),
+            },
         }
-        s
+        Ok(s)
     }
 }
 
@@ -150,22 +177,30 @@ pub struct Outcome {
 
 /// Runs one cell.
 pub fn run_cell(base: &Scene, extreme: Extreme, scheme: SchemeKind) -> Outcome {
-    let mut s = extreme.apply(base);
-    s.scheme.kind = scheme;
-    let t0 = Instant::now();
-    let r = run_scene(&s, None, &mut Quiet);
-    let seconds = t0.elapsed().as_secs_f64();
     let mut o = Outcome {
         extreme,
         scheme,
-        dt: s.time.dt,
+        dt: base.time.dt,
         verdict: Verdict::Stable,
         excess: f64::NAN,
         violation: f64::NAN,
         newton: f64::NAN,
-        seconds,
+        seconds: 0.0,
         detail: String::new(),
     };
+    let mut s = match extreme.apply(base) {
+        Ok(s) => s,
+        Err(why) => {
+            o.verdict = Verdict::NotApplicable;
+            o.detail = why;
+            return o;
+        }
+    };
+    s.scheme.kind = scheme;
+    o.dt = s.time.dt;
+    let t0 = Instant::now();
+    let r = run_scene(&s, None, &mut Quiet);
+    o.seconds = t0.elapsed().as_secs_f64();
     match r {
         Ok(r) => {
             let sm = &r.summary;
