@@ -132,7 +132,7 @@ impl Session {
             parameters,
             out.map(|o| (o, geometry)),
             ckpt,
-            probes::ProbeSet::default(),
+            crate::run::Monitors::default(),
         )?;
         Ok(Session {
             integ,
@@ -167,6 +167,9 @@ impl Session {
         let probes = probes::ProbeSet::new(&model.probes, &model.geometry);
         let bodies = BodyRecord::start(scene, &model);
         let geometry = std::mem::take(&mut model.geometry);
+        let names: Vec<String> = scene.bodies.iter().map(|b| b.name.clone()).collect();
+        let rotations =
+            crate::run::rotations::RotationCheck::new(&geometry, &names, scene.scheme.max_rotation);
         // the run's memory ledger, checked before anything is factored
         let mut plan = model.plan(&scene.scheme, scene.time.dt)?;
         let (m, rows) = (model.problem.contacts.len(), model.problem.contacts.rows());
@@ -219,7 +222,7 @@ impl Session {
             parameters,
             out.map(|o| (o, geometry)),
             ckpt,
-            probes,
+            crate::run::Monitors { probes, rotations },
         )?;
         Ok(Session {
             integ,

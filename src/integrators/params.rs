@@ -268,7 +268,18 @@ pub struct SchemeParams {
     /// energy error is bounded, second order). Linear bodies need nothing: θ = 1/2
     /// conserves their quadratic energy already.
     pub energy_momentum: bool,
+    /// Largest rotation (rad) a cell of a body with the linear law may take before the
+    /// run stops as failed (exit code 1; a starting state past it is refused): the small
+    /// strain is not invariant under rotation, a rigid turn of φ strains the body by
+    /// `1 − cos φ` (`run::rotations`). Default [`DEFAULT_MAX_ROTATION`] (0.05 rad, 2.9°:
+    /// a spurious strain of 1.25e-3); `inf` turns the check off. Bodies with a
+    /// large-deformation or the corotational law are not measured.
+    pub max_rotation: f64,
 }
+
+/// The rotation check's default limit ([`SchemeParams::max_rotation`]): 0.05 rad, where
+/// the linear law's spurious strain `1 − cos φ` reaches 1.25e-3.
+pub const DEFAULT_MAX_ROTATION: f64 = 0.05;
 
 impl Default for SchemeParams {
     fn default() -> Self {
@@ -292,6 +303,7 @@ impl Default for SchemeParams {
             allow_caps: false,
             max_energy_excess: None,
             energy_momentum: false,
+            max_rotation: DEFAULT_MAX_ROTATION,
         }
     }
 }
@@ -371,6 +383,13 @@ impl SchemeParams {
                 "max_energy_excess",
                 crate::error::num(x),
                 "must be a number ≥ 0 (inf accepts any growth)",
+            ));
+        }
+        if self.max_rotation.is_nan() || self.max_rotation <= 0.0 {
+            return Err(Error::invalid(
+                "max_rotation",
+                crate::error::num(self.max_rotation),
+                "must be an angle > 0 in radians (inf: no rotation check)",
             ));
         }
         if self.newton.max_iterations == 0 {

@@ -19,13 +19,14 @@ pub mod driver;
 pub mod history_thread;
 mod observers;
 pub mod probes;
+pub mod rotations;
 pub mod summary;
 
 pub use driver::{Observer, Progress, Quiet, RunChecks, drive, drive_to};
 pub use observers::{ENERGY_CHECK_STRIDE, FORCE_TRACE_MAX_STEPS};
 pub use summary::{
-    ContactSummary, EnergyBalance, FrictionSummary, Iterations, MeanMax, NewtonLoops, RunResult,
-    Summary, forecast_name, write_summary,
+    ContactSummary, EnergyBalance, FrictionSummary, Iterations, MeanMax, NewtonLoops,
+    RotationSummary, RunResult, Summary, forecast_name, write_summary,
 };
 
 use observers::{Acc, CheckpointPlan, ContactTracker, EnergyCheck, RunObserver, Writers};
@@ -97,12 +98,22 @@ pub fn run(
         out,
         progress,
         None,
-        probes::ProbeSet::default(),
+        Monitors::default(),
     )
 }
 
+/// What a run measures beside its steps: the displacement probes (a scene's
+/// `[[probes]]`) and the rotation check of its linear bodies ([`rotations`]).
+#[derive(Clone, Debug, Default)]
+pub struct Monitors {
+    /// The probes.
+    pub probes: probes::ProbeSet,
+    /// The rotation check (`None`: no linear solid or plane body, or `max_rotation = inf`).
+    pub rotations: Option<rotations::RotationCheck>,
+}
+
 /// [`run`], writing checkpoints when `out.options.checkpoint_every > 0` (then `ckpt`
-/// says what to rebuild), or resuming from `ckpt.resume`, and reading `probes`:
+/// says what to rebuild), or resuming from `ckpt.resume`, and reading `monitors`:
 /// [`RunInProgress::start`], one [`RunInProgress::advance`] to the last step and
 /// [`RunInProgress::finish`]. Asked to stop, it leaves the history and frames readable.
 #[allow(clippy::too_many_arguments)]
@@ -117,10 +128,10 @@ pub fn run_checkpointed(
     out: Option<(Output, Geometry)>,
     progress: &mut dyn Progress,
     ckpt: Option<Checkpointing>,
-    probes: probes::ProbeSet,
+    monitors: Monitors,
 ) -> Result<RunResult, Error> {
     let mut run = RunInProgress::start(
-        integ, steps, elements, theta, checks, reference, parameters, out, ckpt, probes,
+        integ, steps, elements, theta, checks, reference, parameters, out, ckpt, monitors,
     )?;
     progress.start(steps);
     if let Err(e) = run.advance(integ, steps, checks, progress) {
@@ -173,8 +184,12 @@ impl RunInProgress {
         parameters: serde_json::Value,
         out: Option<(Output, Geometry)>,
         ckpt: Option<Checkpointing>,
-        mut probes: probes::ProbeSet,
+        monitors: Monitors,
     ) -> Result<RunInProgress, Error> {
+        let Monitors {
+            mut probes,
+            rotations,
+        } = monitors;
         let h = integ.dt();
         let m = integ.state().gap.len();
         let resume = ckpt.as_ref().and_then(|c| c.resume);
@@ -187,6 +202,11 @@ impl RunInProgress {
                 ));
             }
             integ.restore(&c.integrator)?;
+        }
+        // a starting state that turns a linear body is refused before any file is made
+        if let (Some(r), None) = (&rotations, resume) {
+            let s = integ.state();
+            r.check_start(s.time, &s.q)?;
         }
         let t0 = Instant::now();
         let mut writers = Writers {
@@ -323,6 +343,8 @@ impl RunInProgress {
             h,
             plan,
             probes: probes::ProbeSet::default(),
+            rotations,
+            last_rotation: None,
             // Schatzman–Paoli's velocity is a central difference: its discrete energy is
             // not the θ-method's, whose balance the check reads
             energy: crate::integrators::SchemeKind::parse(integ.name())
@@ -498,8 +520,23 @@ impl RunInProgress {
             plan,
             energy,
             probes,
+            rotations,
+            last_rotation,
             ..
         } = obs;
+        let rotation = rotations.as_ref().map(|r| {
+            let w = last_rotation.unwrap_or(rotations::Turned {
+                body: 0,
+                cell: 0,
+                angle: 0.0,
+            });
+            RotationSummary {
+                limit: r.limit(),
+                final_largest: w.angle,
+                body: w.body,
+                cell: w.cell,
+            }
+        });
         let energy_balance = energy.map(|e| EnergyBalance {
             supplied_work: e.audit.work(),
             excess_max: acc.energy_excess,
@@ -574,6 +611,7 @@ impl RunInProgress {
             max_lcp_residual: acc.lcp_res,
             energy: [energy0, energy1],
             energy_balance,
+            rotation,
             probes: probes.summaries(reference.as_ref()),
             // set by the application, which knows the bodies
             bodies: Vec::new(),

@@ -238,6 +238,10 @@ pub(super) struct RunObserver {
     pub(super) plan: Option<CheckpointPlan>,
     pub(super) energy: Option<EnergyCheck>,
     pub(super) probes: super::probes::ProbeSet,
+    /// The rotation check of linear bodies, at the energy check's stride.
+    pub(super) rotations: Option<super::rotations::RotationCheck>,
+    /// The cell that turned most at the last check.
+    pub(super) last_rotation: Option<super::rotations::Turned>,
 }
 
 /// Steps between two checks of the energy balance (each costs the two quadratic forms
@@ -305,6 +309,11 @@ impl Observer for RunObserver {
             e.observe(integ, last, &mut self.acc.energy_excess)?;
         }
         let s = integ.state();
+        if let Some(r) = self.rotations.as_ref()
+            && (last || s.step.is_multiple_of(ENERGY_CHECK_STRIDE))
+        {
+            self.last_rotation = r.check(s.step, s.time, &s.q)?;
+        }
         let f = s.impulse.iter().sum::<f64>() / self.h;
         let g = s.gap.iter().copied().fold(f64::INFINITY, f64::min);
         self.tracker.push(s.step - 1, f, g);

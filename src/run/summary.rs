@@ -134,6 +134,19 @@ pub struct EnergyBalance {
     pub scale_floor: f64,
 }
 
+/// The rotation check's figures ([`Summary::rotation`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct RotationSummary {
+    /// `scheme.max_rotation` (rad).
+    pub limit: f64,
+    /// The largest rotation of a linear body's cell at the last step (rad).
+    pub final_largest: f64,
+    /// Its body and cell (index within the body).
+    pub body: usize,
+    /// The cell.
+    pub cell: usize,
+}
+
 /// One body's measures at the start and the end of a run (`summary.json`'s `bodies`).
 #[derive(Clone, Debug, Serialize)]
 pub struct BodySummary {
@@ -214,6 +227,10 @@ pub struct Summary {
     /// motion, and the largest excess met relative to the run's energy scale (`None` for
     /// Schatzman–Paoli, whose discrete energy is not the θ-method's).
     pub energy_balance: Option<EnergyBalance>,
+    /// The rotation check of linear bodies (`run::rotations`; absent where no body is
+    /// measured): its limit and the largest cell rotation at the end of the run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rotation: Option<RotationSummary>,
     /// Whether the history rows were formed on a thread of their own
     /// (`run::history_thread`: from 4096 dofs on more than one core).
     pub history_thread: bool,

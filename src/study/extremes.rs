@@ -22,7 +22,9 @@
 //!   crushed flat by the load, which no step size cures (the soft ball of
 //!   `ball_crush.toml` at E × 1e-3 hits the floor at 11 times its wave speed; cell 719
 //!   inverts at t = 0.0130 s at h and 0.0129 s at h/4). An inversion that moves with
-//!   the step stays a `failure`.
+//!   the step stays a `failure`. A linear body that turns past `scheme.max_rotation`
+//!   (`run::rotations`) is `beyond the model` too: the linear law's range, not the
+//!   scheme's.
 //!
 //! It writes `extremes.csv` (one row per cell), `extremes-energy.png/.svg` (the energy
 //! excess against the step factor, one curve per scheme) and returns one verdict line per
@@ -222,6 +224,10 @@ pub fn run_cell(base: &Scene, extreme: Extreme, scheme: SchemeKind) -> Outcome {
                 Verdict::EnergyGain
             } else if msg.contains("at its cap") || msg.contains("stopped at its cap") {
                 Verdict::Cap
+            } else if msg.contains("scheme.max_rotation") {
+                // a linear body turned past its law's range (`run::rotations`)
+                o.detail = "the linear law turned past its rotation range; ".into();
+                Verdict::BeyondModel
             } else if let Some(t) = inversion_time(&e) {
                 // the same run at a quarter of the step: an inversion that stays put is
                 // the load's, one that moves (or goes) is the step's

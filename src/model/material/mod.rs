@@ -18,14 +18,16 @@
 
 use nalgebra::{Matrix3, SMatrix};
 
+mod corotational;
 mod neo_hookean;
 mod svk;
 
+pub use corotational::Corotational;
 pub use neo_hookean::NeoHookean;
 pub use svk::Svk;
 
 /// Every hyperelastic law a scene can name, by [`HyperelasticLaw::name`].
-pub static LAWS: &[&dyn HyperelasticLaw] = &[&Svk, &NeoHookean];
+pub static LAWS: &[&dyn HyperelasticLaw] = &[&Svk, &NeoHookean, &Corotational];
 
 /// Stress and tangent at one point: `S` (Voigt) and `ℂ` (6 × 6).
 pub type StressTangent = (SMatrix<f64, 6, 1>, SMatrix<f64, 6, 6>);
@@ -271,7 +273,7 @@ mod tests {
     #[test]
     fn registry_names_round_trip_and_unknown_names_are_listed() {
         let names = model_names();
-        assert_eq!(names, ["linear", "svk", "neo-hookean"]);
+        assert_eq!(names, ["linear", "svk", "neo-hookean", "corotational"]);
         for (i, a) in names.iter().enumerate() {
             assert!(!names[i + 1..].contains(a), "{a} registered twice");
             let m = MaterialModel::named(a).unwrap();
