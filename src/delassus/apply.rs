@@ -14,6 +14,9 @@ impl Delassus {
             Op::W => self.w[self.slot[b] * m + a],
             Op::Wd => self.wd[self.slot[b] * m + a],
             Op::Wn => match self.metric {
+                // the kinetic metric's W_N is formed before the position problem
+                // (`prepare_position_metric`)
+                Metric::Mass if let Some(k) = &self.kinetic => k.wn[b * m + a],
                 Metric::Mass => self.w[self.slot[b] * m + a],
                 Metric::Euclidean if self.dense => self.wn[b * m + a],
                 Metric::Euclidean => self.jac.col_dot_col(a, b),
@@ -31,6 +34,9 @@ impl Delassus {
         out: &mut [f64],
         stiffness: &SparseMatrix,
     ) {
+        if op == Op::Wn && self.metric == Metric::Mass && self.kinetic_mul_add(s, x, out) {
+            return;
+        }
         if !self.has_support(x) {
             self.product(op, s, x, out, stiffness);
             return;
@@ -50,7 +56,10 @@ impl Delassus {
         out: &mut [f64],
         stiffness: &SparseMatrix,
     ) {
-        if x.iter().all(|&v| v == 0.0) || self.product_by_flexibility(op, s, x, out) {
+        if x.iter().all(|&v| v == 0.0)
+            || (op == Op::Wn && self.metric == Metric::Mass && self.kinetic_mul_add(s, x, out))
+            || self.product_by_flexibility(op, s, x, out)
+        {
             return;
         }
         self.products += 1;
@@ -158,7 +167,7 @@ impl Delassus {
         }
         // blk columns: [G τ_used, G τ] (M̂⁻¹ metric: then solved)
         self.ng_ready = false;
-        if self.metric == Metric::Mass && (feedback || any_tau) {
+        if self.metric == Metric::Mass && (feedback || (any_tau && self.kinetic.is_none())) {
             let blk = &mut self.blk[..2 * n];
             blk.iter_mut().for_each(|x| *x = 0.0);
             let (c0, c1) = blk.split_at_mut(n);
@@ -199,6 +208,9 @@ impl Delassus {
 
     /// `q += N G τ` with the `τ` given to the last [`Delassus::add_velocity_correction`].
     pub fn add_position_correction(&mut self, tau: &[f64], q: &mut [f64]) {
+        if self.metric == Metric::Mass && self.add_kinetic_ng(1.0, tau, q) {
+            return;
+        }
         if self.metric == Metric::Mass && self.corrects_by_solves() {
             if self.ng_ready {
                 let n = self.n;
@@ -209,7 +221,7 @@ impl Delassus {
         self.add_ng(1.0, tau, q);
     }
 
-    /// `y += s · N G x` (`N = I` or `Â⁻¹`).
+    /// `y += s · N G x` (`N = I`, `Â⁻¹`, or `M⁻¹` with the kinetic metric).
     pub fn add_ng(&mut self, s: f64, x: &[f64], y: &mut [f64]) {
         match self.metric {
             Metric::Euclidean => {
@@ -219,7 +231,11 @@ impl Delassus {
                     }
                 }
             }
-            Metric::Mass => self.add_inverse_g(s, x, y),
+            Metric::Mass => {
+                if !self.add_kinetic_ng(s, x, y) {
+                    self.add_inverse_g(s, x, y)
+                }
+            }
         }
     }
 

@@ -8,6 +8,7 @@ impl Delassus {
     /// `G` changed (or at start): the dense path recomputes every column now, the
     /// per-active-column path forgets its columns and recomputes them on demand.
     pub fn refresh(&mut self, stiffness: &SparseMatrix) {
+        self.kinetic_moved();
         self.slot.iter_mut().for_each(|s| *s = NONE);
         self.owner.iter_mut().for_each(|s| *s = NONE);
         self.used = 0;

@@ -81,6 +81,7 @@ use faer::sparse::SparseColMatRef;
 
 mod apply;
 mod condense;
+mod kinetic;
 mod policy;
 mod pool;
 mod products;
@@ -275,6 +276,9 @@ pub struct Delassus {
     /// [`DelassusKind::Flexibility`] the zone may switch a per-active-column choice to
     /// the dense one).
     kind: DelassusKind,
+    /// The kinetic metric `N = M⁻¹` of a large-deformation structure's projection
+    /// ([`Delassus::use_kinetic_metric`]).
+    kinetic: Option<kinetic::Kinetic>,
 }
 
 impl Delassus {
@@ -370,6 +374,7 @@ impl Delassus {
             zone_by_tangent: false,
             pflex: None,
             kind,
+            kinetic: None,
         })
     }
 

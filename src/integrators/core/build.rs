@@ -201,6 +201,13 @@ impl ThetaCore {
             // a nonlinear structure condenses with each step's first iteration matrix,
             // and carries the projection's feedback in F: W_D is never read
             core.del.without_wd();
+            // with a constant M, positions are projected in the kinetic metric N = M⁻¹
+            // (`delassus::kinetic`): M̂ⁿ⁻¹ would move nodes along a frictionless plane
+            if with_projection
+                && core.sys.linearity() == crate::model::system::Linearity::ConstantMass
+            {
+                core.del.use_kinetic_metric(&core.sys.mass)?;
+            }
         }
         core.del.jac.transpose_mul(&core.state.v, &mut core.u_rows);
         core.scatter_local_velocity();
@@ -238,7 +245,14 @@ impl ThetaCore {
             },
             self.del.describe(),
             if self.with_projection {
-                format!("; projection metric {}", self.del.metric().name())
+                format!(
+                    "; projection metric {}",
+                    if self.del.kinetic() {
+                        "mass (kinetic: N = M⁻¹, M factored once)"
+                    } else {
+                        self.del.metric().name()
+                    }
+                )
             } else {
                 String::new()
             }

@@ -248,6 +248,9 @@ impl ThetaCore {
         let ptol = self
             .projection_tolerance
             .max(2.0 * self.h * self.theta * self.velocity_accuracy);
+        if rule != PositionRule::None {
+            self.del.prepare_position_metric();
+        }
         match rule {
             PositionRule::None => {
                 self.tau.iter_mut().for_each(|x| *x = 0.0);
