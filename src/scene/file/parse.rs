@@ -60,6 +60,37 @@ impl Scene {
         Ok(scene)
     }
 
+    /// A scene from its tables as TOML values built in code (the Python package builds
+    /// them from a dict, with no text), with the `KEY=VALUE` overrides of
+    /// [`Scene::from_file_with`]; validated as a scene file is, errors naming the key
+    /// path (`bodies[0].material.young`). Equal to the scene of the same tables written
+    /// as TOML text and read by [`Scene::from_toml`]. Relative mesh paths start from the
+    /// working directory (set [`Scene::base_dir`] for another).
+    ///
+    /// ```
+    /// use signorini::scene::file::Scene;
+    /// let text = "[time]\ndt = 1e-6\nt_end = 1e-3\n[example]\nkind = \"bouncing-ball\"\n";
+    /// let table: toml::Table = toml::from_str(text).unwrap();
+    /// let scene = Scene::from_table(table, &["time.dt=2e-6".to_string()]).unwrap();
+    /// assert_eq!(scene.steps(), 500);
+    /// ```
+    pub fn from_table(mut table: toml::Table, overrides: &[String]) -> Result<Scene, Error> {
+        for o in overrides {
+            apply_override(&mut table, o)?;
+        }
+        let scene: Scene = serde_path_to_error::deserialize(table).map_err(|e| {
+            let path = e.path().to_string();
+            let field = if path == "." || path.is_empty() {
+                "scene".to_string()
+            } else {
+                path
+            };
+            Error::invalid(&field, "(key)", first_line(e.inner().message()))
+        })?;
+        scene.validate()?;
+        Ok(scene)
+    }
+
     /// Parses and validates scene text.
     pub fn from_toml(text: &str) -> Result<Scene, Error> {
         let at = |span: Option<std::ops::Range<usize>>| match span {
