@@ -515,6 +515,23 @@ obstacle = "floor"
         serde_json::to_string(&from_code.check().unwrap()).unwrap(),
         serde_json::to_string(&from_text.check().unwrap()).unwrap()
     );
+    // overrides of a scene held in memory (`with_overrides`, the arrays set aside and
+    // put back, or overridden themselves) give the scene of the text with them
+    for set in [
+        vec!["time.t_end=1e-3", "bodies[0].material.young=2e6"],
+        vec!["bodies[0].mesh.node_sets.top=[0, 1]"],
+        vec![
+            "bodies[0].velocity=[0.0, 0.0, -2.0]",
+            "bodies[0].mesh.points[0]=[0.0, 0.0, 0.0]",
+        ],
+    ] {
+        let set: Vec<String> = set.into_iter().map(String::from).collect();
+        assert_eq!(
+            toml::to_string(&from_code.with_overrides(&set).unwrap()).unwrap(),
+            toml::to_string(&Scene::from_text_with(&text, &set).unwrap()).unwrap(),
+            "{set:?}"
+        );
+    }
     // overrides as `--set`; a bad value named by its key path
     let set = Scene::from_table(table.clone(), &["time.t_end=1e-3".to_string()]).unwrap();
     assert_eq!(set.steps(), 10);

@@ -110,8 +110,19 @@ obstacle = "floor"
     other = _arrays_scene(np.asfortranarray(points), cells.astype(np.int32), initial_velocity=v0.tolist())
     other["bodies"][0]["mesh"]["node_sets"]["z0"] = z0.tolist()
     assert signorini.Scene.from_dict(other).to_dict() == from_toml.to_dict()
-    # the overrides of `set` apply as to a scene file
+    # the overrides of `set` apply as to a scene file, and so do those of a scene held
+    # (its arrays set aside and put back, no text)
     assert signorini.Scene.from_dict(d, set={"time.t_end": 5e-5}).steps == 5
+    keys = {"time.t_end": 5e-5, "bodies[0].material.young": 2e7}
+    assert (
+        from_dict.with_params(set=keys).to_dict()
+        == signorini.Scene.from_toml(text, set=keys).to_dict()
+    )
+    keys = {"bodies[0].initial_velocity[0]": [0.0, 0.0, -2.0]}
+    assert (
+        from_dict.with_params(set=keys).to_dict()
+        == signorini.Scene.from_toml(text, set=keys).to_dict()
+    )
 
 
 # the refusal of a mesh the memory limit cannot hold, in a process of its own (its peak
