@@ -177,7 +177,7 @@ fn value(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
         if arr.len() > MAX_LISTED {
             return Err(bad(
                 path,
-                format!("an array of shape {:?}", arr.shape()),
+                format!("an array of shape {}", shape_text(arr.shape())),
                 &format!(
                     "a list of at most {MAX_LISTED} values here: arrays are taken whole as a \
                      mesh's points, cells and node_sets (generator = \"arrays\") and as \

@@ -269,6 +269,10 @@ def _key_not_a_string(d):
     d["bodies"][0]["material"][3] = 1.0
 
 
+def _probe_times_huge(d):
+    d["probes"] = [{"name": "p", "body": "box", "nodes": "all", "times": np.zeros(2_000_000)}]
+
+
 def _set_an_array(d):
     return {"bodies[0].mesh.points": [[0.0, 0.0, 0.0]]}
 
@@ -299,6 +303,7 @@ BAD = [
     (_dt_bool, ["`time.dt`", "boolean"]),
     (_obstacle_point_bool, ["`obstacles[0]", "boolean"]),
     (_key_not_a_string, ["`bodies[0].material.3`", "a key of a scene's table is a string"]),
+    (_probe_times_huge, ["`probes[0].times`", "shape (2000000,)", "at most 1048576 values"]),
     (_set_an_array, ["`set`", "`bodies[0].mesh.points` is given as an array in the dict"]),
     (_unknown_object, ["`bodies[0].material.density`", "not a value of type object"]),
 ]
