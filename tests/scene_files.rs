@@ -438,3 +438,112 @@ obstacle = "floor"
     assert!(qa.iter().zip(&qg).all(|(a, b)| a.to_bits() == b.to_bits()));
     assert!(va.iter().zip(&vg).all(|(a, b)| a.to_bits() == b.to_bits()));
 }
+
+/// A scene built in code (issue 48, the Python package's route: its tables as TOML
+/// values, the mesh as flat arrays, no text) equals the same scene read from TOML text:
+/// the same tables written back, the same `check` report; overrides apply as `--set`
+/// does, and a bad value is refused with its key path.
+#[test]
+fn a_scene_from_tables_and_flat_arrays_equals_the_one_from_text() {
+    use signorini::model::generate::box_mesh;
+    use signorini::model::solid::CellKind;
+    use signorini::scene::file::{MeshSpec, Rows};
+    use std::collections::BTreeMap;
+    let m = box_mesh(CellKind::Hex8, [3, 2, 2], [0.3, 0.2, 0.2]);
+    let rows = |v: &[usize]| format!("{v:?}");
+    let text = format!(
+        r#"[time]
+dt = 1e-4
+t_end = 6e-3
+[[bodies]]
+name = "b"
+mesh = {{ generator = "arrays", points = [{}], cells = {{ hex8 = [{}] }}, node_sets = {{ {} }} }}
+material = {{ young = 1e6, poisson = 0.3, density = 1000.0 }}
+velocity = [0.0, 0.0, -1.0]
+[[obstacles]]
+name = "floor"
+type = "plane"
+point = [0.0, 0.0, -0.001]
+normal = [0.0, 0.0, 1.0]
+[[contacts]]
+body = "b"
+nodes = "z0"
+obstacle = "floor"
+"#,
+        m.points
+            .iter()
+            .map(|p| format!("[{:?}, {:?}, {:?}]", p[0], p[1], p[2]))
+            .collect::<Vec<_>>()
+            .join(", "),
+        m.cells
+            .iter()
+            .map(|(_, c)| rows(c))
+            .collect::<Vec<_>>()
+            .join(", "),
+        m.node_sets
+            .iter()
+            .map(|(k, v)| format!("{k} = {}", rows(v)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let from_text = Scene::from_toml(&text).unwrap();
+    // the tables without the arrays, which are handed over flat afterwards
+    let mut table: toml::Table = toml::from_str(&text).unwrap();
+    let body = table["bodies"].as_array_mut().unwrap()[0]
+        .as_table_mut()
+        .unwrap();
+    let mesh = body["mesh"].as_table_mut().unwrap();
+    for key in ["points", "cells", "node_sets"] {
+        mesh.remove(key);
+    }
+    mesh.insert("points".into(), toml::Value::Array(Vec::new()));
+    mesh.insert("cells".into(), toml::Value::Table(toml::Table::new()));
+    let mut from_code = Scene::from_table(table.clone(), &[]).unwrap();
+    let flat: Vec<f64> = m.points.iter().flatten().copied().collect();
+    let cells: Vec<usize> = m.cells.iter().flat_map(|(_, c)| c.clone()).collect();
+    from_code.bodies[0].mesh = MeshSpec::Arrays {
+        points: Rows::from_flat(flat, 3).unwrap(),
+        cells: BTreeMap::from([("hex8".to_string(), Rows::from_flat(cells, 8).unwrap())]),
+        node_sets: m.node_sets.clone(),
+    };
+    from_code.validate().unwrap();
+    assert_eq!(
+        toml::to_string(&from_code).unwrap(),
+        toml::to_string(&from_text).unwrap()
+    );
+    assert_eq!(
+        serde_json::to_string(&from_code.check().unwrap()).unwrap(),
+        serde_json::to_string(&from_text.check().unwrap()).unwrap()
+    );
+    // overrides of a scene held in memory (`with_overrides`, the arrays set aside and
+    // put back, or overridden themselves) give the scene of the text with them
+    for set in [
+        vec!["time.t_end=1e-3", "bodies[0].material.young=2e6"],
+        vec!["bodies[0].mesh.node_sets.top=[0, 1]"],
+        vec![
+            "bodies[0].velocity=[0.0, 0.0, -2.0]",
+            "bodies[0].mesh.points[0]=[0.0, 0.0, 0.0]",
+        ],
+    ] {
+        let set: Vec<String> = set.into_iter().map(String::from).collect();
+        assert_eq!(
+            toml::to_string(&from_code.with_overrides(&set).unwrap()).unwrap(),
+            toml::to_string(&Scene::from_text_with(&text, &set).unwrap()).unwrap(),
+            "{set:?}"
+        );
+    }
+    // overrides as `--set`; a bad value named by its key path
+    let set = Scene::from_table(table.clone(), &["time.t_end=1e-3".to_string()]).unwrap();
+    assert_eq!(set.steps(), 10);
+    let mut bad = table;
+    bad["bodies"].as_array_mut().unwrap()[0]
+        .as_table_mut()
+        .unwrap()
+        .insert(
+            "material".into(),
+            toml::Value::Table(toml::from_str("young = true").unwrap()),
+        );
+    let e = Scene::from_table(bad, &[]).unwrap_err().to_string();
+    assert!(e.contains("bodies[0].material.young"), "{e}");
+    assert!(e.contains("boolean"), "{e}");
+}

@@ -155,9 +155,16 @@ class Scene:
     ) -> "Scene":
         """A scene from the tables of a scene file as Python data (``{"time": {"dt": …},
         "bodies": [...]}``); mesh paths are relative to ``base_dir`` (default: the
-        working directory). Equal to the same scene read from TOML."""
+        working directory). Equal to the same scene read from TOML.
+
+        Read with no text: the values are checked as they are read (a NaN, an infinity,
+        a complex number, ``None`` in a list is refused with its key path), and a mesh's
+        ``points``, ``cells`` and ``node_sets`` (``generator = "arrays"``) and a body's
+        ``initial_velocity`` / ``initial_displacement`` rows, numpy arrays or lists, are
+        checked for shape and dtype, measured against the memory limit, and then copied
+        once each into the solver's tables. A ``None`` value in a dict is an absent key."""
         base = None if base_dir is None else os.fspath(base_dir)
-        return cls(_Scene.from_json(_json(tables, "scene dict"), _overrides(set), base))
+        return cls(_Scene.from_dict(tables, _overrides(set), base))
 
     @classmethod
     def bar(cls, **params: Any) -> "Scene":

@@ -1,7 +1,7 @@
 """Type stubs of the Rust extension (python/src/lib.rs); the public API is
 `signorini.Scene`, `signorini.Simulation` and `signorini.fclib`."""
 
-from typing import List, Optional, Tuple
+from typing import Any, List, Mapping, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -20,7 +20,7 @@ class _Scene:
     @staticmethod
     def from_text(text: str, set: List[str], base_dir: Optional[str] = None) -> _Scene: ...
     @staticmethod
-    def from_json(json: str, set: List[str], base_dir: Optional[str] = None) -> _Scene: ...
+    def from_dict(tables: Mapping[str, Any], set: List[str], base_dir: Optional[str] = None) -> _Scene: ...
     @staticmethod
     def bar(json: str) -> _Scene: ...
     @staticmethod

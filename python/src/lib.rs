@@ -11,7 +11,8 @@
 //! view would change under the caller's feet (and outlive its buffer if the simulation
 //! were dropped first). A copy costs one pass over `n` values, negligible next to a step.
 //!
-//! By role: `scene` (the scenes: `Kind`, `_Scene`), `simulation` (`_Simulation`: the
+//! By role: `scene` (the scenes: `Kind`, `_Scene`), `tables` (a scene from a dict: its
+//! tables as TOML values and its arrays copied flat, no text), `simulation` (`_Simulation`: the
 //! session, its state, mesh, bodies and history), `progress` (the Python callback,
 //! Ctrl-C and `cancel()`, model building that can be abandoned), `fclib` (one-step
 //! friction problems); here the exceptions, the argument checks and the module.
@@ -91,6 +92,7 @@ mod fclib;
 mod progress;
 mod scene;
 mod simulation;
+mod tables;
 
 use fclib::{fclib_read, fclib_solve_arrays, fclib_solve_file};
 use progress::{INTERRUPT_EVERY, PyProgress, interruptible};

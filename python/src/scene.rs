@@ -1,5 +1,6 @@
 //! The scenes handed to Python: a scene file's or the built-in bar's (`Kind`), their
-//! construction from TOML, JSON and overrides with errors in Python terms (`_Scene`).
+//! construction from TOML, a dict (`tables`), the bar's JSON and overrides with errors
+//! in Python terms (`_Scene`).
 
 use super::*;
 
@@ -100,22 +101,21 @@ impl PyScene {
         Ok(file_scene(s))
     }
 
-    /// A scene given as JSON (the Python dict of the TOML tables): converted to TOML
-    /// and read as a scene file would be, so errors name the same key paths.
+    /// A scene given as the dict of its tables, read with no text (`tables`): the
+    /// arrays of a mesh given as arrays and the per-node fields copied once, after
+    /// their shapes and the memory limit are checked; errors name the key path.
     #[staticmethod]
-    #[pyo3(signature = (json, set, base_dir=None))]
-    fn from_json(json: &str, set: Vec<String>, base_dir: Option<PathBuf>) -> PyResult<Self> {
-        let mut value: serde_json::Value = serde_json::from_str(json)
-            .map_err(|e| BadInput::new_err(format!("scene dict: {e}")))?;
-        strip_nulls(&mut value);
-        let table = toml::Table::try_from(value).map_err(|e| {
-            BadInput::new_err(format!(
-                "scene dict: {e} (expected the tables of a scene file)"
-            ))
-        })?;
-        let text =
-            toml::to_string(&table).map_err(|e| BadInput::new_err(format!("scene dict: {e}")))?;
-        Self::from_text(&text, set, base_dir)
+    #[pyo3(signature = (tables, set, base_dir=None))]
+    fn from_dict(
+        tables: &Bound<'_, PyAny>,
+        set: Vec<String>,
+        base_dir: Option<PathBuf>,
+    ) -> PyResult<Self> {
+        let mut s = super::tables::scene_from_dict(tables, &set)?;
+        if let Some(d) = base_dir {
+            s.base_dir = d;
+        }
+        Ok(file_scene(s))
     }
 
     /// The built-in impacting bar from its parameters as JSON (the reference bar for

@@ -4,7 +4,9 @@
 use super::*;
 
 impl BodySpec {
-    pub(super) fn dim(&self) -> usize {
+    /// The displacement components of a node of this body: 1 for a rod, else its
+    /// formulation's (2 or 3).
+    pub fn dim(&self) -> usize {
         match self.mesh {
             MeshSpec::Rod { .. } => 1,
             _ => self.formulation.dim(),
@@ -96,14 +98,19 @@ impl BodySpec {
 /// limit before anything is built. Cell shapes (inverted, degenerate) are checked with
 /// the formulation afterwards, as for files.
 fn arrays_mesh(
-    points: &[Vec<f64>],
-    cells: &BTreeMap<String, Vec<Vec<usize>>>,
+    points: &Rows<f64>,
+    cells: &BTreeMap<String, Rows<usize>>,
     node_sets: &BTreeMap<String, Vec<usize>>,
     dim: usize,
 ) -> Result<Mesh, Error> {
     let np = points.len();
-    let nc: usize = cells.values().map(Vec::len).sum();
-    crate::limits::mesh_memory(np as u64, nc as u64, 8, dim as u64).check("mesh.points", np)?;
+    let nc: usize = cells.values().map(Rows::len).sum();
+    let shapes: Vec<(usize, usize)> = cells
+        .values()
+        .map(|c| (c.len(), c.width().unwrap_or(8)))
+        .collect();
+    arrays_memory(np, points.width().unwrap_or(3), &shapes, dim)
+        .check("mesh.points", format!("{np} points and {nc} cells"))?;
     if np == 0 || nc == 0 {
         return Err(Error::invalid(
             if np == 0 { "mesh.points" } else { "mesh.cells" },
@@ -150,6 +157,7 @@ fn arrays_mesh(
                     "is not a cell kind: hex8, tet4, quad4 or tri3",
                 )
             })?;
+        mesh.cells.reserve(list.len());
         for (c, nodes) in list.iter().enumerate() {
             let key = format!("mesh.cells.{name}[{c}]");
             if nodes.len() != kind.nodes() {
@@ -167,13 +175,13 @@ fn arrays_mesh(
                 ));
             }
             nodes.iter().for_each(|&v| used[v] = true);
-            mesh.cells.push((kind, nodes.clone()));
+            mesh.cells.push((kind, nodes.to_vec()));
         }
     }
     if let Some(i) = used.iter().position(|u| !u) {
         return Err(Error::invalid(
             &format!("mesh.points[{i}]"),
-            format!("{:?}", points[i]),
+            format!("{:?}", points.row(i)),
             "is in no cell: such a point has no mass or stiffness (drop it)",
         ));
     }

@@ -40,11 +40,13 @@
 //! mesh readers.
 //!
 //! This file holds the schema (the serde types of every table); the rest by role:
-//! `parse` (text and `--set` overrides to a [`Scene`]), `validate` (ranges and
-//! cross-references, starting gaps), `build` (the [`Model`] a scene describes),
-//! `mesh_spec` (a body's mesh and node sets), `obstacle` (obstacles: schema, checks,
-//! contact sets, outlines).
+//! `parse` (text, TOML tables and `--set` overrides to a [`Scene`]), `validate` (ranges
+//! and cross-references, starting gaps), `build` (the [`Model`] a scene describes),
+//! `mesh_spec` (a body's mesh and node sets), `arrays` (the flat tables of a mesh or a
+//! field given as arrays, [`Rows`], and their memory from their shapes), `obstacle`
+//! (obstacles: schema, checks, contact sets, outlines).
 
+mod arrays;
 mod build;
 mod initial;
 mod mesh_spec;
@@ -52,6 +54,7 @@ mod obstacle;
 mod parse;
 mod validate;
 
+pub use arrays::{Rows, arrays_memory};
 pub use obstacle::ObstacleSpec;
 use {build::*, mesh_spec::*, obstacle::*, validate::*};
 
@@ -204,7 +207,7 @@ pub struct BodySpec {
 #[serde(untagged)]
 pub enum NodalField {
     /// The rows, in the scene.
-    Rows(Vec<Vec<f64>>),
+    Rows(Rows<f64>),
     /// A text file of rows.
     File {
         /// Its path, relative to the scene's directory.
@@ -267,10 +270,10 @@ pub enum MeshSpec {
     Arrays {
         /// Coordinates (m) of each point: `[x, y, z]`, or `[x, y]` for a plane or
         /// axisymmetric body.
-        points: Vec<Vec<f64>>,
+        points: Rows<f64>,
         /// Connectivity by cell kind (`hex8`, `tet4`, `quad4`, `tri3`): each cell's
         /// point indices (0-based, in `points`), in the VTK/Gmsh node order.
-        cells: BTreeMap<String, Vec<Vec<usize>>>,
+        cells: BTreeMap<String, Rows<usize>>,
         /// Named node sets (point indices) for `fixed`, `[[contacts]]`, `[[forces]]`,
         /// `[[prescribed]]` and `[[probes]]` (`boundary` and `all` always exist).
         #[serde(default)]
