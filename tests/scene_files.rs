@@ -220,12 +220,15 @@ fn meshio_plate_and_gmsh_ball_on_a_cylinder_run_without_penetration() {
     let dir = env!("CARGO_MANIFEST_DIR");
     // plane-stress plate read from meshio's .vtu, its "bottom" point-data flag as the
     // contact set; and the Gmsh ball against the outside of a cylinder (nonlinear gap),
-    // its computed boundary within 2 cm as candidates.
+    // its computed boundary within 2 cm as candidates. The soft ball's contact cells turn
+    // 0.148 rad at the impact (strains of v/c = 3 %), past the linear law's default
+    // `max_rotation` (issue 48): accepted here, the test being about the meshes and the
+    // gap.
     let plate = format!(
         "[time]\ndt = 1e-4\nt_end = 0.05\n[[bodies]]\nname = \"plate\"\nformulation = {{ plane-stress = {{ thickness = 0.01 }} }}\nmesh = {{ generator = \"file\", path = \"{dir}/meshes/plate.vtu\" }}\nmaterial = {{ young = 1e7, poisson = 0.3, density = 1000.0 }}\nvelocity = [0.0, -1.0]\n[[obstacles]]\nname = \"floor\"\ntype = \"plane\"\npoint = [0.0, -0.001]\nnormal = [0.0, 1.0]\n[[contacts]]\nbody = \"plate\"\nnodes = \"bottom\"\nobstacle = \"floor\"\n"
     );
     let ball = format!(
-        "[time]\ndt = 1e-4\nt_end = 0.05\n[[bodies]]\nname = \"ball\"\nmesh = {{ generator = \"file\", path = \"{dir}/meshes/ball.msh\" }}\nmaterial = {{ young = 1e6, poisson = 0.3, density = 1000.0 }}\nvelocity = [0.0, 0.0, -1.0]\n[[obstacles]]\nname = \"pipe\"\ntype = \"cylinder\"\npoint = [0.0, 0.0, -0.1]\naxis = [1.0, 0.0, 0.0]\nradius = 0.1\n[[contacts]]\nbody = \"ball\"\nnodes = \"boundary\"\nwithin = 0.02\nobstacle = \"pipe\"\n"
+        "[time]\ndt = 1e-4\nt_end = 0.05\n[scheme]\nmax_rotation = 0.2\n[[bodies]]\nname = \"ball\"\nmesh = {{ generator = \"file\", path = \"{dir}/meshes/ball.msh\" }}\nmaterial = {{ young = 1e6, poisson = 0.3, density = 1000.0 }}\nvelocity = [0.0, 0.0, -1.0]\n[[obstacles]]\nname = \"pipe\"\ntype = \"cylinder\"\npoint = [0.0, 0.0, -0.1]\naxis = [1.0, 0.0, 0.0]\nradius = 0.1\n[[contacts]]\nbody = \"ball\"\nnodes = \"boundary\"\nwithin = 0.02\nobstacle = \"pipe\"\n"
     );
     for (name, text, contacts) in [("plate", plate, 9), ("ball on cylinder", ball, 28)] {
         let s = Scene::from_toml(&text).unwrap();
