@@ -23,6 +23,23 @@ pub fn quadratic_form(a: SparseColMatRef<'_, usize, f64>, x: &[f64]) -> f64 {
     parts.iter().sum()
 }
 
+/// `Σ_jk |x_j| |a_jk| |x_k|`: the sum of the absolute terms of `xᵀ A x`, which bounds its
+/// rounding error (`xᵀ A x` is known to about `n ε` of it). Serial, allocation-free.
+pub fn abs_quadratic_form(a: SparseColMatRef<'_, usize, f64>, x: &[f64]) -> f64 {
+    let mut s = 0.0;
+    for (j, &xj) in x.iter().enumerate() {
+        if xj == 0.0 {
+            continue;
+        }
+        let mut col = 0.0;
+        for k in a.col_ptr()[j]..a.col_ptr()[j + 1] {
+            col += a.val()[k].abs() * x[a.row_idx()[k]].abs();
+        }
+        s += xj.abs() * col;
+    }
+    s
+}
+
 /// [`quadratic_form`] of a symmetric `a`, keeping the product `a x` it forms column
 /// by column in `ax` (`n` values): the same `xᵀ A x` bit for bit, and `A x` for the
 /// price of storing it (the history's kinetic energy and each body's momenta read one
