@@ -438,3 +438,38 @@ obstacle = "floor"
     assert!(qa.iter().zip(&qg).all(|(a, b)| a.to_bits() == b.to_bits()));
     assert!(va.iter().zip(&vg).all(|(a, b)| a.to_bits() == b.to_bits()));
 }
+
+/// Issue 48: `within` is measured at the starting positions (reference plus
+/// `initial_displacement`): a box lifted 1 cm above its floor and displaced down by
+/// 9.5 mm has its four bottom nodes within 1 mm of the floor, its top ones 10.05 cm
+/// away; measured at the reference, no node was within and the scene was refused.
+#[test]
+fn within_is_measured_at_the_displaced_start() {
+    let scene = |u: f64| {
+        let rows: Vec<String> = (0..8).map(|_| format!("[0.0, 0.0, {u:?}]")).collect();
+        format!(
+            "[time]\ndt = 1e-4\nt_end = 1e-3\n[[bodies]]\nname = \"b\"\n\
+             mesh = {{ generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }}\n\
+             material = {{ young = 1e6, poisson = 0.3, density = 1000.0 }}\n\
+             initial_displacement = [{}]\n\
+             [[obstacles]]\nname = \"floor\"\ntype = \"plane\"\npoint = [0.0, 0.0, -0.01]\n\
+             normal = [0.0, 0.0, 1.0]\n\
+             [[contacts]]\nbody = \"b\"\nnodes = \"all\"\nobstacle = \"floor\"\nwithin = 1e-3\n",
+            rows.join(", ")
+        )
+    };
+    let (_, report) = Scene::from_toml(&scene(-0.0095)).unwrap().build().unwrap();
+    assert_eq!(
+        report.contacts, 4,
+        "the bottom face, 0.5 mm above the floor"
+    );
+    // not displaced: 1 cm away, none within 1 mm (the nearest named)
+    let err = match Scene::from_toml(&scene(0.0)).unwrap().build() {
+        Ok(_) => panic!("built with no node within"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("within") && err.contains("1.000e-2 m away"),
+        "{err}"
+    );
+}
