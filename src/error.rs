@@ -276,7 +276,9 @@ pub fn num(x: f64) -> String {
         "NaN".into()
     } else if x.is_infinite() || x.abs() >= f64::MAX / 2.0 || x.abs() >= 1e300 {
         if x > 0.0 { "inf".into() } else { "-inf".into() }
-    } else if x == 0.0 || (1e-4..1e7).contains(&x.abs()) {
+    } else if (x.to_bits() << 1) == 0 || (1e-4..1e7).contains(&x.abs()) {
+        // zero by its bits: under a flush of subnormal operands (DAZ), 5e-320 == 0.0
+        // holds, and `{x}` then printed 320 digits
         format!("{x}")
     } else {
         format!("{x:e}")

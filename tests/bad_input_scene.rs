@@ -660,6 +660,40 @@ const CASES: &[Case] = &[
             "prescribed[0] drives that component",
         ],
     ),
+    // issue 48: validated before any flush of subnormals; loads whose arithmetic overflows
+    (
+        "a subnormal end time",
+        &[("t_end = 1e-3", "t_end = 5e-320")],
+        &[
+            "time.t_end",
+            "value 5e-320",
+            "at least one step (time.dt = 0.0001)",
+        ],
+    ),
+    (
+        "a load of 1e308",
+        &[(
+            "[[obstacles]]",
+            "[[forces]]\nbody = \"b\"\nnodes = \"z1\"\ntotal = [0.0, 0.0, -1e308]\n[[obstacles]]",
+        )],
+        &["forces[0].total", "-1e308", "at most 1e150 N", "overflow"],
+    ),
+    (
+        "a load pushed past the bound by its time factors",
+        &[(
+            "[[obstacles]]",
+            "[[forces]]\nbody = \"b\"\nnodes = \"z1\"\ntotal = [0.0, 0.0, -1e100]\ntime = [[0.0, 0.0], [1.0, 1e60]]\n[[obstacles]]",
+        )],
+        &["forces[0].total", "reaches 1e160 N", "at most 1e150 N"],
+    ),
+    (
+        "gravity of 1e200",
+        &[(
+            "[[obstacles]]",
+            "[loads]\ngravity = [0.0, 0.0, -1e200]\n[[obstacles]]",
+        )],
+        &["loads.gravity", "-1e200", "at most 1e150"],
+    ),
     (
         "unknown output encoding",
         &[("[time]\n", "[output]\nencoding = \"xml\"\n[time]\n")],

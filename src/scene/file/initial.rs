@@ -384,7 +384,10 @@ pub(super) fn check_orientation(
                 // a cell of a mesh file: the file and the file's own element id
                 Some(file) => Error::bad_file(
                     file,
-                    format!("element {}", mesh.cell_ids.get(id).copied().unwrap_or(id as u64)),
+                    format!(
+                        "element {}",
+                        mesh.cell_ids.get(id).copied().unwrap_or(id as u64)
+                    ),
                     format!("{cell}, {what}: {why}"),
                 ),
                 None => Error::invalid("mesh", format!("{cell}, {what}"), why),
