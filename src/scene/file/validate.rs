@@ -110,7 +110,9 @@ impl Scene {
                     self.bodies[0].formulation.name()
                 ),
             };
-            o.shape().validate(dim).map_err(|e| {
+            let axisymmetric = matches!(self.bodies[0].formulation, Formulation::Axisymmetric)
+                && !matches!(self.bodies[0].mesh, MeshSpec::Rod { .. });
+            o.shape().validate(dim, axisymmetric).map_err(|e| {
                 prefix(
                     &format!("obstacles[{j}]"),
                     e.context(&format!("a {dim}-D scene: {origin}")),
