@@ -116,10 +116,10 @@ fn arrays_mesh(
         ..Mesh::default()
     };
     for (i, p) in points.iter().enumerate() {
-        let key = format!("mesh.points[{i}]");
+        let key = || format!("mesh.points[{i}]");
         if !(p.len() == dim || p.len() == 3) {
             return Err(Error::invalid(
-                &key,
+                &key(),
                 format!("{p:?}"),
                 &format!(
                     "needs {dim} coordinates (m){}",
@@ -128,11 +128,11 @@ fn arrays_mesh(
             ));
         }
         if let Some(x) = p.iter().find(|x| !x.is_finite()) {
-            return Err(Error::invalid(&key, x, "must be finite"));
+            return Err(Error::invalid(&key(), x, "must be finite"));
         }
         if dim == 2 && p.len() == 3 && p[2] != 0.0 {
             return Err(Error::invalid(
-                &key,
+                &key(),
                 format!("{p:?}"),
                 "a plane body lies in z = 0",
             ));
@@ -144,7 +144,8 @@ fn arrays_mesh(
     // each cell by its sorted nodes → where it was first listed: a cell listed twice
     // would add its mass and stiffness twice (a hex8 cube listed twice weighed 1.125 kg
     // for 1 kg)
-    let mut seen: std::collections::HashMap<Vec<usize>, String> =
+    // (the key: the sorted nodes, padded; at most 8 a cell — no allocation per cell)
+    let mut seen: std::collections::HashMap<[usize; 8], (&str, usize)> =
         std::collections::HashMap::with_capacity(nc.min(1 << 24));
     for (name, list) in cells {
         let kind: CellKind = serde_json::from_value(serde_json::Value::String(name.clone()))
@@ -156,31 +157,32 @@ fn arrays_mesh(
                 )
             })?;
         for (c, nodes) in list.iter().enumerate() {
-            let key = format!("mesh.cells.{name}[{c}]");
+            let key = || format!("mesh.cells.{name}[{c}]");
             if nodes.len() != kind.nodes() {
                 return Err(Error::invalid(
-                    &key,
+                    &key(),
                     format!("{nodes:?}"),
                     &format!("a {name} cell has {} nodes", kind.nodes()),
                 ));
             }
             if let Some(&v) = nodes.iter().find(|&&v| v >= np) {
                 return Err(Error::invalid(
-                    &key,
+                    &key(),
                     v,
                     &format!("is not a point index: mesh.points has {np} points (0-based)"),
                 ));
             }
             nodes.iter().for_each(|&v| used[v] = true);
-            let mut sorted = nodes.clone();
+            let mut sorted = [usize::MAX; 8];
+            sorted[..nodes.len()].copy_from_slice(nodes);
             sorted.sort_unstable();
-            if let Some(first) = seen.insert(sorted, format!("mesh.cells.{name}[{c}]")) {
+            if let Some((first, fc)) = seen.insert(sorted, (name.as_str(), c)) {
                 return Err(Error::invalid(
-                    &key,
+                    &key(),
                     format!("{nodes:?}"),
                     &format!(
-                        "has the nodes of {first}: a cell listed twice would count its mass \
-                         and stiffness twice (list each cell once)"
+                        "has the nodes of mesh.cells.{first}[{fc}]: a cell listed twice would \
+                         count its mass and stiffness twice (list each cell once)"
                     ),
                 ));
             }
@@ -365,9 +367,12 @@ impl<'de> serde::de::Visitor<'de> for Table {
         while let Some(name) = map.next_key::<String>()? {
             let at = format!("{}.{name}", self.at);
             let value = if self.lists {
-                map.next_value_seed(Lists { at })?
+                map.next_value_seed(Lists { at: &at })?
             } else {
-                vec![map.next_value_seed(Indices { at })?]
+                vec![map.next_value_seed(Indices {
+                    at: &at,
+                    cell: None,
+                })?]
             };
             out.insert(name, value);
         }
@@ -375,19 +380,19 @@ impl<'de> serde::de::Visitor<'de> for Table {
     }
 }
 
-/// A list of cells, each a list of point indices.
-struct Lists {
-    at: String,
+/// A list of cells, each a list of point indices (`at`: its key path).
+struct Lists<'a> {
+    at: &'a str,
 }
 
-impl<'de> serde::de::DeserializeSeed<'de> for Lists {
+impl<'de> serde::de::DeserializeSeed<'de> for Lists<'_> {
     type Value = Vec<Vec<usize>>;
     fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
         d.deserialize_any(self)
     }
 }
 
-impl<'de> serde::de::Visitor<'de> for Lists {
+impl<'de> serde::de::Visitor<'de> for Lists<'_> {
     type Value = Vec<Vec<usize>>;
     fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         write!(f, "a list of cells (lists of point indices) at {}", self.at)
@@ -395,28 +400,31 @@ impl<'de> serde::de::Visitor<'de> for Lists {
     fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
         let mut out = Vec::with_capacity(seq.size_hint().unwrap_or(0).min(1 << 20));
         loop {
-            let at = format!("{}[{}]", self.at, out.len());
-            match seq.next_element_seed(Indices { at })? {
-                Some(cell) => out.push(cell),
+            let cell = Some(out.len());
+            match seq.next_element_seed(Indices { at: self.at, cell })? {
+                Some(nodes) => out.push(nodes),
                 None => return Ok(out),
             }
         }
     }
 }
 
-/// A list of point indices.
-struct Indices {
-    at: String,
+/// A list of point indices: a node set (`at`), or cell `cell` of the list at `at`. The
+/// key path is formatted only for an error (a mesh of 10⁷ cells reads without one
+/// string per index).
+struct Indices<'a> {
+    at: &'a str,
+    cell: Option<usize>,
 }
 
-impl<'de> serde::de::DeserializeSeed<'de> for Indices {
+impl<'de> serde::de::DeserializeSeed<'de> for Indices<'_> {
     type Value = Vec<usize>;
     fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
         d.deserialize_any(self)
     }
 }
 
-impl<'de> serde::de::Visitor<'de> for Indices {
+impl<'de> serde::de::Visitor<'de> for Indices<'_> {
     type Value = Vec<usize>;
     fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         write!(f, "a list of point indices at {}", self.at)
@@ -424,8 +432,12 @@ impl<'de> serde::de::Visitor<'de> for Indices {
     fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
         let mut out = Vec::with_capacity(seq.size_hint().unwrap_or(0).min(1 << 20));
         loop {
-            let at = format!("{}[{}]", self.at, out.len());
-            match seq.next_element_seed(Index { at })? {
+            let index = Index {
+                at: self.at,
+                cell: self.cell,
+                k: out.len(),
+            };
+            match seq.next_element_seed(index)? {
                 Some(v) => out.push(v),
                 None => return Ok(out),
             }
@@ -433,29 +445,36 @@ impl<'de> serde::de::Visitor<'de> for Indices {
     }
 }
 
-/// One point index: an integer ≥ 0; anything else is refused with its key path.
-struct Index {
-    at: String,
+/// One point index: an integer ≥ 0; anything else is refused with its key path
+/// (`at[cell][k]`, or `at[k]` in a node set).
+struct Index<'a> {
+    at: &'a str,
+    cell: Option<usize>,
+    k: usize,
 }
 
-impl Index {
+impl Index<'_> {
     fn refuse<E: serde::de::Error>(&self, value: impl std::fmt::Display) -> E {
+        let at = match self.cell {
+            Some(c) => format!("{}[{c}][{}]", self.at, self.k),
+            None => format!("{}[{}]", self.at, self.k),
+        };
         at_key(
-            &self.at,
+            &at,
             value,
             "is not a point index: expected an integer ≥ 0 (0-based, into mesh.points)",
         )
     }
 }
 
-impl<'de> serde::de::DeserializeSeed<'de> for Index {
+impl<'de> serde::de::DeserializeSeed<'de> for Index<'_> {
     type Value = usize;
     fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<usize, D::Error> {
         d.deserialize_any(self)
     }
 }
 
-impl<'de> serde::de::Visitor<'de> for Index {
+impl<'de> serde::de::Visitor<'de> for Index<'_> {
     type Value = usize;
     fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         write!(f, "a point index at {}", self.at)
