@@ -600,6 +600,18 @@ const CASES: &[Case] = &[
         ],
     ),
     (
+        "field file path of the wrong type",
+        &[(
+            "material = { young = 1e6, poisson = 0.3, density = 1000.0 }",
+            "material = { young = 1e6, poisson = 0.3, density = 1000.0 }\ninitial_velocity = { file = 3 }",
+        )],
+        &[
+            "bodies[0].initial_velocity.file`",
+            "integer `3`",
+            "a string",
+        ],
+    ),
+    (
         "initial velocity field of the wrong type",
         &[(
             "material = { young = 1e6, poisson = 0.3, density = 1000.0 }",

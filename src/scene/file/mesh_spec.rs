@@ -485,6 +485,12 @@ impl<'de> serde::de::Visitor<'de> for Index<'_> {
     fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<usize, E> {
         usize::try_from(v).map_err(|_| self.refuse(v))
     }
+    fn visit_u128<E: serde::de::Error>(self, v: u128) -> Result<usize, E> {
+        usize::try_from(v).map_err(|_| self.refuse(v))
+    }
+    fn visit_i128<E: serde::de::Error>(self, v: i128) -> Result<usize, E> {
+        usize::try_from(v).map_err(|_| self.refuse(v))
+    }
     fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<usize, E> {
         Err(self.refuse(crate::error::num(v)))
     }
@@ -495,12 +501,12 @@ impl<'de> serde::de::Visitor<'de> for Index<'_> {
         Err(self.refuse(format!("\"{}\"", crate::error::excerpt(v))))
     }
     fn visit_unit<E: serde::de::Error>(self) -> Result<usize, E> {
-        Err(self.refuse("(none)"))
+        Err(self.refuse("none"))
     }
     fn visit_seq<A: serde::de::SeqAccess<'de>>(self, _: A) -> Result<usize, A::Error> {
-        Err(self.refuse("(a list)"))
+        Err(self.refuse("a list"))
     }
     fn visit_map<A: serde::de::MapAccess<'de>>(self, _: A) -> Result<usize, A::Error> {
-        Err(self.refuse("(a table)"))
+        Err(self.refuse("a table"))
     }
 }

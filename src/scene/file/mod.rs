@@ -252,13 +252,8 @@ impl<'de> Deserialize<'de> for NodalField {
                     if file.is_some() {
                         return Err(at_key(".file", "(twice)", "is given once"));
                     }
-                    file = Some(map.next_value::<String>().map_err(|e| {
-                        at_key(
-                            ".file",
-                            "(value)",
-                            &format!("{e}: the file's path, a string"),
-                        )
-                    })?);
+                    // a bad value is named by serde's path (`initial_velocity.file`)
+                    file = Some(map.next_value::<String>()?);
                 }
                 file.map(|file| NodalField::File { file })
                     .ok_or_else(|| at_key("", "{}", "needs `file = \"…\"` (the path of the rows)"))
