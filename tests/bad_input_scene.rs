@@ -586,6 +586,25 @@ const CASES: &[Case] = &[
             "inverts the cell",
         ],
     ),
+    (
+        "initial displacement inverting a quadrature point, not a corner (neo-Hookean)",
+        &[
+            (
+                "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+                "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, 7]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+            ),
+            (
+                "density = 1000.0 }",
+                "density = 1000.0, model = \"neo-hookean\" }\ninitial_displacement = [[0.0, 0.0, 0.0], [-0.072, -0.098, 0.064], [0.0, -0.079, 0.0], [-0.104, 0.0, 0.109], [-0.026, 0.0, -0.057], [0.0, -0.11, 0.0], [0.089, 0.004, 0.0], [0.118, -0.112, 0.0]]",
+            ),
+        ],
+        &[
+            "bodies[0] (b).initial_displacement",
+            "cell 0: det F = -",
+            "at a quadrature point",
+            "inverts the cell",
+        ],
+    ),
     // initial fields and rigid motions taken as written, or refused
     (
         "field file table with an unknown key",

@@ -351,6 +351,20 @@ impl Scene {
                 )));
             }
             let body = HyperBody::new(mesh, law).map_err(|e| at(prefix("mesh", e)))?;
+            // inverted at a quadrature point by the initial displacement (the corners
+            // were checked with the mesh): bad input, not a step that is too large
+            if let Some(Err(c)) = u_of[bi].as_deref().map(|u| body.strain_energy(u)) {
+                let cell = match mesh.cell_ids.get(c.cell) {
+                    Some(tag) => format!("cell {tag} (file tag)"),
+                    None => format!("cell {}", c.cell),
+                };
+                return Err(at(Error::invalid(
+                    "initial_displacement",
+                    format!("{cell}: det F = {:.3e} at a quadrature point", c.det),
+                    "inverts the cell at the start (det F ≤ 0): no body starts turned \
+                     inside out; check the displacement's sign and its rows' node order",
+                )));
+            }
             let part =
                 HyperelasticPart::new(&b.name, body, dofs, mesh.cell_ids.clone()).map_err(at)?;
             system.add_nonlinear_part(std::sync::Arc::new(part));
