@@ -493,3 +493,32 @@ fn a_friction_cap_advises_only_what_was_not_tried() {
         );
     }
 }
+
+/// Issue 48 (no Rust debug text): a step matrix that is not positive definite (a free
+/// body of density 1e-30, whose mass vanishes beside h²K) was reported with faer's
+/// `NonPositivePivot { index: 20 }`; now in words, with the row.
+#[test]
+fn a_failed_factorization_is_reported_in_words() {
+    let dir = tmp("not_spd");
+    let scene = r#"[time]
+dt = 1e-3
+t_end = 1e-2
+[[bodies]]
+name = "b"
+mesh = { generator = "box", cell = "hex8", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }
+material = { young = 1e6, poisson = 0.3, density = 1e-30 }
+"#;
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let (code, err) = cli(
+        &dir,
+        &["run", "s.toml", "--quiet", "--out", "o", "--no-plots"],
+        &[],
+    );
+    expect(
+        "not positive definite",
+        (code, err.clone()),
+        1,
+        &["not positive definite", "a pivot ≤ 0 at row"],
+    );
+    assert!(!err.contains("{ index"), "debug text: {err}");
+}
