@@ -238,6 +238,37 @@ pub fn os_reason(e: &std::io::Error) -> String {
     }
 }
 
+/// Most characters of an input quoted in a message ([`excerpt`]).
+pub const EXCERPT_CHARS: usize = 80;
+
+/// A piece of the user's input as a message quotes it: its first line, at most
+/// [`EXCERPT_CHARS`] characters as printed, control characters escaped (`\0`, `\u{1b}`), and
+/// `… (N bytes)` when it was cut, so a file of NUL bytes or one endless token is
+/// echoed as one short line, never whole.
+pub fn excerpt(s: &str) -> String {
+    let line = s.lines().next().unwrap_or("");
+    let mut out = String::new();
+    let mut shown = 0;
+    let mut cut = line.len() < s.trim_end_matches(['\n', '\r']).len();
+    for c in line.chars() {
+        let piece: String = if c.is_control() {
+            c.escape_default().collect()
+        } else {
+            c.to_string()
+        };
+        shown += piece.chars().count();
+        if shown > EXCERPT_CHARS {
+            cut = true;
+            break;
+        }
+        out.push_str(&piece);
+    }
+    if cut {
+        out.push_str(&format!("… ({} bytes)", s.len()));
+    }
+    out
+}
+
 /// A number as a person reads it: plain for moderate magnitudes, `1e-300` rather than
 /// 300 zeros, `inf` for the unbounded end of a range (`f64::MAX` and above).
 pub fn num(x: f64) -> String {
@@ -245,7 +276,9 @@ pub fn num(x: f64) -> String {
         "NaN".into()
     } else if x.is_infinite() || x.abs() >= f64::MAX / 2.0 || x.abs() >= 1e300 {
         if x > 0.0 { "inf".into() } else { "-inf".into() }
-    } else if x == 0.0 || (1e-4..1e7).contains(&x.abs()) {
+    } else if (x.to_bits() << 1) == 0 || (1e-4..1e7).contains(&x.abs()) {
+        // zero by its bits: under a flush of subnormal operands (DAZ), 5e-320 == 0.0
+        // holds, and `{x}` then printed 320 digits
         format!("{x}")
     } else {
         format!("{x:e}")

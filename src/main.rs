@@ -207,9 +207,10 @@ fn main() -> ExitCode {
     let cli = Cli::parse_from(globals_after_subcommand(std::env::args_os().collect()));
     signorini::linalg::set_portable_arithmetic(cli.portable_arithmetic);
     signorini::linalg::set_ieee_subnormals(cli.ieee_subnormals);
-    // every command's threads (this one and rayon's) in the run's subnormal mode; runs
-    // set it again for library callers (`app::run_scene` and friends)
-    let _flush = signorini::linalg::FlushGuard::for_run();
+    // no flush of subnormals while the inputs are read and validated (issue 48: under
+    // the flush, `time.t_end = 5e-320` compared as 0 and was refused with a false
+    // reason): the runs set the run's mode themselves (`app::run_scene` and friends),
+    // the studies and the FCLIB solve once their inputs are checked
     // every command refuses a limit it cannot read (issue 34: ignored silently before)
     if let Err(e) = signorini::limits::memory_limit_setting() {
         err!("error: {e}");
@@ -245,6 +246,7 @@ fn main() -> ExitCode {
                 )),
                 None => PathBuf::from(format!("out/study-{name}")),
             });
+            let _flush = signorini::linalg::FlushGuard::for_run();
             let result = match &scene {
                 Some(p) => signorini::study::run_on_scene(&name, p, &set, &schemes, &dir),
                 None if !schemes.is_empty() => Err(signorini::Error::invalid(

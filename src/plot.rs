@@ -51,8 +51,41 @@ fn tick(v: f64) -> String {
 fn plot_error(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::Write {
         path: path.to_path_buf(),
-        source: std::io::Error::other(format!("plot: {e}")),
+        source: std::io::Error::other(plain_reason(&e.to_string())),
     }
+}
+
+/// The operating system's reason inside a drawing backend's error, which plotters
+/// prints as Rust debug text (`Drawing backend error: ImageError(IoError(Os { code:
+/// 21, kind: IsADirectory, message: "Is a directory" }))`): its `message` when there is
+/// one, else the text after the backend's prefixes.
+fn plain_reason(text: &str) -> String {
+    if let Some(rest) = text.split("message: \"").nth(1)
+        && let Some(m) = rest.split('"').next()
+    {
+        return m.to_string();
+    }
+    let mut t = text;
+    for prefix in ["backend error: ", "Drawing backend error: "] {
+        t = t.trim_start_matches(prefix);
+    }
+    t.to_string()
+}
+
+/// Opens `path` for writing before anything is drawn into it, so that a plot that
+/// cannot be written is reported with the operating system's own reason and the path
+/// (not the drawing backend's debug text).
+fn writable(path: &Path) -> Result<(), Error> {
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .open(path)
+        .map(drop)
+        .map_err(|e| Error::Write {
+            path: path.to_path_buf(),
+            source: e,
+        })
 }
 
 fn register_font() {
@@ -306,9 +339,11 @@ pub fn plot_run(dir: &Path) -> Result<Vec<PathBuf>, Error> {
     let mut written = Vec::new();
     for f in &figures {
         let png = dir.join(format!("{}.png", f.stem));
+        writable(&png)?;
         draw(BitMapBackend::new(&png, (1000, 600)).into_drawing_area(), f)
             .map_err(|e| plot_error(&png, e))?;
         let svg = dir.join(format!("{}.svg", f.stem));
+        writable(&svg)?;
         draw(SVGBackend::new(&svg, (1000, 600)).into_drawing_area(), f)
             .map_err(|e| plot_error(&svg, e))?;
         written.extend([png, svg]);
@@ -353,6 +388,7 @@ pub fn lines(
     let mut out = Vec::new();
     for ext in ["png", "svg"] {
         let path = stem.with_extension(ext);
+        writable(&path)?;
         let r = if ext == "png" {
             draw_lines(
                 BitMapBackend::new(&path, (1000, 600)).into_drawing_area(),

@@ -170,3 +170,185 @@ fn a_global_flag_before_the_subcommand_reaches_it() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// Issue 48: a negative count (`--jobs -1`, `--max-iter -1`, …) was read as an unknown
+/// flag `-1` ("unexpected argument '-1'"); it is now the flag's value, refused (exit 2)
+/// naming the flag, the value and what a count is.
+#[test]
+fn negative_counts_name_the_flag_and_value() {
+    for (args, flag, want) in [
+        (
+            &["sweep", "bar", "--jobs", "-1"][..],
+            "--jobs",
+            "positive integer",
+        ),
+        (
+            &["fclib", "p.dat", "--max-iter", "-1"][..],
+            "--max-iter",
+            "positive integer",
+        ),
+        (
+            &["fclib", "p.dat", "--repeat", "2.5"][..],
+            "--repeat",
+            "positive integer",
+        ),
+        (
+            &["bar", "--elements", "-3"][..],
+            "--elements",
+            "whole number",
+        ),
+        (
+            &["bar", "--newton-max-iterations", "-1"][..],
+            "--newton-max-iterations",
+            "positive integer",
+        ),
+        (
+            &["bar", "--checkpoint-every", "-10"][..],
+            "--checkpoint-every",
+            "whole number",
+        ),
+    ] {
+        let (code, err) = signorini(args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        let value = args[args.len() - 1];
+        assert!(
+            err.contains(flag) && err.contains(&format!("'{value}'")) && err.contains(want),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("unexpected argument"), "{args:?}: {err}");
+    }
+}
+
+/// Issue 48: `signorini study NAME` with an unknown NAME created its `--out` (or
+/// `out/study-NAME`) before refusing the name; nothing is created now.
+#[test]
+fn an_unknown_study_creates_nothing() {
+    let dir = std::env::temp_dir().join(format!("signorini-study48-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for args in [
+        &["study", "bogus", "--out", "made"][..],
+        &["study", "bogus"][..],
+        &["study", "bogus", "scene.toml"][..],
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_signorini"))
+            .current_dir(&dir)
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("bogus") && err.contains("unknown study"),
+            "{err}"
+        );
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert!(left.is_empty(), "{args:?} created {left:?}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 48: a plot that cannot be written was reported with the drawing backend's
+/// Rust debug text (`ImageError(IoError(Os { code: 21, … }))`); now the path and the
+/// operating system's reason.
+#[test]
+fn an_unwritable_plot_is_named_plainly() {
+    let dir = std::env::temp_dir().join(format!("signorini-plot48-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .args([
+            "bar",
+            "--elements",
+            "50",
+            "--dt",
+            "2e-6",
+            "--t-end",
+            "1e-4",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for stem in ["energy.png", "energy.svg"] {
+        let p = dir.join(stem);
+        let _ = std::fs::remove_file(&p);
+        std::fs::create_dir(&p).unwrap();
+        let (code, err) = signorini(&["plot", dir.to_str().unwrap()]);
+        assert_eq!(code, 1, "{err}");
+        assert!(
+            err.contains(&format!("cannot write {}", p.display())),
+            "{err}"
+        );
+        assert!(err.contains("directory"), "{err}");
+        for debug in ["Os {", "IoError", "ImageError", "kind:", "backend error"] {
+            assert!(!err.contains(debug), "debug text {debug:?}: {err}");
+        }
+        std::fs::remove_dir(&p).unwrap();
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 48: a sweep point that only its build refuses (a node set on an axis) stopped
+/// the sweep after the points before it had run; every point is built first.
+#[test]
+fn every_sweep_point_is_checked_before_the_first_runs() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dir = std::env::temp_dir().join(format!("signorini-sweep48-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let o = Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .current_dir(root)
+        .args([
+            "sweep",
+            "meshes/bar.toml",
+            "--set",
+            "time.t_end=1e-4",
+            "--axis",
+            "contacts[0].nodes=[\"x1\", \"nope\"]",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("contacts[0].nodes") && err.contains("nope") && err.contains("sweep point 1"),
+        "{err}"
+    );
+    assert!(
+        !dir.exists(),
+        "the sweep ran before refusing: {}",
+        dir.display()
+    );
+}
+
+/// Issue 48: the inputs were read under the flush of subnormals, so a W entry of
+/// 1e-320 was refused as "is 0e0, expected > 0". It is read as written now: refused as
+/// subnormal (which the solve would flush to 0) naming the remedy, and taken with
+/// `--ieee-subnormals`.
+#[test]
+fn a_subnormal_input_is_named_as_written() {
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/fclib/FrictionContact3D_1c.dat");
+    let text = std::fs::read_to_string(src).unwrap();
+    let mut lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[10], "15", "W[0,0] of the 1-contact problem");
+    lines[10] = "1e-320";
+    let dir = std::env::temp_dir().join(format!("signorini-sub48-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("w.dat");
+    std::fs::write(&file, lines.join("\n") + "\n").unwrap();
+    let (code, err) = signorini(&["fclib", file.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("W_NN = W[0,0] is 1e-320")
+            && err.contains("subnormal")
+            && err.contains("--ieee-subnormals"),
+        "{err}"
+    );
+    let (code, err) = signorini(&["fclib", file.to_str().unwrap(), "--ieee-subnormals"]);
+    assert_ne!(code, 2, "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

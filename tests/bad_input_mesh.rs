@@ -203,7 +203,12 @@ fn each_bad_mesh_is_refused_with_its_file_and_place() {
             "inverted element",
             "inv.msh",
             text(&g22("1\n17 4 2 1 1 1 3 2 4\n")),
-            vec!["element 17", "inverted or degenerate", "determinant"],
+            vec![
+                "inv.msh:element 17",
+                "every corner: Jacobian determinant det J = -",
+                "is inverted",
+                "reorder the cell's nodes",
+            ],
         ),
         (
             "degenerate element",

@@ -496,6 +496,235 @@ const CASES: &[Case] = &[
         )],
         &["mesh.cells", "at least one point and one cell"],
     ),
+    // issue 48: arrays meshes taken as written, or refused
+    (
+        "arrays mesh: a node set named all",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, 7]] }, node_sets = { z0 = [0, 1, 2, 3], all = [0] } }",
+        )],
+        &["mesh.node_sets.all", "1 node(s)", "reserved", "every node"],
+    ),
+    (
+        "arrays mesh: a cell listed twice",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, 7], [4, 5, 6, 7, 0, 1, 2, 3]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+        )],
+        &[
+            "mesh.cells.hex8[1]",
+            "[4, 5, 6, 7, 0, 1, 2, 3]",
+            "mesh.cells.hex8[0]",
+            "listed twice",
+        ],
+    ),
+    (
+        "arrays mesh: a negative cell index",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, -7]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+        )],
+        &["bodies[0].mesh.cells.hex8[0][7]", "value -7", "integer ≥ 0"],
+    ),
+    (
+        "arrays mesh: a fractional cell index",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, 7.5]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+        )],
+        &[
+            "bodies[0].mesh.cells.hex8[0][7]",
+            "value 7.5",
+            "integer ≥ 0",
+        ],
+    ),
+    (
+        "arrays mesh: a string in a node set",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, 7]] }, node_sets = { z0 = [0, 1, \"two\", 3] } }",
+        )],
+        &["bodies[0].mesh.node_sets.z0[2]", "\"two\"", "point index"],
+    ),
+    // a body inverted at the start: in its mesh (mirrored, or one tangled corner), or by its displacement
+    (
+        "arrays mesh: a mirrored cell",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex8 = [[4, 5, 6, 7, 0, 1, 2, 3]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+        )],
+        &[
+            "bodies[0] (b).mesh",
+            "cell 0 (hex8), corner 0",
+            "det J = -1.000e0",
+            "reorder the cell's nodes",
+        ],
+    ),
+    (
+        "arrays mesh: a tangled corner",
+        &[(
+            "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.03, 0.03, 0.03], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, 7]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+        )],
+        &[
+            "bodies[0] (b).mesh",
+            "corner 6",
+            "det J = -",
+            "reorder the cell's nodes",
+        ],
+    ),
+    (
+        "initial displacement that inverts the body",
+        &[(
+            "material = { young = 1e6, poisson = 0.3, density = 1000.0 }",
+            "material = { young = 1e6, poisson = 0.3, density = 1000.0 }\ninitial_displacement = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, -0.2], [0.0, 0.0, -0.2], [0.0, 0.0, -0.2], [0.0, 0.0, -0.2]]",
+        )],
+        &[
+            "bodies[0] (b).initial_displacement",
+            "cell 0 (hex8), corner 0",
+            "det F = -1.000e0",
+            "inverts the cell",
+        ],
+    ),
+    (
+        "initial displacement inverting a quadrature point, not a corner (neo-Hookean)",
+        &[
+            (
+                "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
+                "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex8 = [[0, 1, 2, 3, 4, 5, 6, 7]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+            ),
+            (
+                "density = 1000.0 }",
+                "density = 1000.0, model = \"neo-hookean\" }\ninitial_displacement = [[0.0, 0.0, 0.0], [-0.072, -0.098, 0.064], [0.0, -0.079, 0.0], [-0.104, 0.0, 0.109], [-0.026, 0.0, -0.057], [0.0, -0.11, 0.0], [0.089, 0.004, 0.0], [0.118, -0.112, 0.0]]",
+            ),
+        ],
+        &[
+            "bodies[0] (b).initial_displacement",
+            "cell 0: det F = -",
+            "at a quadrature point",
+            "inverts the cell",
+        ],
+    ),
+    // initial fields and rigid motions taken as written, or refused
+    (
+        "field file table with an unknown key",
+        &[(
+            "material = { young = 1e6, poisson = 0.3, density = 1000.0 }",
+            "material = { young = 1e6, poisson = 0.3, density = 1000.0 }\ninitial_velocity = { file = \"v0.csv\", columns = [0, 1, 2] }",
+        )],
+        &[
+            "bodies[0].initial_velocity.columns",
+            "value columns",
+            "not a key of a field file",
+        ],
+    ),
+    (
+        "field file path of the wrong type",
+        &[(
+            "material = { young = 1e6, poisson = 0.3, density = 1000.0 }",
+            "material = { young = 1e6, poisson = 0.3, density = 1000.0 }\ninitial_velocity = { file = 3 }",
+        )],
+        &[
+            "bodies[0].initial_velocity.file`",
+            "integer `3`",
+            "a string",
+        ],
+    ),
+    (
+        "initial velocity field of the wrong type",
+        &[(
+            "material = { young = 1e6, poisson = 0.3, density = 1000.0 }",
+            "material = { young = 1e6, poisson = 0.3, density = 1000.0 }\ninitial_velocity = 3",
+        )],
+        &[
+            "bodies[0].initial_velocity",
+            "integer `3`",
+            "rows of numbers",
+        ],
+    ),
+    (
+        "a spin on a body with fixed nodes",
+        &[(
+            "material = { young = 1e6, poisson = 0.3, density = 1000.0 }",
+            "material = { young = 1e6, poisson = 0.3, density = 1000.0 }\nangular_velocity = [0.0, 0.0, 10.0]\nfixed = [\"x0\"]",
+        )],
+        &[
+            "bodies[0] (b).angular_velocity",
+            "at node 0 component 0",
+            "must be 0 on every fixed component",
+        ],
+    ),
+    (
+        "initial velocity on prescribed nodes",
+        &[
+            (
+                "material = { young = 1e6, poisson = 0.3, density = 1000.0 }",
+                "material = { young = 1e6, poisson = 0.3, density = 1000.0 }\ninitial_velocity = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]",
+            ),
+            (
+                "[[obstacles]]",
+                "[[prescribed]]\nbody = \"b\"\nnodes = \"z1\"\nvelocity = [0.0, 0.0, 0.0]\n[[obstacles]]",
+            ),
+        ],
+        &[
+            "bodies[0] (b).initial_velocity",
+            "value 1 at node 4",
+            "prescribed[0] drives that component",
+            "starts at 0",
+        ],
+    ),
+    (
+        "initial displacement on prescribed nodes",
+        &[
+            (
+                "material = { young = 1e6, poisson = 0.3, density = 1000.0 }",
+                "material = { young = 1e6, poisson = 0.3, density = 1000.0 }\ninitial_displacement = [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.001], [0.0, 0.0, 0.001], [0.0, 0.0, 0.001], [0.0, 0.0, 0.001]]",
+            ),
+            (
+                "[[obstacles]]",
+                "[[prescribed]]\nbody = \"b\"\nnodes = \"z1\"\nvelocity = [0.0, 0.0, 0.0]\ncomponents = [2]\n[[obstacles]]",
+            ),
+        ],
+        &[
+            "bodies[0] (b).initial_displacement",
+            "value 0.001 at node 4",
+            "prescribed[0] drives that component",
+        ],
+    ),
+    // issue 48: validated before any flush of subnormals; loads whose arithmetic overflows
+    (
+        "a subnormal end time",
+        &[("t_end = 1e-3", "t_end = 5e-320")],
+        &[
+            "time.t_end",
+            "value 5e-320",
+            "at least one step (time.dt = 0.0001)",
+        ],
+    ),
+    (
+        "a load of 1e308",
+        &[(
+            "[[obstacles]]",
+            "[[forces]]\nbody = \"b\"\nnodes = \"z1\"\ntotal = [0.0, 0.0, -1e308]\n[[obstacles]]",
+        )],
+        &["forces[0].total", "-1e308", "at most 1e150 N", "overflow"],
+    ),
+    (
+        "a load pushed past the bound by its time factors",
+        &[(
+            "[[obstacles]]",
+            "[[forces]]\nbody = \"b\"\nnodes = \"z1\"\ntotal = [0.0, 0.0, -1e100]\ntime = [[0.0, 0.0], [1.0, 1e60]]\n[[obstacles]]",
+        )],
+        &["forces[0].total", "reaches 1e160 N", "at most 1e150 N"],
+    ),
+    (
+        "gravity of 1e200",
+        &[(
+            "[[obstacles]]",
+            "[loads]\ngravity = [0.0, 0.0, -1e200]\n[[obstacles]]",
+        )],
+        &["loads.gravity", "-1e200", "at most 1e150"],
+    ),
     (
         "unknown output encoding",
         &[("[time]\n", "[output]\nencoding = \"xml\"\n[time]\n")],
@@ -1081,5 +1310,59 @@ fn issue_34_refusals_name_what_the_user_wrote() {
         ),
         2,
         &["example.q0", "contact 0 starts 1.468e-3 m inside"],
+    );
+}
+
+/// Issue 48: a field file's row `1.0,,0.0,-1.0` read as (1, 0, −1); now its empty cell
+/// is refused with file, line and column. A file of NUL bytes is quoted in one short
+/// excerpt, not echoed whole.
+#[test]
+fn field_files_are_read_as_written() {
+    let dir = tmp("field_files");
+    let scene = BOX_ON_FLOOR.replace("MESH", BOX_MESH).replace(
+        "density = 1000.0 }",
+        "density = 1000.0 }\ninitial_velocity = { file = \"v0.csv\" }",
+    );
+    std::fs::write(dir.join("scene.toml"), &scene).unwrap();
+    std::fs::write(dir.join("v0.csv"), "0 0 0\n1.0,,0.0,-1.0\n").unwrap();
+    expect(
+        "an empty cell",
+        cli(&dir, &["check", "scene.toml"], &[]),
+        2,
+        &[
+            "v0.csv:line 2, column 5",
+            "an empty cell",
+            "`1.0,,0.0,-1.0`",
+        ],
+    );
+    std::fs::write(dir.join("v0.csv"), "0, 0, 0,\n").unwrap();
+    expect(
+        "a trailing comma",
+        cli(&dir, &["check", "scene.toml"], &[]),
+        2,
+        &["v0.csv:line 1, column 9", "an empty cell"],
+    );
+    // the same rows, well written, are taken (commas with spaces, or white space)
+    let rows = "0.0, 0.0, 0.0\n".repeat(4) + &"0 0 -1.0 # falling\n".repeat(4);
+    std::fs::write(dir.join("v0.csv"), rows).unwrap();
+    let (code, err) = cli(&dir, &["check", "scene.toml"], &[]);
+    assert_eq!(code, 0, "{err}");
+    std::fs::write(dir.join("v0.csv"), vec![0u8; 20 << 20]).unwrap();
+    let (code, err) = cli(&dir, &["check", "scene.toml"], &[]);
+    expect(
+        "a file of NUL bytes",
+        (code, err.clone()),
+        2,
+        &[
+            "v0.csv:line 1",
+            "\\u{0}",
+            "(20971520 bytes)",
+            "is not a finite number",
+        ],
+    );
+    assert!(
+        err.len() < 400,
+        "the NUL file is echoed: {} bytes",
+        err.len()
     );
 }

@@ -125,10 +125,24 @@ fn foreign_and_inconsistent_checkpoints_are_refused() {
     let work = tmp("foreign");
     killed_scene_run(&work);
     let out = work.join("out");
-    // copied into another directory, with its history
+    // copied beside another run's history (a splice of two runs): refused
     let other = work.join("other");
     copy_dir(&out, &other);
-    refused(&other, &["`out_dir`", "belongs to the run in"]);
+    let part = other.join("history.csv.part");
+    // another run's rows: one digit of the first row changed
+    let mut h = std::fs::read(&part).unwrap();
+    let row = h.iter().position(|&b| b == b'\n').unwrap() + 1;
+    let at = row + h[row..].iter().position(u8::is_ascii_digit).unwrap();
+    h[at] = if h[at] == b'1' { b'2' } else { b'1' };
+    std::fs::write(&part, &h).unwrap();
+    refused(
+        &other,
+        &[
+            "history.csv.part",
+            "are not the history the checkpoint continues",
+            "SHA-256",
+        ],
+    );
     // each change on a fresh copy of the original directory
     let cases: Vec<(&str, Edit, Vec<&str>)> = vec![
         (
@@ -209,7 +223,13 @@ fn foreign_and_inconsistent_checkpoints_are_refused() {
     let nl = h.iter().position(|&b| b == b'\n').unwrap();
     h[nl] = b',';
     std::fs::write(&part, &h).unwrap();
-    refused(&dir, &["history.csv.part", "does not end row"]);
+    refused(
+        &dir,
+        &[
+            "history.csv.part",
+            "are not the history the checkpoint continues",
+        ],
+    );
     // the unchanged copy (directory rewritten only) resumes
     let dir = work.join("case-none");
     copy_dir(&out, &dir);
@@ -256,4 +276,21 @@ fn checkpoint_size_does_not_grow_with_the_run() {
         (late - early).abs() <= 0.01 * early,
         "checkpoints of one run: {early} bytes at step 1 000, {late} at step 19 000"
     );
+}
+
+/// Issue 48: a run directory moved whole (`mv out out2`) was refused ("the checkpoint
+/// belongs to the run in …/out") though nothing was spliced: the checkpoint named its
+/// directory by path. It is tied to its history's content now, so the moved directory
+/// resumes and finishes; the checkpoint is removed and the summary written.
+#[test]
+fn a_run_directory_moved_whole_resumes() {
+    let work = tmp("moved");
+    killed_scene_run(&work);
+    let moved = work.join("moved-elsewhere");
+    std::fs::rename(work.join("out"), &moved).unwrap();
+    let o = resume(&moved);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(moved.join("summary.json").exists());
+    assert!(!moved.join("checkpoint.json").exists());
+    let _ = std::fs::remove_dir_all(&work);
 }

@@ -428,7 +428,7 @@ fn missing_old_and_corrupt_checkpoints_are_named() {
     .unwrap();
     let e = err(&dir);
     assert!(
-        e.contains("version 0") && e.contains("reads version 6"),
+        e.contains("version 0") && e.contains("reads version 7"),
         "{e}"
     );
     // a real checkpoint with one vector cut short

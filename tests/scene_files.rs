@@ -550,3 +550,135 @@ obstacle = "floor"
     assert!(e.contains("bodies[0].material.young"), "{e}");
     assert!(e.contains("boolean"), "{e}");
 }
+
+/// Issue 48: `within` is measured at the starting positions (reference plus
+/// `initial_displacement`): a box lifted 1 cm above its floor and displaced down by
+/// 9.5 mm has its four bottom nodes within 1 mm of the floor, its top ones 10.05 cm
+/// away; measured at the reference, no node was within and the scene was refused.
+#[test]
+fn within_is_measured_at_the_displaced_start() {
+    let scene = |u: f64| {
+        let rows: Vec<String> = (0..8).map(|_| format!("[0.0, 0.0, {u:?}]")).collect();
+        format!(
+            "[time]\ndt = 1e-4\nt_end = 1e-3\n[[bodies]]\nname = \"b\"\n\
+             mesh = {{ generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }}\n\
+             material = {{ young = 1e6, poisson = 0.3, density = 1000.0 }}\n\
+             initial_displacement = [{}]\n\
+             [[obstacles]]\nname = \"floor\"\ntype = \"plane\"\npoint = [0.0, 0.0, -0.01]\n\
+             normal = [0.0, 0.0, 1.0]\n\
+             [[contacts]]\nbody = \"b\"\nnodes = \"all\"\nobstacle = \"floor\"\nwithin = 1e-3\n",
+            rows.join(", ")
+        )
+    };
+    let (_, report) = Scene::from_toml(&scene(-0.0095)).unwrap().build().unwrap();
+    assert_eq!(
+        report.contacts, 4,
+        "the bottom face, 0.5 mm above the floor"
+    );
+    // not displaced: 1 cm away, none within 1 mm (the nearest named)
+    let err = match Scene::from_toml(&scene(0.0)).unwrap().build() {
+        Ok(_) => panic!("built with no node within"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("within") && err.contains("1.000e-2 m away"),
+        "{err}"
+    );
+}
+
+/// Issue 48: an axisymmetric tube (r from 10 to 20 mm, 50 mm long) in a coaxial bore of
+/// radius 20.5 mm and on a coaxial shaft of radius 9.5 mm, each given as a line parallel
+/// to the axis (`normal = [∓1, 0]`, which revolves into the cylinder) and as a coaxial
+/// `cylinder`: every outer node starts at the closed-form gap R_bore − r_out = 0.5 mm,
+/// every inner node at r_in − R_shaft = 0.5 mm, in both writings, to round-off; the
+/// tube runs outward into the bore without passing it. A cone (an oblique line) and an
+/// off-axis cylinder are refused with the reason.
+#[test]
+fn a_tube_in_a_coaxial_bore_and_on_a_shaft() {
+    use signorini::contact::ContactJacobian;
+    let scene = |bore: &str, shaft: &str, extra: &str| {
+        format!(
+            "[time]\ndt = 1e-5\nt_end = 2e-3\n[[bodies]]\nname = \"tube\"\n\
+             formulation = \"axisymmetric\"\n\
+             mesh = {{ generator = \"rectangle\", cell = \"quad4\", cells = [2, 5], size = [0.01, 0.05], origin = [0.01, 0.0] }}\n\
+             material = {{ young = 1e6, poisson = 0.3, density = 1000.0 }}\n{extra}\
+             [[obstacles]]\nname = \"bore\"\n{bore}\n\
+             [[obstacles]]\nname = \"shaft\"\n{shaft}\n\
+             [[contacts]]\nbody = \"tube\"\nnodes = \"x1\"\nobstacle = \"bore\"\n\
+             [[contacts]]\nbody = \"tube\"\nnodes = \"x0\"\nobstacle = \"shaft\"\n"
+        )
+    };
+    let lines = (
+        "type = \"plane\"\npoint = [0.0205, 0.0]\nnormal = [-1.0, 0.0]",
+        "type = \"plane\"\npoint = [0.0095, 0.0]\nnormal = [1.0, 0.0]",
+    );
+    let cylinders = (
+        "type = \"cylinder\"\npoint = [0.0, 0.0]\naxis = [0.0, 1.0]\nradius = 0.0205\nside = \"inside\"",
+        "type = \"cylinder\"\npoint = [0.0, 0.3]\naxis = [0.0, -2.0]\nradius = 0.0095",
+    );
+    for (bore, shaft) in [lines, cylinders] {
+        let s = Scene::from_toml(&scene(bore, shaft, "")).unwrap();
+        let (model, report) = s.build().unwrap();
+        assert_eq!(report.contacts, 12, "6 outer and 6 inner nodes");
+        let c = &model.problem.contacts;
+        let mut gap = vec![0.0; c.len()];
+        let mut jac = ContactJacobian::for_set(c.as_ref());
+        c.evaluate(&model.problem.q0, &mut gap, &mut jac);
+        for g in gap {
+            assert!(
+                (g - 5e-4).abs() < 1e-15,
+                "{bore}: gap {g}, closed form 5e-4"
+            );
+        }
+        // pushed outward at 3 m/s (a free ring would swing out 1.4 mm): the bore stops
+        // it, and its outer nodes end at r ≤ R_bore
+        let v: Vec<String> = (0..18).map(|_| "[3.0, 0.0]".to_string()).collect();
+        let s = Scene::from_toml(&scene(
+            bore,
+            shaft,
+            &format!("initial_velocity = [{}]\n", v.join(", ")),
+        ))
+        .unwrap();
+        let r = run_scene(&s, None, &mut Quiet).unwrap();
+        assert!(
+            r.summary.max_violation < 1e-9,
+            "{bore}: the tube passed the bore by {}",
+            r.summary.max_violation
+        );
+        assert!(
+            r.force.iter().any(|&f| f > 0.0),
+            "{bore}: the tube never met the bore"
+        );
+        let q = &r.state.q;
+        assert!(q.iter().any(|&u| u > 4e-4), "the tube moved out");
+    }
+    // what revolves into no cylinder is refused, with why
+    for (bore, key, why) in [
+        (
+            "type = \"plane\"\npoint = [0.0205, 0.0]\nnormal = [-0.6, 0.8]",
+            "obstacles[0].normal",
+            "revolves into a cone",
+        ),
+        (
+            "type = \"plane\"\npoint = [0.0, 0.0]\nnormal = [-1.0, 0.0]",
+            "obstacles[0].point",
+            "radius point[0] = r, which must be > 0",
+        ),
+        (
+            "type = \"cylinder\"\npoint = [0.0, 0.0]\naxis = [1.0, 0.0]\nradius = 0.0205\nside = \"inside\"",
+            "obstacles[0].axis",
+            "is coaxial",
+        ),
+        (
+            "type = \"cylinder\"\npoint = [0.001, 0.0]\naxis = [0.0, 1.0]\nradius = 0.0205\nside = \"inside\"",
+            "obstacles[0].point",
+            "passes through the axis of revolution",
+        ),
+    ] {
+        let err = match Scene::from_toml(&scene(bore, lines.1, "")) {
+            Ok(_) => panic!("{bore}: accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(err.contains(key) && err.contains(why), "{err}");
+    }
+}

@@ -3,6 +3,31 @@
 
 use super::*;
 
+/// A count flag's value (`--jobs`, `--max-iter`, `--repeat`, …): a whole number ≥ 1.
+/// Without it, `--jobs -1` was read as an unknown flag `-1` ("unexpected argument").
+fn positive(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err("must be a positive integer (1, 2, 3, …)".to_string()),
+    }
+}
+
+/// `--jobs`: a whole number, its range (1 to 1024) checked by the sweep, which names it.
+fn jobs(s: &str) -> Result<usize, String> {
+    s.trim()
+        .parse::<usize>()
+        .map_err(|_| "must be a positive integer (1 to 1024)".to_string())
+}
+
+/// A count flag that takes 0 where the run says what 0 means (`--checkpoint-every`,
+/// `--delassus-pool`, …; a 0 the run cannot use is refused there, with its reason):
+/// a whole number ≥ 0.
+fn count(s: &str) -> Result<usize, String> {
+    s.trim()
+        .parse::<usize>()
+        .map_err(|_| "must be a whole number (0, 1, 2, …)".to_string())
+}
+
 #[derive(Args)]
 pub(crate) struct FclibArgs {
     /// The problem file (.hdf5, .h5 or .dat).
@@ -19,13 +44,13 @@ pub(crate) struct FclibArgs {
     #[arg(long, default_value = "siconos", value_parser = ["siconos", "velocity"])]
     pub(crate) residual: String,
     /// Cap on NSGS sweeps (over all proximal iterations for prox).
-    #[arg(long, default_value_t = signorini::io::fclib::DEFAULT_MAX_ITERATIONS)]
+    #[arg(long, default_value_t = signorini::io::fclib::DEFAULT_MAX_ITERATIONS, allow_hyphen_values = true, value_parser = positive)]
     pub(crate) max_iter: usize,
     /// Start from the file's /guesses/1/r instead of r = 0.
     #[arg(long)]
     pub(crate) warm: bool,
     /// Solve this many times (from the same start) and report the median time.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_hyphen_values = true, value_parser = positive)]
     pub(crate) repeat: usize,
     /// Write r, u, residual, iterations and seconds as JSON.
     #[arg(long, value_name = "OUT.json")]
@@ -67,7 +92,7 @@ pub(crate) struct SweepRunArgs {
     #[arg(long, value_delimiter = ',', value_name = "H")]
     pub(crate) dt: Vec<f64>,
     /// Mesh refinement levels: every generated mesh's cell counts times the level.
-    #[arg(long, value_delimiter = ',', value_name = "LEVELS")]
+    #[arg(long, value_delimiter = ',', value_name = "LEVELS", allow_hyphen_values = true, value_parser = positive)]
     pub(crate) refine: Vec<usize>,
     /// θ values.
     #[arg(long, value_delimiter = ',')]
@@ -86,7 +111,7 @@ pub(crate) struct SweepRunArgs {
     #[arg(long, value_name = "KEY=[VALUES]")]
     pub(crate) axis: Vec<String>,
     /// Runs per point; the wall time is their median.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = positive)]
     pub(crate) repeat: Option<usize>,
     /// Accuracy levels of the verdict (relative, comma-separated; default 0.1,0.01,0.001).
     #[arg(long, value_delimiter = ',')]
@@ -110,7 +135,7 @@ pub(crate) struct SweepRunArgs {
     /// core; 1 with --repeat > 1, whose timing medians want each point alone, and with
     /// --mpi, whose ranks fill the cores). Every point's record is the same with any
     /// value, times and peak memory aside.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = jobs)]
     pub(crate) jobs: Option<usize>,
     /// Print only one line per run.
     #[arg(long)]
@@ -141,10 +166,10 @@ pub(crate) struct SceneArgs {
 pub(crate) struct OutputArgs {
     /// Save a field frame every K steps (default: about 100 frames; frames are also saved
     /// at the start, at contact onset and release and at the last step).
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", allow_hyphen_values = true, value_parser = count)]
     pub(crate) save_every: Option<usize>,
     /// Write a history row every K steps (default 1).
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", allow_hyphen_values = true, value_parser = count)]
     pub(crate) history_every: Option<usize>,
     /// Write no field frames (neither .vtu/.pvd nor, with the hdf5 feature, the VTKHDF grid).
     #[arg(long)]
@@ -160,7 +185,7 @@ pub(crate) struct OutputArgs {
     pub(crate) no_hdf5: bool,
     /// Write a checkpoint every K steps (`checkpoint.json` in the output directory);
     /// `signorini resume DIR` finishes a killed run from it.
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", allow_hyphen_values = true, value_parser = count)]
     pub(crate) checkpoint_every: Option<usize>,
 }
 
@@ -222,7 +247,7 @@ pub(crate) enum LcpArg {
 #[derive(Args)]
 pub(crate) struct BarArgs {
     /// Number of rod elements N.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = 1000, allow_hyphen_values = true, value_parser = count)]
     pub(crate) elements: usize,
     /// Time step h (s).
     #[arg(long, default_value_t = 2e-7, allow_hyphen_values = true)]
@@ -297,20 +322,20 @@ pub(crate) struct BarArgs {
     #[arg(long, default_value_t = 1e-12, allow_hyphen_values = true)]
     pub(crate) lcp_tol: f64,
     /// PGS sweep cap.
-    #[arg(long, default_value_t = 10_000)]
+    #[arg(long, default_value_t = 10_000, allow_hyphen_values = true, value_parser = count)]
     pub(crate) lcp_max_sweeps: usize,
     /// Delassus storage: dense n×m blocks, per-active-column, or auto (dense up to 64
     /// contacts).
     #[arg(long, value_enum, default_value = "auto")]
     pub(crate) delassus: DelassusKind,
     /// Columns of the per-active-column pool (0: as many as fit in 2 GiB).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_hyphen_values = true, value_parser = count)]
     pub(crate) delassus_pool: usize,
     /// Newton / fixed-point tolerance (relative).
     #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
     pub(crate) newton_tol: f64,
     /// Newton iteration cap per step.
-    #[arg(long, default_value_t = 50)]
+    #[arg(long, default_value_t = 50, allow_hyphen_values = true, value_parser = positive)]
     pub(crate) newton_max_iterations: usize,
     /// Count iteration caps hit (Newton, projection, LCP) in the summary and go on,
     /// instead of failing the run (exit code 1) at the first one.

@@ -187,6 +187,8 @@ pub(crate) fn fclib(a: &FclibArgs) -> Result<bool, signorini::Error> {
     }
     let measure =
         signorini::solvers::friction::Measure::parse(&a.residual).expect("clap checked the name");
+    // the problem is read and checked: now the run's subnormal mode
+    let _flush = signorini::linalg::FlushGuard::for_run();
     let sol = signorini::io::fclib::solve_repeated(&prob, &params, measure, a.warm, a.repeat)?;
     out!("problem             {} ({})", a.file.display(), prob.form);
     out!(

@@ -243,6 +243,16 @@ impl std::fmt::Debug for SpdFactor {
     }
 }
 
+/// A failed sparse Cholesky factorization in words (faer prints its errors as Rust
+/// debug text: `NonPositivePivot { index: 20 }`).
+fn llt_reason(e: &faer::linalg::solvers::LltError) -> String {
+    match e {
+        faer::linalg::solvers::LltError::NonPositivePivot { index } => format!(
+            "the Cholesky factorization met a pivot ≤ 0 at row {index} of the reordered matrix"
+        ),
+    }
+}
+
 pub(super) fn not_spd(what: &str, detail: String) -> Error {
     Error::Numerical(format!(
         "{what} is not positive definite ({detail}); check that the mass matrix has no zero \
@@ -391,7 +401,7 @@ impl SpdFactor {
                 MemStack::new(&mut f.mem),
                 Default::default(),
             )
-            .map_err(|e| not_spd(what, format!("Cholesky failed: {e:?}")))?;
+            .map_err(|e| not_spd(what, llt_reason(&e)))?;
         // the simplicial copy reuses its buffers after the first factorization: a
         // refactorization (the Newton loop's `M̂ⁿ`) does not allocate
         let previous = f.simplicial.take();

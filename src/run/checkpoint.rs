@@ -17,11 +17,15 @@
 //!   frames, then appended to. Nothing in it grows with the number of steps (version
 //!   3: version 2 held the per-step force trace and every frame's time). Version 4
 //!   adds the friction fallback and complementarity fallback counters and the energy
-//!   balance; version 5 the digest; version 6 the subnormal mode.
+//!   balance; version 5 the digest; version 6 the subnormal mode; version 7 the
+//!   SHA-256 of the history it continues, in place of the directory's path.
 //!
-//! What a checkpoint guards (since version 2): the build that wrote it, the output directory it
-//! belongs to, and the size and SHA-256 of every input file (the scene file and its mesh
-//! files); `resume` refuses a checkpoint whose build, directory or inputs differ, whose
+//! What a checkpoint guards (since version 2): the build that wrote it, the run it
+//! belongs to — since version 7 by content: the SHA-256 of the history up to its cursor,
+//! so that a run directory moved or copied whole resumes, and a checkpoint copied into
+//! another run's directory (which would splice two runs) is refused —, and the size and
+//! SHA-256 of every input file (the scene file and its mesh
+//! files); `resume` refuses a checkpoint whose build, history or inputs differ, whose
 //! `every` is 0, whose history cursor falls inside a row or whose arrays disagree, each
 //! with exit code 2 and a message naming what differs ([`Checkpoint::verify`]). Since
 //! version 5 it also carries the SHA-256 of its own content (`digest`, all but the
@@ -43,7 +47,7 @@ use crate::integrators::saved::{Bits, Floats, IntegratorState};
 /// The format name in every checkpoint.
 pub const FORMAT: &str = "signorini-checkpoint";
 /// The format version this build writes and reads.
-pub const VERSION: u32 = 6;
+pub const VERSION: u32 = 7;
 /// The checkpoint's file name in a run directory.
 pub const FILE: &str = "checkpoint.json";
 
@@ -95,6 +99,10 @@ pub struct RunState {
     pub energy0: Bits,
     /// Bytes of `history.csv.part` written up to the checkpoint.
     pub history_bytes: u64,
+    /// SHA-256 (hex) of those bytes: what ties the checkpoint to its run directory
+    /// (version 7; before, its absolute path, so a directory moved whole could not be
+    /// resumed).
+    pub history_sha256: String,
     /// History rows written up to the checkpoint (the length of the HDF5 `/history`).
     pub history_rows: u64,
     /// Frames written (their times are read back from the `.pvd`, so that a checkpoint
@@ -105,6 +113,63 @@ pub struct RunState {
     /// The probes' values recorded so far (`run::probes::ProbeSet::save`).
     #[serde(default)]
     pub probes: Vec<Floats>,
+}
+
+/// A running SHA-256 of a history file's first `bytes` bytes: each checkpoint reads only
+/// what was written since the last one.
+#[derive(Clone, Default)]
+pub struct HistoryHash {
+    sha: sha2::Sha256,
+    bytes: u64,
+}
+
+impl HistoryHash {
+    /// The hex digest of the bytes hashed so far.
+    pub fn hex(&self) -> String {
+        use sha2::Digest as _;
+        hex(&self.sha.clone().finalize())
+    }
+}
+
+/// `state` carried on to the first `upto` bytes of `path` (reading only the bytes past
+/// those it holds); the file must hold them. Returns the new state twice: one to keep,
+/// one that was hashed.
+pub fn hash_history(
+    path: &Path,
+    mut state: HistoryHash,
+    upto: u64,
+) -> Result<(HistoryHash, HistoryHash), Error> {
+    use sha2::Digest as _;
+    use std::io::{Read as _, Seek as _};
+    if upto < state.bytes {
+        state = HistoryHash::default();
+    }
+    if upto > state.bytes {
+        let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        f.seek(std::io::SeekFrom::Start(state.bytes))
+            .map_err(|e| Error::io(path, e))?;
+        let mut left = upto - state.bytes;
+        let mut buf = vec![0u8; 1 << 16];
+        while left > 0 {
+            let want = (buf.len() as u64).min(left) as usize;
+            let got = f.read(&mut buf[..want]).map_err(|e| Error::io(path, e))?;
+            if got == 0 {
+                return Err(Error::bad_file(
+                    path,
+                    "",
+                    format!(
+                        "holds {} bytes, fewer than the {upto} the checkpoint recorded (the \
+                         history was cut or replaced)",
+                        upto - left
+                    ),
+                ));
+            }
+            state.sha.update(&buf[..got]);
+            left -= got as u64;
+        }
+        state.bytes = upto;
+    }
+    Ok((state.clone(), state))
 }
 
 /// One input file of a run as the checkpoint saw it.
@@ -185,7 +250,8 @@ pub struct Checkpoint {
     pub run: RunState,
     /// The build that wrote it ([`build_id`]).
     pub build: String,
-    /// The output directory it belongs to (absolute, canonical).
+    /// The output directory it was written in (absolute, canonical; for messages only:
+    /// the run is identified by `run.history_sha256`, so a directory moved whole resumes).
     pub out_dir: PathBuf,
     /// The run's input files as they were at its start.
     pub inputs: Vec<InputFile>,
@@ -301,18 +367,6 @@ impl Checkpoint {
                 ),
             );
         }
-        let here = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
-        if self.out_dir != here {
-            return bad(
-                "`out_dir`",
-                format!(
-                    "the checkpoint belongs to the run in {}, not to {}: resume that \
-                     directory (a checkpoint copied elsewhere would splice two runs)",
-                    self.out_dir.display(),
-                    here.display()
-                ),
-            );
-        }
         if self.every == 0 {
             return bad(
                 "`every`",
@@ -385,7 +439,7 @@ impl Checkpoint {
                 );
             }
         }
-        // last, so that the checks above name what they find
+        // after the field checks, so that they name what they find
         if self.clone().content_digest()? != self.digest {
             return bad(
                 "`digest`",
@@ -394,6 +448,27 @@ impl Checkpoint {
                  or resume from an intact copy"
                     .into(),
             );
+        }
+        // then, for an intact checkpoint: the directory's history is the one it
+        // continues, by content, not by path (a directory moved whole resumes; a
+        // checkpoint copied beside another run's history would splice two runs)
+        let history = crate::io::part_path(&dir.join("history.csv"));
+        let (_, hashed) = hash_history(&history, HistoryHash::default(), self.run.history_bytes)?;
+        if hashed.hex() != self.run.history_sha256 {
+            return Err(Error::bad_file(
+                &history,
+                "",
+                format!(
+                    "its first {} bytes (SHA-256 {}) are not the history the checkpoint \
+                     continues (SHA-256 {}; written in {}): the checkpoint was copied beside \
+                     another run's history, or the history was edited; resume the directory \
+                     the checkpoint was written in (moved whole, it resumes)",
+                    self.run.history_bytes,
+                    &hashed.hex()[..16],
+                    &self.run.history_sha256[..16.min(self.run.history_sha256.len())],
+                    self.out_dir.display()
+                ),
+            ));
         }
         Ok(())
     }

@@ -313,13 +313,12 @@ impl RunInProgress {
             writers.history_stride = o.options.history_stride;
             let every = resume.map_or(o.options.checkpoint_every, |c| c.every);
             if let Some(c) = ckpt.as_ref().filter(|_| every > 0) {
-                let (inputs, out_dir) = match resume {
-                    Some(r) => (r.inputs.clone(), r.out_dir.clone()),
-                    None => (
-                        c.inputs.clone(),
-                        std::fs::canonicalize(o.dir).map_err(|e| Error::io(o.dir, e))?,
-                    ),
+                let inputs = match resume {
+                    Some(r) => r.inputs.clone(),
+                    None => c.inputs.clone(),
                 };
+                // where the run is now (a resumed directory may have been moved whole)
+                let out_dir = std::fs::canonicalize(o.dir).map_err(|e| Error::io(o.dir, e))?;
                 plan = Some(CheckpointPlan {
                     every,
                     dir: o.dir.to_path_buf(),
@@ -329,6 +328,7 @@ impl RunInProgress {
                     energy0,
                     inputs,
                     out_dir,
+                    history_hash: Default::default(),
                     abort_after: std::env::var("SIGNORINI_ABORT_AFTER_STEP")
                         .ok()
                         .and_then(|v| v.parse().ok()),

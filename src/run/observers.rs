@@ -223,6 +223,8 @@ pub(super) struct CheckpointPlan {
     /// [`Checkpoint::verify`].
     pub(super) inputs: Vec<checkpoint::InputFile>,
     pub(super) out_dir: PathBuf,
+    /// The running SHA-256 of the history up to the last checkpoint.
+    pub(super) history_hash: checkpoint::HistoryHash,
     /// Test hook (`SIGNORINI_ABORT_AFTER_STEP`): abort the process right after this
     /// step's checkpoint and output, as a SIGKILL would, to test `resume`.
     pub(super) abort_after: Option<usize>,
@@ -351,13 +353,18 @@ impl Observer for RunObserver {
 impl RunObserver {
     /// Flushes the history, waits for the queued frames and writes the checkpoint.
     pub(super) fn checkpoint(&mut self, integ: &dyn Integrator) -> Result<(), Error> {
-        let Some(p) = &self.plan else {
+        let Some(p) = &mut self.plan else {
             return Ok(());
         };
         let (history_bytes, history_rows) = match self.writers.history.as_mut() {
             Some(h) => h.sync()?,
             None => (0, 0),
         };
+        let history = crate::io::part_path(&p.dir.join("history.csv"));
+        let (kept, hashed) =
+            checkpoint::hash_history(&history, std::mem::take(&mut p.history_hash), history_bytes)?;
+        p.history_hash = kept;
+        let p = &*p;
         if let Some(f) = self.writers.frames.as_mut() {
             f.sync()?;
         }
@@ -395,6 +402,7 @@ impl RunObserver {
             total_force: Bits(t.total_force),
             energy0: Bits(p.energy0),
             history_bytes,
+            history_sha256: hashed.hex(),
             history_rows,
             frames: self.writers.frame_count,
             closed_before: self.writers.closed_before,

@@ -202,9 +202,23 @@ fn params(kind: SchemeKind, forecast: Forecast) -> SchemeParams {
 /// created, so Figs. 3 and 7 would not show (measured: max |τ| = 0 at every h).
 pub const STUDY_FORECAST: Forecast = Forecast::Explicit { gamma: 0.0 };
 
+/// `name` is one of [`NAMES`], or the error that lists them.
+fn known(name: &str) -> Result<(), Error> {
+    if NAMES.contains(&name) {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        "study",
+        crate::error::excerpt(name),
+        &format!("unknown study; the studies are {}", NAMES.join(", ")),
+    ))
+}
+
 /// Runs study `name` into `dir` and returns its verdict lines (also written to
 /// `dir/verdict.txt`).
 pub fn run(name: &str, dir: &Path) -> Result<Vec<String>, Error> {
+    // the name before anything is created (issue 48: an unknown name left its `--out`)
+    known(name)?;
     std::fs::create_dir_all(dir).map_err(|e| Error::write(dir, e))?;
     let verdicts = match name {
         "convergence" => convergence(dir)?,
@@ -239,6 +253,7 @@ pub fn run_on_scene(
     schemes: &[SchemeKind],
     dir: &Path,
 ) -> Result<Vec<String>, Error> {
+    known(name)?;
     if name != "extremes" {
         return Err(Error::invalid(
             "study",

@@ -180,6 +180,21 @@ impl FrictionContactProblem {
                     ),
                 ));
             }
+            // read without the flush (issue 48: 1e-320 was refused as "is 0e0, expected
+            // > 0"), but the solve flushes subnormals: such a W_NN would be 0 there
+            if wnn < f64::MIN_POSITIVE
+                && crate::linalg::subnormals() == crate::linalg::Subnormals::Flushed
+            {
+                return Err(at(
+                    "W",
+                    format!(
+                        "contact {a}: W_NN = W[{o},{o}] is {wnn:e}, positive but subnormal \
+                         (below {:e}), which the solve flushes to 0: rescale the problem, or \
+                         keep subnormals with --ieee-subnormals",
+                        f64::MIN_POSITIVE
+                    ),
+                ));
+            }
         }
         let wmax = self.w.iter().fold(0.0_f64, |s, x| s.max(x.abs()));
         let mut asym: f64 = 0.0;

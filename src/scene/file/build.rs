@@ -63,6 +63,31 @@ impl Scene {
             }
             all_meshes.push(mesh);
         }
+        // each body's initial displacement (node-major, `dim` per node), before the
+        // contacts: `within` is measured at the starting positions
+        let mut u_of: Vec<Option<Vec<f64>>> = Vec::with_capacity(self.bodies.len());
+        for (bi, b) in self.bodies.iter().enumerate() {
+            let at = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
+            u_of.push(match &b.initial_displacement {
+                Some(field) => Some(
+                    super::initial::nodal_field(
+                        "initial_displacement",
+                        "m",
+                        field,
+                        &self.base_dir,
+                        all_meshes[bi].points.len(),
+                        b.dim(),
+                    )
+                    .map_err(at)?,
+                ),
+                None => None,
+            });
+            // a cell inverted at the start, in the mesh or by the displacement
+            if !matches!(b.mesh, MeshSpec::Rod { .. }) {
+                super::initial::check_orientation(&all_meshes[bi], b, u_of[bi].as_deref())
+                    .map_err(at)?;
+            }
+        }
         // the probes' node sets, before any assembly: a misspelt set is refused at once
         let point_base = starts(all_meshes.iter().map(|m| m.points.len()));
         let probes = self.probes(&all_meshes, &point_base)?;
@@ -97,7 +122,7 @@ impl Scene {
                 .filter(|(_, c)| c.body == b.name)
             {
                 nodes_of[ci] = self
-                    .contact_nodes(mesh, c, dim, &facets_of[ci], &all_meshes)
+                    .contact_nodes(mesh, c, dim, &facets_of[ci], &all_meshes, &u_of)
                     .map_err(|e| prefix(&format!("contacts[{ci}]"), e))?;
                 let other = match (&c.obstacle, &c.target) {
                     (Some(o), _) => format!("obstacle \"{o}\""),
@@ -199,24 +224,16 @@ impl Scene {
                     }
                 }
             }
-            if b.initial_velocity.is_some() {
-                super::initial::zero_where_fixed("initial_velocity", &v0[first..], &fx, dim)
-                    .map_err(at)?;
-            }
-            match &b.initial_displacement {
-                Some(field) => {
-                    let u = super::initial::nodal_field(
-                        "initial_displacement",
-                        "m",
-                        field,
-                        &self.base_dir,
-                        n / dim,
-                        dim,
-                    )
-                    .map_err(at)?;
-                    super::initial::zero_where_fixed("initial_displacement", &u, &fx, dim)
+            // every initial motion, the rigid one included: the elimination would drop
+            // its values on fixed components (a spin given by angular_velocity stopped
+            // at the fixed nodes, silently)
+            super::initial::zero_where_fixed(super::initial::motion_key(b), &v0[first..], &fx, dim)
+                .map_err(at)?;
+            match &u_of[bi] {
+                Some(u) => {
+                    super::initial::zero_where_fixed("initial_displacement", u, &fx, dim)
                         .map_err(at)?;
-                    q0.extend(u);
+                    q0.extend_from_slice(u);
                 }
                 None => q0.extend(std::iter::repeat_n(0.0, n)),
             }
@@ -272,6 +289,36 @@ impl Scene {
                         )));
                     }
                     prescribed[d] = Some((p.velocity[c], functions.len() - 1));
+                    // a prescribed component starts at its prescribed motion: a
+                    // different initial value there would be dropped by the elimination
+                    let b = &self.bodies[bi];
+                    let w0 = p.velocity[c] * functions[functions.len() - 1].eval(0.0);
+                    let body = |e: Error| prefix(&format!("bodies[{bi}] ({})", b.name), e);
+                    if b.initial_velocity.is_some()
+                        || b.velocity.is_some()
+                        || b.angular_velocity.is_some()
+                    {
+                        super::initial::as_prescribed(
+                            super::initial::motion_key(b),
+                            v0[d],
+                            w0,
+                            &meshes[bi].node_label(v),
+                            c,
+                            pi,
+                        )
+                        .map_err(body)?;
+                    }
+                    if b.initial_displacement.is_some() {
+                        super::initial::as_prescribed(
+                            "initial_displacement",
+                            q0[d],
+                            0.0,
+                            &meshes[bi].node_label(v),
+                            c,
+                            pi,
+                        )
+                        .map_err(body)?;
+                    }
                 }
             }
         }
@@ -304,6 +351,20 @@ impl Scene {
                 )));
             }
             let body = HyperBody::new(mesh, law).map_err(|e| at(prefix("mesh", e)))?;
+            // inverted at a quadrature point by the initial displacement (the corners
+            // were checked with the mesh): bad input, not a step that is too large
+            if let Some(Err(c)) = u_of[bi].as_deref().map(|u| body.strain_energy(u)) {
+                let cell = match mesh.cell_ids.get(c.cell) {
+                    Some(tag) => format!("cell {tag} (file tag)"),
+                    None => format!("cell {}", c.cell),
+                };
+                return Err(at(Error::invalid(
+                    "initial_displacement",
+                    format!("{cell}: det F = {:.3e} at a quadrature point", c.det),
+                    "inverts the cell at the start (det F ≤ 0): no body starts turned \
+                     inside out; check the displacement's sign and its rows' node order",
+                )));
+            }
             let part =
                 HyperelasticPart::new(&b.name, body, dofs, mesh.cell_ids.clone()).map_err(at)?;
             system.add_nonlinear_part(std::sync::Arc::new(part));
@@ -539,7 +600,9 @@ impl Scene {
     }
 
     /// The nodes of contact `c` on `mesh`: its node set (`boundary` and `all`
-    /// included), kept where the initial gap to the obstacle is at most `within`.
+    /// included), kept where the gap to the obstacle (or the distance to the target
+    /// surface) at the starting positions — reference plus each body's
+    /// `initial_displacement` — is at most `within`.
     pub(super) fn contact_nodes(
         &self,
         mesh: &Mesh,
@@ -547,26 +610,42 @@ impl Scene {
         dim: usize,
         facets: &[Vec<usize>],
         meshes: &[Mesh],
+        displacements: &[Option<Vec<f64>>],
     ) -> Result<Vec<usize>, Error> {
         let nodes = node_set(mesh, &c.nodes)?;
         let Some(d) = c.within else {
             return Ok(nodes);
         };
         require_positive("within", d)?;
+        let bi = self.body_index(&c.body);
+        // a node's starting position: its reference position plus the body's
+        // `initial_displacement` (a body lifted 0.5 mm above its floor had no node
+        // "within" 1 mm when measured at the reference)
+        let start = |body: usize, v: usize| -> [f64; 3] {
+            let mut x = meshes[body].points[v];
+            if let Some(u) = &displacements[body] {
+                for (i, xi) in x.iter_mut().enumerate().take(dim) {
+                    *xi += u[v * dim + i];
+                }
+            }
+            x
+        };
         if let Some(t) = &c.target {
             // the distance to the nearest facet's box (a lower bound of the distance to
             // the surface: keeps every node within `d`, and a few more)
-            let master = &meshes[self.body_index(&t.body)];
+            let ti = self.body_index(&t.body);
+            let master: Vec<[f64; 3]> =
+                (0..meshes[ti].points.len()).map(|v| start(ti, v)).collect();
             let dist = crate::contact::bodies::box_distances(
-                nodes.iter().map(|&v| mesh.points[v]),
+                nodes.iter().map(|&v| start(bi, v)),
                 facets,
-                &master.points,
+                &master,
             );
             return keep_within(&nodes, &dist, d, &c.nodes, "the target surface");
         }
         let obstacle = self.obstacle(c);
-        // the gaps at the reference positions, through the obstacle's own gap function
-        // (node-local dofs: q = 0 there)
+        // the gaps at the starting positions, through the obstacle's own gap function
+        // (node-local dofs: q is the initial displacement there)
         let dofs: Vec<Vec<usize>> = (0..nodes.len())
             .map(|k| (0..dim).map(|i| k * dim + i).collect())
             .collect();
@@ -579,7 +658,14 @@ impl Scene {
             .contact_set(dofs, refs, c.restitution, c.friction)?;
         let mut jac = crate::contact::ContactJacobian::for_set(set.as_ref());
         let mut gap = vec![0.0; set.len()];
-        set.evaluate(&vec![0.0; nodes.len() * dim], &mut gap, &mut jac);
+        let q: Vec<f64> = match &displacements[bi] {
+            Some(u) => nodes
+                .iter()
+                .flat_map(|&v| (0..dim).map(move |i| u[v * dim + i]))
+                .collect(),
+            None => vec![0.0; nodes.len() * dim],
+        };
+        set.evaluate(&q, &mut gap, &mut jac);
         keep_within(&nodes, &gap, d, &c.nodes, "the obstacle")
     }
 

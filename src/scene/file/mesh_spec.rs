@@ -123,10 +123,10 @@ fn arrays_mesh(
         ..Mesh::default()
     };
     for (i, p) in points.iter().enumerate() {
-        let key = format!("mesh.points[{i}]");
+        let key = || format!("mesh.points[{i}]");
         if !(p.len() == dim || p.len() == 3) {
             return Err(Error::invalid(
-                &key,
+                &key(),
                 format!("{p:?}"),
                 &format!(
                     "needs {dim} coordinates (m){}",
@@ -135,11 +135,11 @@ fn arrays_mesh(
             ));
         }
         if let Some(x) = p.iter().find(|x| !x.is_finite()) {
-            return Err(Error::invalid(&key, x, "must be finite"));
+            return Err(Error::invalid(&key(), x, "must be finite"));
         }
         if dim == 2 && p.len() == 3 && p[2] != 0.0 {
             return Err(Error::invalid(
-                &key,
+                &key(),
                 format!("{p:?}"),
                 "a plane body lies in z = 0",
             ));
@@ -148,6 +148,12 @@ fn arrays_mesh(
             .push([p[0], p[1], p.get(2).copied().unwrap_or(0.0)]);
     }
     let mut used = vec![false; np];
+    // each cell by its sorted nodes → where it was first listed: a cell listed twice
+    // would add its mass and stiffness twice (a hex8 cube listed twice weighed 1.125 kg
+    // for 1 kg)
+    // (the key: the sorted nodes, padded; at most 8 a cell — no allocation per cell)
+    let mut seen: std::collections::HashMap<[usize; 8], (&str, usize)> =
+        std::collections::HashMap::with_capacity(nc.min(1 << 24));
     for (name, list) in cells {
         let kind: CellKind = serde_json::from_value(serde_json::Value::String(name.clone()))
             .map_err(|_| {
@@ -159,22 +165,35 @@ fn arrays_mesh(
             })?;
         mesh.cells.reserve(list.len());
         for (c, nodes) in list.iter().enumerate() {
-            let key = format!("mesh.cells.{name}[{c}]");
+            let key = || format!("mesh.cells.{name}[{c}]");
             if nodes.len() != kind.nodes() {
                 return Err(Error::invalid(
-                    &key,
+                    &key(),
                     format!("{nodes:?}"),
                     &format!("a {name} cell has {} nodes", kind.nodes()),
                 ));
             }
             if let Some(&v) = nodes.iter().find(|&&v| v >= np) {
                 return Err(Error::invalid(
-                    &key,
+                    &key(),
                     v,
                     &format!("is not a point index: mesh.points has {np} points (0-based)"),
                 ));
             }
             nodes.iter().for_each(|&v| used[v] = true);
+            let mut sorted = [usize::MAX; 8];
+            sorted[..nodes.len()].copy_from_slice(nodes);
+            sorted.sort_unstable();
+            if let Some((first, fc)) = seen.insert(sorted, (name.as_str(), c)) {
+                return Err(Error::invalid(
+                    &key(),
+                    format!("{nodes:?}"),
+                    &format!(
+                        "has the nodes of mesh.cells.{first}[{fc}]: a cell listed twice would \
+                         count its mass and stiffness twice (list each cell once)"
+                    ),
+                ));
+            }
             mesh.cells.push((kind, nodes.to_vec()));
         }
     }
@@ -186,6 +205,14 @@ fn arrays_mesh(
         ));
     }
     for (name, set) in node_sets {
+        if name == "all" {
+            return Err(Error::invalid(
+                "mesh.node_sets.all",
+                format!("{} node(s)", set.len()),
+                "`all` is a reserved name: it always means every node of the mesh; \
+                 give your set another name",
+            ));
+        }
         if let Some(&v) = set.iter().find(|&&v| v >= np) {
             return Err(Error::invalid(
                 &format!("mesh.node_sets.{name}"),
@@ -303,4 +330,195 @@ pub(super) fn target_facets(
         ));
     }
     Ok((facets, on_axis))
+}
+
+/// `mesh.cells` of an arrays mesh, read with the key path and the value of an entry
+/// that is not a point index (the mesh's tagged table hides the path from serde: a
+/// negative or fractional index was refused as "`bodies[0].mesh`: expected usize").
+pub(super) fn cell_lists<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<BTreeMap<String, super::Rows<usize>>, D::Error> {
+    let lists = d.deserialize_any(Table {
+        at: ".cells",
+        lists: true,
+    })?;
+    Ok(lists
+        .into_iter()
+        .map(|(k, v)| (k, super::Rows::from_rows(v)))
+        .collect())
+}
+
+/// `mesh.node_sets` of an arrays mesh, read as [`cell_lists`] is.
+pub(super) fn index_sets<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<BTreeMap<String, Vec<usize>>, D::Error> {
+    let sets = d.deserialize_any(Table {
+        at: ".node_sets",
+        lists: false,
+    })?;
+    Ok(sets
+        .into_iter()
+        .map(|(k, mut v)| (k, v.pop().unwrap_or_default()))
+        .collect())
+}
+
+/// A table of index lists (`lists`: of lists of lists, the cells by kind; else of
+/// lists, the node sets, each returned as a one-element vector).
+struct Table {
+    at: &'static str,
+    lists: bool,
+}
+
+impl<'de> serde::de::Visitor<'de> for Table {
+    type Value = BTreeMap<String, Vec<Vec<usize>>>;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "a table of point-index lists")
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+        let mut out = BTreeMap::new();
+        while let Some(name) = map.next_key::<String>()? {
+            let at = format!("{}.{name}", self.at);
+            let value = if self.lists {
+                map.next_value_seed(Lists { at: &at })?
+            } else {
+                vec![map.next_value_seed(Indices {
+                    at: &at,
+                    cell: None,
+                })?]
+            };
+            out.insert(name, value);
+        }
+        Ok(out)
+    }
+}
+
+/// A list of cells, each a list of point indices (`at`: its key path).
+struct Lists<'a> {
+    at: &'a str,
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for Lists<'_> {
+    type Value = Vec<Vec<usize>>;
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for Lists<'_> {
+    type Value = Vec<Vec<usize>>;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "a list of cells (lists of point indices) at {}", self.at)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        let mut out = Vec::with_capacity(seq.size_hint().unwrap_or(0).min(1 << 20));
+        loop {
+            let cell = Some(out.len());
+            match seq.next_element_seed(Indices { at: self.at, cell })? {
+                Some(nodes) => out.push(nodes),
+                None => return Ok(out),
+            }
+        }
+    }
+}
+
+/// A list of point indices: a node set (`at`), or cell `cell` of the list at `at`. The
+/// key path is formatted only for an error (a mesh of 10⁷ cells reads without one
+/// string per index).
+struct Indices<'a> {
+    at: &'a str,
+    cell: Option<usize>,
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for Indices<'_> {
+    type Value = Vec<usize>;
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for Indices<'_> {
+    type Value = Vec<usize>;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "a list of point indices at {}", self.at)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        let mut out = Vec::with_capacity(seq.size_hint().unwrap_or(0).min(1 << 20));
+        loop {
+            let index = Index {
+                at: self.at,
+                cell: self.cell,
+                k: out.len(),
+            };
+            match seq.next_element_seed(index)? {
+                Some(v) => out.push(v),
+                None => return Ok(out),
+            }
+        }
+    }
+}
+
+/// One point index: an integer ≥ 0; anything else is refused with its key path
+/// (`at[cell][k]`, or `at[k]` in a node set).
+struct Index<'a> {
+    at: &'a str,
+    cell: Option<usize>,
+    k: usize,
+}
+
+impl Index<'_> {
+    fn refuse<E: serde::de::Error>(&self, value: impl std::fmt::Display) -> E {
+        let at = match self.cell {
+            Some(c) => format!("{}[{c}][{}]", self.at, self.k),
+            None => format!("{}[{}]", self.at, self.k),
+        };
+        at_key(
+            &at,
+            value,
+            "is not a point index: expected an integer ≥ 0 (0-based, into mesh.points)",
+        )
+    }
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for Index<'_> {
+    type Value = usize;
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<usize, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for Index<'_> {
+    type Value = usize;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "a point index at {}", self.at)
+    }
+    fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<usize, E> {
+        usize::try_from(v).map_err(|_| self.refuse(v))
+    }
+    fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<usize, E> {
+        usize::try_from(v).map_err(|_| self.refuse(v))
+    }
+    fn visit_u128<E: serde::de::Error>(self, v: u128) -> Result<usize, E> {
+        usize::try_from(v).map_err(|_| self.refuse(v))
+    }
+    fn visit_i128<E: serde::de::Error>(self, v: i128) -> Result<usize, E> {
+        usize::try_from(v).map_err(|_| self.refuse(v))
+    }
+    fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<usize, E> {
+        Err(self.refuse(crate::error::num(v)))
+    }
+    fn visit_bool<E: serde::de::Error>(self, v: bool) -> Result<usize, E> {
+        Err(self.refuse(v))
+    }
+    fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<usize, E> {
+        Err(self.refuse(format!("\"{}\"", crate::error::excerpt(v))))
+    }
+    fn visit_unit<E: serde::de::Error>(self) -> Result<usize, E> {
+        Err(self.refuse("none"))
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, _: A) -> Result<usize, A::Error> {
+        Err(self.refuse("a list"))
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, _: A) -> Result<usize, A::Error> {
+        Err(self.refuse("a table"))
+    }
 }

@@ -202,8 +202,8 @@ pub struct BodySpec {
 }
 
 /// A field with one row per node of a body's mesh (`initial_velocity`,
-/// `initial_displacement`).
-#[derive(Clone, Debug, Serialize, Deserialize)]
+/// `initial_displacement`): rows of numbers, or `{ file = "…" }` and no other key.
+#[derive(Clone, Debug, Serialize)]
 #[serde(untagged)]
 pub enum NodalField {
     /// The rows, in the scene.
@@ -213,6 +213,74 @@ pub enum NodalField {
         /// Its path, relative to the scene's directory.
         file: String,
     },
+}
+
+/// Read by hand rather than as an untagged enum: its refusals name the row or key that
+/// is wrong (serde's untagged enums say only that no variant matched), and a file
+/// table's unknown keys are refused (`{ file = "v0.csv", columns = [1, 2, 3] }` read
+/// every column, silently).
+impl<'de> Deserialize<'de> for NodalField {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visit;
+        impl<'de> serde::de::Visitor<'de> for Visit {
+            type Value = NodalField;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("rows of numbers, one per node ([[x, y, z], …]), or { file = \"…\" }")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<NodalField, A::Error> {
+                let mut rows = Vec::with_capacity(seq.size_hint().unwrap_or(0).min(1 << 20));
+                // a bad row is named by serde's path (`initial_velocity[3][1]`)
+                while let Some(row) = seq.next_element::<Vec<f64>>()? {
+                    rows.push(row);
+                }
+                Ok(NodalField::Rows(Rows::from_rows(rows)))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<NodalField, A::Error> {
+                let mut file = None;
+                while let Some(key) = map.next_key::<String>()? {
+                    if key != "file" {
+                        return Err(at_key(
+                            &format!(".{key}"),
+                            crate::error::excerpt(&key),
+                            "is not a key of a field file: the table is { file = \"…\" } \
+                             alone (one row per node, one column per component, in order)",
+                        ));
+                    }
+                    if file.is_some() {
+                        return Err(at_key(".file", "(twice)", "is given once"));
+                    }
+                    // a bad value is named by serde's path (`initial_velocity.file`)
+                    file = Some(map.next_value::<String>()?);
+                }
+                file.map(|file| NodalField::File { file })
+                    .ok_or_else(|| at_key("", "{}", "needs `file = \"…\"` (the path of the rows)"))
+            }
+        }
+        d.deserialize_any(Visit)
+    }
+}
+
+/// Separates the parts of an [`at_key`] message.
+pub(super) const KEY_MARK: char = '\u{1f}';
+
+/// A deserialization error below the key path serde reports (inside an internally
+/// tagged or hand-read value, whose inner path serde loses): `sub` is appended to that
+/// path (`.cells.hex8[0][7]`, `[3]`), and [`Scene::from_toml`] reports it as an
+/// [`Error::InvalidParameter`] with `value` and `reason`.
+pub(super) fn at_key<E: serde::de::Error>(
+    sub: &str,
+    value: impl std::fmt::Display,
+    reason: &str,
+) -> E {
+    E::custom(format!(
+        "{KEY_MARK}{sub}{KEY_MARK}{value}{KEY_MARK}{reason}"
+    ))
 }
 
 fn default_formulation() -> Formulation {
@@ -273,10 +341,11 @@ pub enum MeshSpec {
         points: Rows<f64>,
         /// Connectivity by cell kind (`hex8`, `tet4`, `quad4`, `tri3`): each cell's
         /// point indices (0-based, in `points`), in the VTK/Gmsh node order.
+        #[serde(deserialize_with = "mesh_spec::cell_lists")]
         cells: BTreeMap<String, Rows<usize>>,
         /// Named node sets (point indices) for `fixed`, `[[contacts]]`, `[[forces]]`,
         /// `[[prescribed]]` and `[[probes]]` (`boundary` and `all` always exist).
-        #[serde(default)]
+        #[serde(default, deserialize_with = "mesh_spec::index_sets")]
         node_sets: BTreeMap<String, Vec<usize>>,
     },
     /// The P1 rod of eq. 71 along x from the origin, with cross-section `area`.

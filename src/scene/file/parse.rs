@@ -189,7 +189,23 @@ impl Scene {
             } else {
                 path
             };
-            Error::invalid(&field, "(key)", first_line(inner.message()))
+            let message = first_line(inner.message());
+            match message
+                .strip_prefix(KEY_MARK)
+                .map(|m| m.splitn(3, KEY_MARK).collect::<Vec<_>>())
+            {
+                // an error below the path serde knows ([`at_key`])
+                Some(parts) if parts.len() == 3 => {
+                    let sub = parts[0];
+                    let sub = if sub.is_empty() || sub.starts_with(['.', '[']) {
+                        sub.to_string()
+                    } else {
+                        format!(".{sub}")
+                    };
+                    Error::invalid(&format!("{field}{sub}"), parts[1], parts[2])
+                }
+                _ => Error::invalid(&field, "(key)", message),
+            }
         })?;
         scene.validate()?;
         Ok(scene)

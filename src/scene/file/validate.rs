@@ -110,7 +110,9 @@ impl Scene {
                     self.bodies[0].formulation.name()
                 ),
             };
-            o.shape().validate(dim).map_err(|e| {
+            let axisymmetric = matches!(self.bodies[0].formulation, Formulation::Axisymmetric)
+                && !matches!(self.bodies[0].mesh, MeshSpec::Rod { .. });
+            o.shape().validate(dim, axisymmetric).map_err(|e| {
                 prefix(
                     &format!("obstacles[{j}]"),
                     e.context(&format!("a {dim}-D scene: {origin}")),
@@ -125,6 +127,10 @@ impl Scene {
                 format!("{g:?}"),
                 &format!("needs {dim} finite components (m/s²)"),
             ));
+        }
+        if let Some(g) = &self.loads.gravity {
+            let peak = g.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            within_magnitude("loads.gravity", g, peak, "m/s²")?;
         }
         self.validate_axisymmetric()?;
         for (i, c) in self.contacts.iter().enumerate() {
@@ -283,6 +289,11 @@ impl Scene {
             ));
         }
         time_function(&format!("{at}.time"), time)?;
+        let peak = v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+            * time
+                .as_ref()
+                .map_or(1.0, |t| t.iter().fold(0.0f64, |m, p| m.max(p[1].abs())));
+        within_magnitude(&format!("{at}.{key}"), v, peak, unit)?;
         Ok(b)
     }
 
@@ -444,4 +455,27 @@ pub(super) fn generator_checks(
     let dim = cells.len() as u64;
     crate::limits::mesh_memory(prod(1), n_cells, cell.nodes() as u64, dim)
         .check("mesh.cells", format!("{cells:?}"))
+}
+
+/// The largest magnitude a load, a prescribed velocity or gravity may reach (its
+/// components times the largest factor of its `time` function): the run's energy
+/// balance squares them and multiplies them by displacements, and past this their
+/// products overflow to infinity (issue 48: loads of 1e308 ran, and the overflow was
+/// reported as a run that exploded, with "lower the time step" as the remedy).
+pub const MAX_LOAD_MAGNITUDE: f64 = 1e150;
+
+/// `values` (of key `key`, peak magnitude `peak`) within [`MAX_LOAD_MAGNITUDE`].
+fn within_magnitude(key: &str, values: &[f64], peak: f64, unit: &str) -> Result<(), Error> {
+    if peak <= MAX_LOAD_MAGNITUDE {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        key,
+        format!("{values:?}"),
+        &format!(
+            "reaches {peak:e} {unit} (with its time factors); at most {MAX_LOAD_MAGNITUDE:e} \
+             {unit}: beyond it the energy and work sums (squares, products with \
+             displacements) overflow"
+        ),
+    ))
 }

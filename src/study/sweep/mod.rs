@@ -155,7 +155,7 @@ impl Sweep {
         self.finish(&dir, done.into_values().collect())
     }
 
-    /// Every point, each scene read and validated (before the first run).
+    /// Every point, each scene read, validated and built (before the first run).
     fn validate_points(&self) -> Result<Vec<Point>, Error> {
         self.spec.validate()?;
         // a `--set` on an axis' key is overridden at every point
@@ -177,9 +177,18 @@ impl Sweep {
         }
         let points = points(&self.spec);
         for p in &points {
-            self.source
-                .scene(&self.set, p)
-                .map_err(|e| e.context(&format!("sweep point {} ({})", p.id, p.key)))?;
+            let at = |e: Error| e.context(&format!("sweep point {} ({})", p.id, p.key));
+            let scene = self.source.scene(&self.set, p).map_err(at)?;
+            // built as well (and dropped): what only the build finds — a node set, a
+            // starting gap, a mesh's cells — is refused before the first point runs
+            // (issue 48: a misspelt node set on an axis stopped the sweep after point 0)
+            scene
+                .build()
+                .map_err(|e| match &self.source {
+                    Source::File(f) => e.in_file(f),
+                    Source::Bar => e,
+                })
+                .map_err(at)?;
         }
         Ok(points)
     }

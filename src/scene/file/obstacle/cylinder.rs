@@ -1,8 +1,11 @@
-//! The infinite cylinder obstacle (3-D), outside or inside (`type = "cylinder"`).
+//! The infinite cylinder obstacle (3-D, or coaxial in an axisymmetric scene), outside or
+//! inside (`type = "cylinder"`).
 
 use super::*;
 
-/// `type = "cylinder"`: an infinite cylinder (3-D).
+/// `type = "cylinder"`: an infinite cylinder: in 3-D, or in an axisymmetric scene the
+/// cylinder about the axis of revolution (`point = [0, y]`, `axis = [0, 1]`), whose
+/// section is the line `r = radius`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CylinderSpec {
@@ -24,13 +27,20 @@ impl ObstacleShape for CylinderSpec {
         &self.name
     }
 
-    fn validate(&self, dim: usize) -> Result<(), Error> {
+    fn validate(&self, dim: usize, axisymmetric: bool) -> Result<(), Error> {
+        if dim == 2 && axisymmetric {
+            // coaxial: checked by `axisymmetric_problem`
+            check_vector("point", &self.point, 2, false)?;
+            check_vector("axis", &self.axis, 2, true)?;
+            return require_positive("radius", self.radius).map(|_| ());
+        }
         if dim != 3 {
             return Err(Error::invalid(
                 "type",
                 "cylinder",
                 &format!(
-                    "is a 3-D obstacle; this scene is {dim}-D (use a sphere: a circle in 2-D)"
+                    "is a 3-D obstacle, or the coaxial cylinder of an axisymmetric scene; this \
+                     scene is {dim}-D and not axisymmetric (use a sphere: a circle in 2-D)"
                 ),
             ));
         }
@@ -39,12 +49,26 @@ impl ObstacleShape for CylinderSpec {
         require_positive("radius", self.radius).map(|_| ())
     }
 
+    /// Coaxial (axis along y through a point of the axis): the section's gap
+    /// `±(|r| − R)` is the exact gap to the cylinder. Any other axis revolves into no
+    /// cylinder.
     fn axisymmetric_problem(&self) -> Option<(&'static str, String, &'static str)> {
-        Some((
-            "type",
-            "cylinder".to_string(),
-            "a cylinder is a 3-D obstacle; an axisymmetric scene takes planes and spheres",
-        ))
+        if self.axis[0] != 0.0 {
+            return Some((
+                "axis",
+                format!("{:?}", self.axis),
+                "a cylinder of an axisymmetric scene is coaxial: its axis is the axis of \
+                 revolution, [0.0, 1.0] (another axis revolves into no cylinder)",
+            ));
+        }
+        (self.point[0] != 0.0).then(|| {
+            (
+                "point",
+                format!("{:?}", self.point),
+                "a cylinder of an axisymmetric scene is coaxial: its axis passes through \
+                 the axis of revolution, give [0.0, y]",
+            )
+        })
     }
 
     fn contact_set(
@@ -64,8 +88,17 @@ impl ObstacleShape for CylinderSpec {
     }
 
     /// The two end circles and eight generators over the box's extent along the axis.
-    fn outline(&self, out: &mut Outline, view: &View, _dim: usize) {
+    fn outline(&self, out: &mut Outline, view: &View, dim: usize) {
         let (centre, size, radius) = (view.centre, view.size, self.radius);
+        if dim == 2 {
+            // the coaxial cylinder's section: the line r = radius along the axis
+            let half = 0.75 * size;
+            out.segment(
+                [radius, centre[1] - half, 0.0],
+                [radius, centre[1] + half, 0.0],
+            );
+            return;
+        }
         let (p, n) = (v3(&self.point), unit(v3(&self.axis)));
         let (a, b) = orthonormal(n);
         let t = dot(n, std::array::from_fn(|i| centre[i] - p[i]));

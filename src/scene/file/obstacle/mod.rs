@@ -22,11 +22,14 @@ pub use sphere::SphereSpec;
 pub trait ObstacleShape {
     /// The name contacts use (`obstacle = "…"`).
     fn name(&self) -> &str;
-    /// Checks the geometry in a scene of dimension `dim`, whether or not a contact uses
-    /// the obstacle; errors name the key inside the obstacle's table.
-    fn validate(&self, dim: usize) -> Result<(), Error>;
-    /// In an axisymmetric scene (`x` = r, `y` the axis): `None` when the shape is a solid
-    /// of revolution about the axis, else the key, its value and what is expected.
+    /// Checks the geometry in a scene of dimension `dim` (`axisymmetric`: the 2-D scene
+    /// is the section of a solid of revolution), whether or not a contact uses the
+    /// obstacle; errors name the key inside the obstacle's table.
+    fn validate(&self, dim: usize, axisymmetric: bool) -> Result<(), Error>;
+    /// In an axisymmetric scene (`x` = r, `y` the axis): `None` when the shape revolves
+    /// into a surface whose gap the section's gap gives exactly (a plane normal to the
+    /// axis, a coaxial cylinder, a sphere centred on it), else the key, its value and
+    /// why not.
     fn axisymmetric_problem(&self) -> Option<(&'static str, String, &'static str)>;
     /// The contact set between this obstacle and the nodes with `dofs` (per node, its
     /// coordinates' dofs) at reference positions `refs`, restitution `e`, friction `mu`.

@@ -19,17 +19,36 @@ impl ObstacleShape for PlaneSpec {
         &self.name
     }
 
-    fn validate(&self, dim: usize) -> Result<(), Error> {
+    fn validate(&self, dim: usize, _axisymmetric: bool) -> Result<(), Error> {
         check_vector("point", &self.point, dim, false)?;
         check_vector("normal", &self.normal, dim, true)
     }
 
+    /// A line normal to the axis revolves into a plane; a line parallel to it, at
+    /// `r = point[0] > 0`, into a coaxial cylinder (a shaft for `normal = [1, 0]`, a bore
+    /// for `[-1, 0]`): the section's gap `±(r − r₀)` is the exact gap to it, and its
+    /// tangent (along the axis) a tangent of the cylinder. An oblique line revolves into
+    /// a cone, whose gap the line gives only where its foot lies at r ≥ 0: refused.
     fn axisymmetric_problem(&self) -> Option<(&'static str, String, &'static str)> {
-        self.normal.first().is_some_and(|&n| n != 0.0).then(|| {
-            (
+        let (nr, ny) = (self.normal[0], self.normal[1]);
+        if nr == 0.0 {
+            return None;
+        }
+        if ny != 0.0 {
+            return Some((
                 "normal",
                 format!("{:?}", self.normal),
-                "a plane of revolution is normal to the axis: give [0.0, ±1.0]",
+                "an oblique line revolves into a cone, whose gap the section's line does not \
+                 give exactly: give [0.0, ±1.0] (a plane normal to the axis) or [±1.0, 0.0] \
+                 (a line parallel to it: a coaxial cylinder of radius point[0])",
+            ));
+        }
+        (self.point[0] <= 0.0).then(|| {
+            (
+                "point",
+                format!("{:?}", self.point),
+                "a line parallel to the axis (normal [±1.0, 0.0]) revolves into a coaxial \
+                 cylinder of radius point[0] = r, which must be > 0",
             )
         })
     }

@@ -22,7 +22,7 @@ impl ObstacleShape for SphereSpec {
         &self.name
     }
 
-    fn validate(&self, dim: usize) -> Result<(), Error> {
+    fn validate(&self, dim: usize, _axisymmetric: bool) -> Result<(), Error> {
         check_vector("center", &self.center, dim, false)?;
         require_positive("radius", self.radius).map(|_| ())
     }
