@@ -62,20 +62,24 @@ fn a_newton_cap_fails_the_run_unless_the_scene_allows_caps() {
     );
 }
 
-/// A body whose faces start apart at ±1e308 m/s: its internal forces overflow in the
-/// first step. (Loads of 1e308 were the example before issue 48; they are refused now at
-/// validation, past `MAX_LOAD_MAGNITUDE`: `tests/bad_input_scene.rs`.)
+/// A free body falling under gravity of 1e150 m/s² (the largest load accepted) at steps
+/// of 1e79 s: `½ g t²` passes the largest double at the second step (2e308 m), and the
+/// run stops there, naming the step and the time. (Loads and initial velocities of
+/// 1e308 were the examples before issue 48; they are refused now at validation, past
+/// `MAX_LOAD_MAGNITUDE`: `tests/bad_input_scene.rs`.) E = 1e-160 Pa keeps `M̂ = M +
+/// h²θ²K` factorable at that step.
 #[test]
 fn a_non_finite_state_stops_the_run_with_step_and_time() {
     let dir = tmp("nonfinite");
     let scene = r#"[time]
-dt = 1e-3
-t_end = 1e-2
+dt = 1e79
+t_end = 1e80
 [[bodies]]
 name = "b"
 mesh = { generator = "box", cell = "hex8", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }
-material = { young = 1e6, poisson = 0.3, density = 1e-3 }
-initial_velocity = [[0.0, 0.0, 1e308], [0.0, 0.0, 1e308], [0.0, 0.0, 1e308], [0.0, 0.0, 1e308], [0.0, 0.0, -1e308], [0.0, 0.0, -1e308], [0.0, 0.0, -1e308], [0.0, 0.0, -1e308]]
+material = { young = 1e-160, poisson = 0.3, density = 1000.0 }
+[loads]
+gravity = [0.0, 0.0, -1e150]
 "#;
     std::fs::write(dir.join("s.toml"), scene).unwrap();
     let r = cli(
@@ -87,7 +91,7 @@ initial_velocity = [[0.0, 0.0, 1e308], [0.0, 0.0, 1e308], [0.0, 0.0, 1e308], [0.
         "non-finite state",
         r,
         1,
-        &["run failed at step 1", "t = 1e-3", "broke down"],
+        &["run failed at step 2", "t = 2e79", "broke down"],
     );
 }
 

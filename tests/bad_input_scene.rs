@@ -710,6 +710,31 @@ const CASES: &[Case] = &[
         &["forces[0].total", "-1e308", "at most 1e150 N", "overflow"],
     ),
     (
+        "an initial velocity of 1e308",
+        &[(
+            "density = 1000.0 }",
+            "density = 1000.0 }\nvelocity = [0.0, 0.0, -1e308]",
+        )],
+        &[
+            "bodies[0] (b).velocity",
+            "-1e308 m/s",
+            "at most 1e150 m/s",
+            "overflow",
+        ],
+    ),
+    (
+        "an initial displacement of 1e300",
+        &[(
+            "density = 1000.0 }",
+            "density = 1000.0 }\ninitial_displacement = [[1e300, 0.0, 0.0], [1e300, 0.0, 0.0], [1e300, 0.0, 0.0], [1e300, 0.0, 0.0], [1e300, 0.0, 0.0], [1e300, 0.0, 0.0], [1e300, 0.0, 0.0], [1e300, 0.0, 0.0]]",
+        )],
+        &[
+            "bodies[0] (b).initial_displacement",
+            "1e300 m",
+            "at most 1e150 m",
+        ],
+    ),
+    (
         "a load pushed past the bound by its time factors",
         &[(
             "[[obstacles]]",

@@ -389,31 +389,29 @@ fn index_array(
     // no copy of an array that has the dtype already
     let no_copy = PyDict::new(obj.py());
     no_copy.set_item("copy", false)?;
+    // signed and unsigned arrays alike: each value checked into a point index
+    fn indices<T>(
+        flat: &Bound<'_, PyAny>,
+        dtype: &str,
+        no_copy: &Bound<'_, PyDict>,
+        name: impl Fn(usize) -> String,
+    ) -> PyResult<Vec<usize>>
+    where
+        T: numpy::Element + Copy + Display,
+        usize: TryFrom<T>,
+    {
+        let typed = flat.call_method("astype", (dtype,), Some(no_copy))?;
+        let arr = typed.cast::<PyArray1<T>>()?.readonly();
+        let view = arr.as_array();
+        let mut out = Vec::with_capacity(view.len());
+        for (k, &v) in view.iter().enumerate() {
+            out.push(usize::try_from(v).map_err(|_| bad(&name(k), v, &Values::Index.expected()))?);
+        }
+        Ok(out)
+    }
     match a.dtype().kind() {
-        b'i' => {
-            let typed = flat.call_method("astype", ("int64",), Some(&no_copy))?;
-            let arr = typed.cast::<PyArray1<i64>>()?.readonly();
-            let view = arr.as_array();
-            let mut out = Vec::with_capacity(view.len());
-            for (k, &v) in view.iter().enumerate() {
-                out.push(
-                    usize::try_from(v).map_err(|_| bad(&name(k), v, &Values::Index.expected()))?,
-                );
-            }
-            Ok(out)
-        }
-        b'u' => {
-            let typed = flat.call_method("astype", ("uint64",), Some(&no_copy))?;
-            let arr = typed.cast::<PyArray1<u64>>()?.readonly();
-            let view = arr.as_array();
-            let mut out = Vec::with_capacity(view.len());
-            for (k, &v) in view.iter().enumerate() {
-                out.push(
-                    usize::try_from(v).map_err(|_| bad(&name(k), v, &Values::Index.expected()))?,
-                );
-            }
-            Ok(out)
-        }
+        b'i' => indices::<i64>(&flat, "int64", &no_copy, name),
+        b'u' => indices::<u64>(&flat, "uint64", &no_copy, name),
         _ => Err(bad_dtype(path, a, Values::Index)),
     }
 }

@@ -18,7 +18,7 @@
 //! GᵀM⁻¹G` is formed once for a constant `G`, at each linearization for a moving one
 //! (`m` solves with the factor of `M`), dense `m × m`. Where `M` is singular (the
 //! redistributed mass puts none on the contact nodes) or `W_N` would pass
-//! [`KINETIC_MAX_BYTES`], the projection keeps `N = M̂ⁿ⁻¹` and the path says so.
+//! `KINETIC_MAX_BYTES` (512 MiB), the projection keeps `N = M̂ⁿ⁻¹` and the path says so.
 
 use super::*;
 
@@ -41,7 +41,7 @@ impl Delassus {
     /// Projects positions in the kinetic metric `N = M⁻¹` instead of `M̂ⁿ⁻¹` (module doc)
     /// where the metric is [`Metric::Mass`]; `mass` is the structure's constant `M`.
     /// Returns whether it took it (not for the Euclidean metric, nor past
-    /// [`KINETIC_MAX_BYTES`], nor for a singular `M`: the redistributed mass).
+    /// 512 MiB of `W_N`, nor for a singular `M`: the redistributed mass).
     pub fn use_kinetic_metric(&mut self, mass: &SparseMatrix) -> Result<bool, Error> {
         let m = self.m;
         if self.metric != Metric::Mass || m.saturating_mul(m).saturating_mul(8) > KINETIC_MAX_BYTES

@@ -46,6 +46,7 @@ mod stress;
 pub use assemble::*;
 pub use kernels::*;
 pub(in crate::model) use quadrature::*;
+pub use quadrature::{HEX8_CORNERS, QUAD4_CORNERS};
 pub use stress::*;
 
 impl Material {

@@ -58,18 +58,26 @@ pub(in crate::model) fn tet4_points() -> [Point<4, 3>; 4] {
         .map(|[r, s, u]| ([1.0 - r - s - u, r, s, u], g, 1.0 / 24.0))
 }
 
+/// Reference coordinates (±1) of the bilinear quadrilateral's corners (VTK / Gmsh node
+/// order).
+pub const QUAD4_CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+
+/// Reference coordinates (±1) of the trilinear hexahedron's corners (VTK / Gmsh node
+/// order).
+pub const HEX8_CORNERS: [[f64; 3]; 8] = [
+    [-1.0, -1.0, -1.0],
+    [1.0, -1.0, -1.0],
+    [1.0, 1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+    [1.0, -1.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+];
+
 /// 2×2×2 Gauss points of the trilinear hexahedron (VTK / Gmsh node order).
 pub(in crate::model) fn hex8_points() -> [Point<8, 3>; 8] {
-    const SGN: [[f64; 3]; 8] = [
-        [-1.0, -1.0, -1.0],
-        [1.0, -1.0, -1.0],
-        [1.0, 1.0, -1.0],
-        [-1.0, 1.0, -1.0],
-        [-1.0, -1.0, 1.0],
-        [1.0, -1.0, 1.0],
-        [1.0, 1.0, 1.0],
-        [-1.0, 1.0, 1.0],
-    ];
+    const SGN: [[f64; 3]; 8] = HEX8_CORNERS;
     std::array::from_fn(|p| {
         let (r, s, u) = (G2[p / 4], G2[(p / 2) % 2], G2[p % 2]);
         (

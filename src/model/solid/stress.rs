@@ -14,10 +14,7 @@ pub(super) fn centre_gradients(kind: CellKind) -> [[f64; 3]; 8] {
             }
         }
         CellKind::Quad4 => {
-            for (a, s) in [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]
-                .iter()
-                .enumerate()
-            {
+            for (a, s) in QUAD4_CORNERS.iter().enumerate() {
                 g[a] = [0.25 * s[0], 0.25 * s[1], 0.0];
             }
         }

@@ -82,6 +82,10 @@ impl Scene {
                 ),
                 None => None,
             });
+            if let Some(u) = &u_of[bi] {
+                super::initial::within_bound("initial_displacement", u, b.dim(), "m")
+                    .map_err(at)?;
+            }
             // a cell inverted at the start, in the mesh or by the displacement
             if !matches!(b.mesh, MeshSpec::Rod { .. }) {
                 super::initial::check_orientation(&all_meshes[bi], b, u_of[bi].as_deref())
@@ -228,6 +232,8 @@ impl Scene {
             // its values on fixed components (a spin given by angular_velocity stopped
             // at the fixed nodes, silently)
             super::initial::zero_where_fixed(super::initial::motion_key(b), &v0[first..], &fx, dim)
+                .map_err(at)?;
+            super::initial::within_bound(super::initial::motion_key(b), &v0[first..], dim, "m/s")
                 .map_err(at)?;
             match &u_of[bi] {
                 Some(u) => {

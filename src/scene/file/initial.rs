@@ -4,6 +4,7 @@
 //! kind, mesh and fixed components.
 
 use super::*;
+use crate::model::solid::{HEX8_CORNERS, QUAD4_CORNERS};
 
 /// The rows of a body's field `key` (`initial_velocity` in m/s, `initial_displacement`
 /// in m): `nodes` rows of `dim` finite values, inline or from its file (read within
@@ -240,6 +241,29 @@ pub(super) fn zero_where_fixed(
     }
 }
 
+/// An initial velocity or displacement past [`super::validate::MAX_LOAD_MAGNITUDE`]
+/// (`values` over the body's dofs, node-major; `unit` for the message): the energy and
+/// work sums square it and overflow (issue 48: a velocity of 1e308 ran and was reported
+/// as a run that broke down, "lower the time step").
+pub(super) fn within_bound(key: &str, values: &[f64], dim: usize, unit: &str) -> Result<(), Error> {
+    let max = super::validate::MAX_LOAD_MAGNITUDE;
+    match values.iter().position(|v| v.abs() > max) {
+        Some(i) => Err(Error::invalid(
+            key,
+            format!(
+                "{:e} {unit} at node {} component {}",
+                values[i],
+                i / dim,
+                i % dim
+            ),
+            &format!(
+                "at most {max:e} {unit} in magnitude: beyond it the energy sums (squares) overflow"
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// An initial value on a component a `[[prescribed]]` entry (`prescribed[entry]`)
 /// drives: it must equal the prescribed motion's start (`expected`: the velocity at
 /// t = 0, or displacement 0), since the elimination replaces it by that.
@@ -274,19 +298,6 @@ pub(super) fn as_prescribed(
         ),
     ))
 }
-
-/// Reference coordinates (±1) of the corners of a quad4 and a hex8 (VTK/Gmsh order).
-const QUAD4_CORNERS: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
-const HEX8_CORNERS: [[f64; 3]; 8] = [
-    [-1.0, -1.0, -1.0],
-    [1.0, -1.0, -1.0],
-    [1.0, 1.0, -1.0],
-    [-1.0, 1.0, -1.0],
-    [-1.0, -1.0, 1.0],
-    [1.0, -1.0, 1.0],
-    [1.0, 1.0, 1.0],
-    [-1.0, 1.0, 1.0],
-];
 
 /// The Jacobian determinant (up to a positive factor) of a cell with corner positions
 /// `x` at each corner, and the scale of its edges there (the product of their lengths)
