@@ -127,6 +127,9 @@ impl Delassus {
         if self.kinetic.is_none() {
             return false;
         }
+        if x.iter().all(|&v| v == 0.0) {
+            return true;
+        }
         self.prepare_position_metric();
         let (m, k) = (self.m, self.kinetic.as_ref().expect("checked above"));
         for (b, &xb) in x.iter().enumerate() {

@@ -248,9 +248,6 @@ impl ThetaCore {
         let ptol = self
             .projection_tolerance
             .max(2.0 * self.h * self.theta * self.velocity_accuracy);
-        if rule != PositionRule::None {
-            self.del.prepare_position_metric();
-        }
         match rule {
             PositionRule::None => {
                 self.tau.iter_mut().for_each(|x| *x = 0.0);
@@ -258,6 +255,7 @@ impl ThetaCore {
             }
             PositionRule::AllComplementarity => {
                 // 0 ≤ b + W_N τ ⊥ τ ≥ 0 over all contacts
+                self.del.prepare_position_metric();
                 grow_solve(
                     &mut self.ws,
                     &mut self.del,
@@ -311,6 +309,10 @@ impl ThetaCore {
                 // friction: a lifting node next to projected ones). Such rows join and
                 // the problem is solved again, as in `grow_solve`: at most m rounds.
                 let mut rounds = 0;
+                if !self.ws.idx.is_empty() {
+                    // the kinetic metric's W_N, formed only for a problem with rows
+                    self.del.prepare_position_metric();
+                }
                 while !self.ws.idx.is_empty() {
                     rounds += 1;
                     if !self.ws.over_cap() {
