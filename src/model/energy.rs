@@ -113,6 +113,8 @@ pub struct Excess {
     pub relative: f64,
     /// `E − E₀ − W` (J).
     pub joules: f64,
+    /// The run's energy scale it was measured against (J).
+    pub scale: f64,
     /// Kinetic energy of the whole structure (J).
     pub kinetic: f64,
     /// Potential energy of the whole structure (J).
@@ -284,6 +286,7 @@ impl EnergyAudit {
         Excess {
             relative: excess / scale,
             joules: excess,
+            scale,
             kinetic,
             potential,
         }

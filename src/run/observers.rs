@@ -286,7 +286,7 @@ impl EnergyCheck {
             // within the energy's own rounding it is no gain (`model::energy`): the
             // scale is floored so that the rounding sits at the limit
             let bound = self.audit.roundoff(sys, &s.q, &s.v);
-            rel = abs / (abs / rel).max(bound / self.max);
+            rel = abs / x.scale.max(bound / self.max);
         }
         *worst = worst.max(rel);
         if rel > self.max {
