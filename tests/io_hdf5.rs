@@ -112,3 +112,29 @@ fn vtkhdf_and_history_hold_what_the_vtu_and_csv_hold() {
     assert_eq!(p["elements"], 50);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A child process spawned while the run's file is open inherits its descriptor (HDF5
+/// opens without `O_CLOEXEC`); with HDF5's `flock` advisory lock on, that child held
+/// the writer's exclusive lock and a reader failed with `errno = 11` until the child
+/// exited (CI, `study_sweep`, where another test spawned the CLI). The files are
+/// written without the lock: the reader opens while the child still lives.
+#[test]
+fn a_child_process_spawned_mid_write_does_not_lock_readers_out() {
+    let dir = tmp("lock");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = signorini::io::h5::RunFile::create(&dir).unwrap();
+    let mut child = std::process::Command::new("sleep")
+        .arg("30")
+        .spawn()
+        .unwrap();
+    drop(file);
+    let opened = hdf5::File::open(dir.join("fields.vtkhdf"));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(
+        opened.is_ok(),
+        "reader locked out: {:?}",
+        opened.err().map(|e| e.to_string())
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

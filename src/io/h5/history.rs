@@ -295,7 +295,7 @@ pub fn write_table(path: &Path, columns: &[(String, TableColumn)]) -> Result<(),
     part.push(".part");
     let part = PathBuf::from(part);
     let write = || -> hdf5::Result<()> {
-        let file = hdf5::File::create(&part)?;
+        let file = super::options().create(&part)?;
         let g = file.create_group("table")?;
         for (name, col) in columns {
             match col {

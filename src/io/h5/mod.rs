@@ -22,6 +22,16 @@
 //! the end), then the file is flushed, so a killed run keeps every completed frame and
 //! the history up to it. The file is written in place (HDF5 has no atomic rename of a
 //! growing file); a run that finishes renames nothing.
+//!
+//! Every file is created and opened **without HDF5's advisory lock** ([`options`]).
+//! HDF5 opens files without `O_CLOEXEC` and locks them with `flock`, whose lock
+//! belongs to the open file description: a child process that any thread of the same
+//! program spawns while a file is open (a test, a sweep driver, a Python kernel
+//! calling a subprocess) inherits the descriptor and holds the lock until that child
+//! exits, and every reader meanwhile fails with `errno = 11` (CI saw it once). The
+//! lock protects nothing here: tables are written under a private `.part` name and
+//! renamed, and a run's file has one writer that flushes whole frames for readers
+//! that look at it mid-run.
 
 use std::path::{Path, PathBuf};
 
@@ -44,6 +54,13 @@ fn h5err(path: &Path, e: impl std::fmt::Display) -> Error {
     }
 }
 
+/// A file builder with HDF5's advisory file lock off (the module doc says why).
+pub(crate) fn options() -> hdf5::FileBuilder {
+    let mut b = hdf5::File::with_options();
+    b.with_fapl(|p| p.file_locking(false));
+    b
+}
+
 /// The run's HDF5 file, shared by the field and history writers.
 #[derive(Clone)]
 pub struct RunFile {
@@ -55,7 +72,7 @@ impl RunFile {
     /// Creates (truncates) `dir/fields.vtkhdf`.
     pub fn create(dir: &Path) -> Result<Self, Error> {
         let path = dir.join("fields.vtkhdf");
-        let file = hdf5::File::create(&path).map_err(|e| h5err(&path, e))?;
+        let file = options().create(&path).map_err(|e| h5err(&path, e))?;
         Ok(RunFile { file, path })
     }
     /// Opens the `dir/fields.vtkhdf` of a checkpointed run, to cut its datasets to the
@@ -63,7 +80,7 @@ impl RunFile {
     /// `reopen`).
     pub fn open(dir: &Path) -> Result<Self, Error> {
         let path = dir.join("fields.vtkhdf");
-        let file = hdf5::File::open_rw(&path).map_err(|e| h5err(&path, e))?;
+        let file = options().open_rw(&path).map_err(|e| h5err(&path, e))?;
         Ok(RunFile { file, path })
     }
     /// Path of the file.
