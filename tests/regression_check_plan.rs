@@ -50,7 +50,7 @@ fn planned_paths_are_the_built_ones() {
             Some(k) => s.scheme.kind = signorini::integrators::SchemeKind::parse(k).unwrap(),
             None => {}
         }
-        let (model, _) = s.build().unwrap();
+        let (mut model, _) = s.build().unwrap();
         // planned on its own (`plan_only` keeps nothing): the build analyses again
         let plan = model.plan_only(&s.scheme, s.time.dt).unwrap();
         let path = model.into_integrator(&s.scheme, s.time.dt).unwrap().path();

@@ -133,8 +133,8 @@ fn an_unconverged_newton_loop_that_gains_energy_fails_the_run() {
 struct Leaky(Box<dyn Integrator>);
 
 impl Integrator for Leaky {
-    fn name(&self) -> &'static str {
-        self.0.name()
+    fn kind(&self) -> signorini::integrators::SchemeKind {
+        self.0.kind()
     }
     fn step(&mut self) -> Result<StepStats, Error> {
         let st = self.0.step()?;

@@ -429,6 +429,17 @@ impl Delassus {
         self.cap
     }
 
+    /// Bytes the data hold: the factor's entries and the stored blocks and columns (not
+    /// the zone's or the products' flexibilities, which are bounded by the plan).
+    pub fn bytes(&self) -> u64 {
+        let vectors = [
+            &self.cg, &self.d, &self.wn, &self.w, &self.wd, &self.t1, &self.t2, &self.blk,
+            &self.blk2,
+        ];
+        let values: usize = vectors.iter().map(|v| v.len()).sum();
+        8 * (values as u64 + self.factor.factor_entries().unwrap_or(self.n as u64))
+    }
+
     /// One phrase for summaries: which path runs.
     pub fn describe(&self) -> String {
         let path = describe_path(

@@ -22,6 +22,7 @@
 //! exact at position level with `τ ≥ 0` wherever `P = 0` (docs/friction.md, "Algorithm 2 with
 //! friction on undamped elastic bodies").
 
+use super::SchemeKind;
 use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};
 use super::problem::Problem;
 use super::{Integrator, ProjectionRule, SchemeParams, StepStats};
@@ -44,8 +45,8 @@ impl CombinedProjection {
 }
 
 impl Integrator for CombinedProjection {
-    fn name(&self) -> &'static str {
-        "combined-projection"
+    fn kind(&self) -> SchemeKind {
+        SchemeKind::CombinedProjection
     }
     fn step(&mut self) -> Result<StepStats, Error> {
         let mut st = StepStats::default();

@@ -17,6 +17,7 @@
 //! its step, 1.7e-6–2.8e-6 of the energy on the Hertz ball at ⅛–½ of its step, 1.1e-3 on
 //! the ball drop with e = 1; none with the closure).
 
+use super::SchemeKind;
 use super::core::{PositionRule, ThetaCore, delegate_to_core};
 use super::problem::Problem;
 use super::{Forecast, Integrator, SchemeParams, StepStats};
@@ -41,8 +42,8 @@ impl DirectProjection {
 }
 
 impl Integrator for DirectProjection {
-    fn name(&self) -> &'static str {
-        "direct-projection"
+    fn kind(&self) -> SchemeKind {
+        SchemeKind::DirectProjection
     }
     fn step(&mut self) -> Result<StepStats, Error> {
         let mut st = StepStats::default();

@@ -31,6 +31,8 @@ pub mod plan;
 pub mod problem;
 pub mod saved;
 pub mod schatzman_paoli;
+mod sizing;
+pub mod step_matrix;
 pub mod structure;
 pub mod trapezoid;
 
@@ -50,8 +52,13 @@ use crate::solvers::LcpKind;
 /// A time integrator for a linear structure with contacts. `Send`: a built integrator
 /// can move to another thread (the Python package steps it with the GIL released).
 pub trait Integrator: Send {
-    /// Short name, as on the command line.
-    fn name(&self) -> &'static str;
+    /// The scheme this integrator runs (what the driver asks, e.g. whether the θ-method's
+    /// energy balance applies: never a name parsed back).
+    fn kind(&self) -> SchemeKind;
+    /// Short name, as on the command line ([`SchemeKind::name`]).
+    fn name(&self) -> &'static str {
+        self.kind().name()
+    }
     /// Advances one step of size `h`. Does not allocate, unless the contact search had
     /// to be rebuilt in it (then [`Integrator::prepare`] was not called before).
     fn step(&mut self) -> Result<StepStats, Error>;
@@ -77,8 +84,27 @@ pub trait Integrator: Send {
     /// The same system, shared: nothing changes it after the build, so a writer thread
     /// may read it while the run steps (the history's energies).
     fn shared_system(&self) -> std::sync::Arc<LinearSystem>;
-    /// The time step `h` (s).
+    /// The time step `h` (s) of the next step.
     fn dt(&self) -> f64;
+    /// Makes `h` the step of the next steps: the step matrix `M̂(h)` and the Delassus data
+    /// on it are asked through the structure's one call (kept per `h` within
+    /// [`core::STEP_CACHE_BYTES`]), and the run continues bit for bit as one resumed from
+    /// a checkpoint at `h` would. A scheme that steps at a constant `h` (Schatzman–Paoli,
+    /// a two-step scheme) refuses any other `h`.
+    fn set_dt(&mut self, h: f64) -> Result<(), Error> {
+        if h.to_bits() == self.dt().to_bits() {
+            return Ok(());
+        }
+        Err(Error::invalid(
+            "dt",
+            h,
+            &format!(
+                "{} steps at the constant h = {:e} s it was built with",
+                self.name(),
+                self.dt()
+            ),
+        ))
+    }
     /// A one-line description of the solution path taken (factorization, Delassus
     /// data, Newton or not), for summaries.
     fn path(&self) -> String;

@@ -18,6 +18,7 @@
 //! a contact left out then ends the step open (linear `G`), and an active one within
 //! `|U_k|(1−θ)h` below where it started. `activation_closure = false` is eq. 61/62 alone.
 
+use super::SchemeKind;
 use super::core::{PositionRule, ThetaCore, delegate_to_core};
 use super::problem::Problem;
 use super::{Forecast, Integrator, SchemeParams, StepStats};
@@ -42,8 +43,8 @@ impl MoreauJean {
 }
 
 impl Integrator for MoreauJean {
-    fn name(&self) -> &'static str {
-        "moreau-jean"
+    fn kind(&self) -> SchemeKind {
+        SchemeKind::MoreauJean
     }
     fn step(&mut self) -> Result<StepStats, Error> {
         let mut st = StepStats::default();

@@ -333,6 +333,15 @@ pub fn energy_excess_limit(max: Option<f64>, energy_momentum: bool, linear: bool
 }
 
 impl SchemeParams {
+    /// The step matrix the scheme factors ([`super::step_matrix::StepForm`]).
+    pub fn step_form(&self) -> super::step_matrix::StepForm {
+        use super::step_matrix::StepForm;
+        match self.kind {
+            SchemeKind::SchatzmanPaoli => StepForm::SchatzmanPaoli { theta: self.theta },
+            _ => StepForm::Theta { theta: self.theta },
+        }
+    }
+
     /// The energy check's limit on a structure that is `linear` or not
     /// ([`SchemeParams::max_energy_excess`]).
     pub fn energy_excess_limit(&self, linear: bool) -> f64 {

@@ -15,7 +15,8 @@
 //! structure's step matrix is planned on the pattern of `M`, `K` and `C` (its tangents
 //! share it for the shipped bodies).
 
-use super::structure::{DENSE_MAX, StepMatrix};
+use super::step_matrix::StepMatrix;
+use super::structure::StructureModel;
 use super::{SchemeKind, SchemeParams};
 use crate::contact::ContactSet;
 use crate::delassus::{Delassus, DelassusPlan};
@@ -23,7 +24,6 @@ use crate::error::Error;
 use crate::limits::MemoryEstimate;
 use crate::linalg::FactorPlan;
 use crate::model::LinearSystem;
-use crate::model::system::Linearity;
 
 /// `n`-vectors the integrators hold (state, free and new velocities, linearization
 /// points, loads, scratch of the solves and of the Delassus corrections, a rod's `K` as
@@ -78,68 +78,43 @@ impl Plan {
     }
 }
 
-/// Plans the run of `params` on `system` with `contacts` at step `h` (module doc).
+/// Plans the run of `params` on `system` with `contacts` at step `h` (module doc), with
+/// the structure model the build would choose ([`super::structure::for_system`]).
 pub fn plan(
     params: &SchemeParams,
     system: &LinearSystem,
     contacts: &dyn ContactSet,
     h: f64,
 ) -> Result<Plan, Error> {
-    plan_kept(params, system, contacts, h).map(|(plan, _)| plan)
+    let structure = super::structure::for_system(system, &params.newton, params.energy_momentum);
+    plan_kept(params, structure.as_ref(), system, contacts, h).map(|(plan, _)| plan)
 }
 
-/// [`plan`], keeping the step matrix it formed and analysed (linear structures, whose
-/// factor is the SPD one) for the build ([`super::problem::Problem::plan`]).
-pub fn plan_kept(
+/// [`plan`] on the given `structure`, keeping the step matrix its analysis formed
+/// (structures whose step matrix is constant) for the build
+/// ([`super::problem::Problem::plan`]). The factor's backend and size are the
+/// structure's own statement ([`super::structure::StructureModel::analyse`]).
+pub(crate) fn plan_kept(
     params: &SchemeParams,
+    structure: &dyn StructureModel,
     system: &LinearSystem,
     contacts: &dyn ContactSet,
     h: f64,
 ) -> Result<(Plan, Option<StepMatrix>), Error> {
-    super::core::check_block_rows(params, contacts)?;
+    super::sizing::check_block_rows(params, contacts)?;
     let n = system.ndof();
     let m = contacts.len();
     let rows = contacts.rows();
     let friction = rows > m;
-    let th = params.theta;
     let sp = params.kind == SchemeKind::SchatzmanPaoli;
     let with_projection = params.kind.capabilities().projection;
-    let (a, b) = if sp {
-        (h * h * th, h * th / 2.0)
-    } else {
-        (h * h * th * th, h * th)
-    };
-    let mut kept = StepMatrix::form(system, (a, b));
-    let step = kept.matrix();
-    let linear = system.linearity() == Linearity::Linear;
-    let what = "iteration matrix M + hθC + h²θ²K";
-    // the backends of `structure::factor_step_matrix` and `NonlinearStructure::factor`
-    let mut analysis = None;
-    let factor = if linear {
-        let (f, an) =
-            crate::linalg::analyse_spd_kept(step.as_ref(), what, system.ordering.as_ref())?;
-        analysis = an;
-        f
-    } else if system.symmetric() {
-        crate::linalg::analyse_ldlt(step.as_ref(), what)?
-    } else if n <= DENSE_MAX {
-        FactorPlan {
-            backend: "dense LU".to_string(),
-            entries: (n * n) as u64,
-            scratch_bytes: 0,
-            supernodal: false,
-        }
-    } else {
-        // the LU's fill follows its pivots: the symmetric pattern's as an estimate
-        let f = crate::linalg::analyse_ldlt(step.as_ref(), what)?;
-        FactorPlan {
-            backend: format!("faer LU (fill after pivoting; about {} entries)", f.entries),
-            ..f
-        }
-    };
+    let step = structure.analyse(system, params.step_form(), h)?;
+    let factor = step.factor;
+    let analysis = step.kept.as_ref().and_then(|k| k.analysis());
+    let linear = structure.step_matrix_constant();
     let g_constant = contacts.is_linear();
     let zone = (linear && !g_constant && contacts.condensed()).then(|| contacts.zone().len());
-    let ws_cap = super::core::Workspace::cap(rows, params);
+    let ws_cap = super::sizing::workspace_cap(rows, params);
     let mut delassus = Delassus::plan(
         n,
         rows,
@@ -153,7 +128,7 @@ pub fn plan_kept(
     // the core's threshold (Schatzman–Paoli and nonlinear structures keep the cap); its
     // columns are stored up to it
     let mf_from = if linear && !sp {
-        super::core::matrix_free_rows(ws_cap, g_constant, delassus.dense)
+        super::sizing::matrix_free_rows(ws_cap, g_constant, delassus.dense)
     } else {
         ws_cap
     };
@@ -176,7 +151,7 @@ pub fn plan_kept(
         let mut jac = crate::contact::ContactJacobian::for_set(contacts);
         contacts.evaluate(&vec![0.0; n], &mut vec![0.0; m], &mut jac);
         let dofs = crate::delassus::acting_dofs(&jac);
-        let paths = analysis.as_ref().and_then(|a| a.zone_path_entries(&dofs));
+        let paths = analysis.and_then(|a| a.zone_path_entries(&dofs));
         paths.filter(|_| {
             delassus.add_products(
                 params.delassus,
@@ -196,7 +171,11 @@ pub fn plan_kept(
     let nnz = |s: &crate::linalg::SparseMatrix| s.val().len() as u64;
     let model = nnz(&system.mass) + nnz(&system.stiffness) + system.damping.as_ref().map_or(0, nnz);
     ledger.add("mass, stiffness and damping matrices", model, 16);
-    ledger.add("step matrix M̂ (for its factorization)", nnz(step), 16);
+    ledger.add(
+        "step matrix M̂ (for its factorization)",
+        step.matrix_entries,
+        16,
+    );
     ledger.add("factor of M̂", factor.entries, 8);
     ledger.add("factorization scratch", factor.scratch_bytes, 1);
     // the zone's flexibilities from a supernodal factor and its tangent (under the M̂⁻¹
@@ -226,9 +205,9 @@ pub fn plan_kept(
         );
     }
     if sp {
-        super::core::workspace_ledger(m, m, params, (false, false), &mut ledger);
+        super::sizing::workspace_ledger(m, m, params, (false, false), &mut ledger);
     } else {
-        super::core::workspace_ledger(rows, m, params, (friction, with_projection), &mut ledger);
+        super::sizing::workspace_ledger(rows, m, params, (friction, with_projection), &mut ledger);
     }
     if rows > mf_from && rows <= ws_cap {
         ledger.add(
@@ -266,12 +245,5 @@ pub fn plan_kept(
         workspaces,
         ledger,
     };
-    // a nonlinear structure forms its own M̂ⁿ on the union pattern of its parts
-    Ok((
-        plan,
-        linear.then(|| {
-            kept.keep_analysis(analysis);
-            kept
-        }),
-    ))
+    Ok((plan, step.kept))
 }

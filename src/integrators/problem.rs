@@ -13,7 +13,8 @@
 
 use super::SchemeParams;
 use super::plan::Plan;
-use super::structure::StepMatrix;
+use super::step_matrix::StepMatrix;
+use super::structure::StructureModel;
 use crate::contact::ContactSet;
 use crate::error::Error;
 use crate::linalg::SparseMatrix;
@@ -31,6 +32,17 @@ struct Planned {
     checked: bool,
 }
 
+/// The structure model a [`Problem`] holds: one its caller gave
+/// ([`Problem::with_structure`]), or the default of the system
+/// ([`super::structure::for_system`]) made for a scheme's Newton settings and
+/// energy–momentum option (made again when the build asks for other ones).
+struct HeldStructure {
+    model: Box<dyn StructureModel>,
+    /// `None`: the caller's; otherwise the `(modified Newton, energy–momentum)` of the
+    /// default it is.
+    made_for: Option<(bool, bool)>,
+}
+
 /// The structure, its contacts and the initial state of a run.
 pub struct Problem {
     /// The assembled structure (after Dirichlet elimination).
@@ -43,6 +55,9 @@ pub struct Problem {
     pub v0: Vec<f64>,
     /// What the last [`Problem::plan`] established (module doc).
     planned: Option<Planned>,
+    /// The structure model of the step ([`Problem::with_structure`]), made once for the
+    /// plan and the build.
+    structure: Option<HeldStructure>,
 }
 
 impl Problem {
@@ -59,7 +74,65 @@ impl Problem {
             q0,
             v0,
             planned: None,
+            structure: None,
         }
+    }
+
+    /// The problem stepped through `model` instead of the default structure model of its
+    /// system ([`super::structure::for_system`]): the plan asks it for the step matrix's
+    /// analysis and the build steps with it (a new structure plugs in here, with no edit
+    /// to the core, the plan or the driver).
+    pub fn with_structure(mut self, model: Box<dyn StructureModel>) -> Problem {
+        self.structure = Some(HeldStructure {
+            model,
+            made_for: None,
+        });
+        self.planned = None;
+        self
+    }
+
+    /// Makes the structure model for `params` unless the problem holds it: the caller's
+    /// is kept, the system's default is made for `params`' Newton settings.
+    fn ensure_structure(&mut self, params: &SchemeParams) {
+        let key = (params.newton.modified, params.energy_momentum);
+        let fresh = match &self.structure {
+            Some(h) => h.made_for.is_some_and(|k| k != key),
+            None => true,
+        };
+        if fresh {
+            self.structure = Some(HeldStructure {
+                model: super::structure::for_system(
+                    &self.system,
+                    &params.newton,
+                    params.energy_momentum,
+                ),
+                made_for: Some(key),
+            });
+        }
+    }
+
+    /// The plan of `params` at `h` on the held structure model ([`super::plan::plan_kept`]).
+    fn plan_held(
+        &mut self,
+        params: &SchemeParams,
+        h: f64,
+    ) -> Result<(Plan, Option<StepMatrix>), Error> {
+        self.ensure_structure(params);
+        let structure = self.structure.as_ref().expect("made above").model.as_ref();
+        super::plan::plan_kept(params, structure, &self.system, self.contacts.as_ref(), h)
+    }
+
+    /// Takes the structure model for `params` out of the problem, for the build.
+    pub(crate) fn take_structure(&mut self, params: &SchemeParams) -> Box<dyn StructureModel> {
+        self.ensure_structure(params);
+        self.structure.take().expect("made above").model
+    }
+
+    /// [`Problem::plan`] for a problem that will not be built (what `signorini check`
+    /// costs): validated and planned, no step matrix kept.
+    pub fn plan_only(&mut self, params: &SchemeParams, h: f64) -> Result<Plan, Error> {
+        self.validate(params, h)?;
+        self.plan_held(params, h).map(|(plan, _)| plan)
     }
 
     /// Validates the problem for `params` at step `h` and plans its run
@@ -68,7 +141,7 @@ impl Problem {
     pub fn plan(&mut self, params: &SchemeParams, h: f64) -> Result<Plan, Error> {
         self.planned = None;
         self.validate(params, h)?;
-        let (plan, step) = super::plan::plan_kept(params, &self.system, self.contacts.as_ref(), h)?;
+        let (plan, step) = self.plan_held(params, h)?;
         self.planned = Some(Planned {
             params: *params,
             h,
@@ -187,8 +260,8 @@ impl Problem {
                  moreau-jean, direct-projection or combined-projection",
             ));
         }
-        super::core::check_vector("initial displacement", q0, system.ndof())?;
-        super::core::check_vector("initial velocity", v0, system.ndof())
+        super::sizing::check_vector("initial displacement", q0, system.ndof())?;
+        super::sizing::check_vector("initial velocity", v0, system.ndof())
     }
 }
 

@@ -82,6 +82,14 @@ pub struct IntegratorState {
     /// Contact status codes (frictional scenes: 0 open, 1 stick, 2 slip, 3 closed
     /// without friction).
     pub status: Vec<u8>,
+    /// The step `h` the saving integrator ran at (`None`: a scheme at a constant `h`, or
+    /// a checkpoint from before issue 49); an integrator restored at another `h` starts
+    /// its clock at the saved step and time.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt: Option<Bits>,
+    /// The step and time at which `h` last changed (`None`: the start, `t = 0`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub origin: Option<(usize, Bits)>,
 }
 
 impl IntegratorState {
@@ -118,6 +126,8 @@ mod tests {
             time: Bits(3e-6),
             vectors: [("q".to_string(), Floats(vec![0.0]))].into_iter().collect(),
             status: Vec::new(),
+            dt: None,
+            origin: None,
         };
         assert_eq!(s.vector("q", 1).unwrap(), &[0.0]);
         let e = s.vector("q", 51).unwrap_err().to_string();

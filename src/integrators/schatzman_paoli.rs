@@ -16,9 +16,10 @@
 //! when `M` is singular, as with the redistributed mass).
 //! The reported impulse is `P/h` (N·s), comparable with the velocity-level schemes.
 
+use super::SchemeKind;
 use super::core::{Workspace, fail, grow_solve, newton_change};
 use super::problem::Problem;
-use super::structure::factor_step_matrix;
+use super::step_matrix::factor_step_matrix;
 use super::{Integrator, Metric, NewtonParams, SchemeParams, State, StepStats};
 use crate::contact::{ContactJacobian, ContactSet};
 use crate::delassus::{Delassus, Op};
@@ -66,12 +67,7 @@ impl SchatzmanPaoli {
         let (sys, contacts, q0, v0) = problem.into_parts();
         let (q0, v0) = (&q0[..], &v0[..]);
         let theta = params.theta;
-        let factor = factor_step_matrix(
-            &sys,
-            (h * h * theta, 0.5 * h * theta),
-            "Schatzman–Paoli matrix M + h²θK + (hθ/2)C",
-            planned,
-        )?;
+        let factor = factor_step_matrix(&sys, params.step_form(), h, planned)?;
         let n = sys.ndof();
         let m = contacts.len();
         // start-up: a0 = M⁻¹ (f(0) − K q0 − C v0), the time-dependent loads active at
@@ -113,7 +109,7 @@ impl SchatzmanPaoli {
             m,
             del: {
                 let mut del = del?;
-                del.limit_columns(Workspace::cap(m, params));
+                del.limit_columns(super::sizing::workspace_cap(m, params));
                 del
             },
             e,
@@ -152,8 +148,8 @@ impl SchatzmanPaoli {
 }
 
 impl Integrator for SchatzmanPaoli {
-    fn name(&self) -> &'static str {
-        "schatzman-paoli"
+    fn kind(&self) -> SchemeKind {
+        SchemeKind::SchatzmanPaoli
     }
 
     fn step(&mut self) -> Result<StepStats, Error> {

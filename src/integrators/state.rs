@@ -117,6 +117,8 @@ impl State {
             time: Bits(self.time),
             vectors,
             status: self.status.iter().map(|s| s.code()).collect(),
+            dt: None,
+            origin: None,
         }
     }
 

@@ -4,6 +4,7 @@
 //! Keeps the position constraint exactly, but as an index-3 formulation it makes the
 //! contact velocity and force oscillate step to step (the paper's Fig. 11).
 
+use super::SchemeKind;
 use super::core::{PositionRule, ThetaCore, VelocityLaw, delegate_to_core};
 use super::problem::Problem;
 use super::{Integrator, SchemeParams, StepStats};
@@ -24,8 +25,8 @@ impl TrapezoidPosition {
 }
 
 impl Integrator for TrapezoidPosition {
-    fn name(&self) -> &'static str {
-        "trapezoid-position"
+    fn kind(&self) -> SchemeKind {
+        SchemeKind::TrapezoidPosition
     }
     fn step(&mut self) -> Result<StepStats, Error> {
         let mut st = StepStats::default();

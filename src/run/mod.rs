@@ -347,25 +347,23 @@ impl RunInProgress {
             last_rotation: None,
             // Schatzman–Paoli's velocity is a central difference: its discrete energy is
             // not the θ-method's, whose balance the check reads
-            energy: crate::integrators::SchemeKind::parse(integ.name())
-                .is_none_or(|k| k.capabilities().theta_energy)
-                .then(|| {
-                    let s = integ.state();
-                    EnergyCheck {
-                        audit: crate::model::energy::EnergyAudit::new(
-                            integ.system(),
-                            s.time,
-                            &s.q,
-                            &s.v,
-                            checks.energy_floor.joules(integ.system()),
-                        ),
-                        theta,
-                        max: checks.energy_excess_limit(
-                            integ.system().linearity() == crate::model::system::Linearity::Linear,
-                        ),
-                        caps_allowed: checks.allow_caps,
-                    }
-                }),
+            energy: integ.kind().capabilities().theta_energy.then(|| {
+                let s = integ.state();
+                EnergyCheck {
+                    audit: crate::model::energy::EnergyAudit::new(
+                        integ.system(),
+                        s.time,
+                        &s.q,
+                        &s.v,
+                        checks.energy_floor.joules(integ.system()),
+                    ),
+                    theta,
+                    max: checks.energy_excess_limit(
+                        integ.system().linearity() == crate::model::system::Linearity::Linear,
+                    ),
+                    caps_allowed: checks.allow_caps,
+                }
+            }),
         };
         {
             let s = integ.state();

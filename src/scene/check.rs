@@ -86,9 +86,9 @@ impl Scene {
     /// check` prints. Errors are those of [`Scene::build`]; a run that would not fit the
     /// memory limit is reported in the result (`memory_fits`, `memory_error`).
     pub fn check(&self) -> Result<CheckReport, Error> {
-        let (model, report) = self.build()?;
+        let (mut model, report) = self.build()?;
         CheckReport::new(
-            &model,
+            &mut model,
             &report,
             self.bodies.len(),
             &self.scheme,
@@ -103,7 +103,7 @@ impl BarScene {
     /// [`Scene::check`] for the built-in bar: one rod, one contact, linear (history in
     /// CSV only, as the bar writes it).
     pub fn check(&self) -> Result<CheckReport, Error> {
-        let model = self.build()?;
+        let mut model = self.build()?;
         let report = ModelReport {
             dofs: model.problem.q0.len(),
             cells: self.elements,
@@ -117,7 +117,7 @@ impl BarScene {
             interfaces: Vec::new(),
         };
         CheckReport::new(
-            &model,
+            &mut model,
             &report,
             1,
             &self.scheme,
@@ -132,7 +132,7 @@ impl CheckReport {
     /// The report of a built `model` (its build `report`) run with `params` at `dt` for
     /// `steps` steps; `hdf5`: whether the history is also written to HDF5 (the ledger).
     fn new(
-        model: &Model,
+        model: &mut Model,
         report: &ModelReport,
         bodies: usize,
         params: &SchemeParams,

@@ -50,13 +50,11 @@ impl Model {
     /// [`Model::plan`] for a model that will not be built (what `signorini check`
     /// costs): nothing is kept.
     pub fn plan_only(
-        &self,
+        &mut self,
         params: &SchemeParams,
         dt: f64,
     ) -> Result<integrators::plan::Plan, Error> {
-        self.problem.validate(params, dt)?;
-        let p = &self.problem;
-        integrators::plan::plan(params, &p.system, p.contacts.as_ref(), dt)
+        self.problem.plan_only(params, dt)
     }
 }
 

@@ -16,6 +16,7 @@ impl ThetaCore {
     ) -> Result<Self, Error> {
         let mut problem = problem;
         let planned = problem.take_step_matrix();
+        let mut structure = problem.take_structure(params);
         let (sys, contacts, q0, v0) = problem.into_parts();
         let (q0, v0) = (&q0[..], &v0[..]);
         check_block_rows(params, contacts.as_ref())?;
@@ -38,9 +39,7 @@ impl ThetaCore {
             params
         };
         let theta = params.theta;
-        let mut structure =
-            super::super::structure::for_system(&sys, &params.newton, params.energy_momentum);
-        let factor = structure.factor(&sys, (h, theta), (q0, v0), planned)?;
+        let factor = structure.factor(&sys, (params.step_form(), h), (q0, v0), planned)?;
         let n = sys.ndof();
         let np = sys.prescribed.as_ref().map_or(0, |p| p.dofs.len());
         let m = contacts.len();
@@ -83,7 +82,7 @@ impl ThetaCore {
         // and the MLCP's three, plus the coupled position problem's matrix
         // the coupled problem has at most the velocity rows plus one τ per contact,
         // capped like the dense workspaces (beyond, the decoupled loop runs alone)
-        let ws_cap = Workspace::cap(rows, params);
+        let ws_cap = workspace_cap(rows, params);
         let mut del = del?;
         del.limit_columns(ws_cap);
         let coupled_cap =
@@ -159,44 +158,17 @@ impl ThetaCore {
             zq_new: Vec::new(),
             zq_lin: Vec::new(),
             zq_k: Vec::new(),
+            form: params.step_form(),
+            built: *params,
+            origin: (0, 0.0),
+            step_cache: StepCache::default(),
+            pending_factorizations: 0,
         };
         core.contacts
             .evaluate(&core.state.q, &mut core.state.gap, &mut core.del.jac);
         if core.structure.step_matrix_constant() {
-            if !g_constant && core.contacts.condensed() {
-                let zone = core.contacts.zone();
-                let fixed = fixed_rows(core.contacts.as_ref());
-                core.del
-                    .condense_zone(&zone, fixed, &core.sys.stiffness, true);
-                if let Some(dofs) = core.del.flexibility_zone() {
-                    let z = dofs.len();
-                    core.zone = dofs.to_vec();
-                    for buf in [
-                        &mut core.zv,
-                        &mut core.zq,
-                        &mut core.zq_new,
-                        &mut core.zq_lin,
-                        &mut core.zq_k,
-                    ] {
-                        *buf = vec![0.0; z];
-                    }
-                }
-            }
-            core.del.refresh(&core.sys.stiffness);
+            core.condense(params);
             core.w_at_qk = true;
-            let rows_mf = matrix_free_rows(core.ws.cap, g_constant, core.del.is_dense());
-            if rows_mf < core.ws.cap {
-                core.ws.matrix_free_from(rows_mf, params);
-                core.del.limit_columns(rows_mf);
-                if let Some(cp) = core.coupled.as_mut() {
-                    cp.cap = cp.cap.min(rows_mf);
-                }
-            }
-            // a constant G whose problems may go matrix-free: its products through the
-            // zone flexibilities F (formed once from the factor) instead of a solve each
-            if g_constant && core.ws.global.capacity() > 0 {
-                core.del.condense_products();
-            }
         } else {
             // a nonlinear structure condenses with each step's first iteration matrix,
             // and carries the projection's feedback in F: W_D is never read
@@ -266,47 +238,4 @@ pub(crate) fn fixed_rows(contacts: &dyn ContactSet) -> Vec<bool> {
     (0..contacts.len())
         .flat_map(|a| std::iter::repeat_n(contacts.block_is_linear(a), contacts.dim(a)))
         .collect()
-}
-
-/// Refuses a `max_active_rows` that cannot hold one contact block (the dense one-step
-/// workspaces gather whole blocks).
-pub(crate) fn check_block_rows(
-    params: &SchemeParams,
-    contacts: &dyn ContactSet,
-) -> Result<(), Error> {
-    let block = (0..contacts.len())
-        .map(|a| contacts.dim(a))
-        .max()
-        .unwrap_or(1);
-    if params.max_active_rows != 0 && params.max_active_rows < block {
-        // issue 34: accepted before
-        return Err(Error::invalid(
-            "scheme.max_active_rows",
-            params.max_active_rows,
-            &format!(
-                "must hold at least one contact block ({block} rows: the normal and the \
-                 tangents of a frictional contact), or be 0 for the default"
-            ),
-        ));
-    }
-    Ok(())
-}
-
-/// Checks a user-given vector: length and finiteness.
-pub(crate) fn check_vector(field: &str, x: &[f64], n: usize) -> Result<(), Error> {
-    if x.len() != n {
-        return Err(Error::invalid(
-            field,
-            format!("{} values", x.len()),
-            &format!("needs {n} values (one per dof)"),
-        ));
-    }
-    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-        return Err(Error::invalid(
-            &format!("{field}[{i}]"),
-            x[i],
-            "must be finite",
-        ));
-    }
-    Ok(())
 }

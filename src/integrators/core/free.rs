@@ -32,6 +32,7 @@ impl ThetaCore {
     /// Free velocity and the contact-space data at the start of a step (for a
     /// nonlinear structure, at its first Newton iterate: [`super::super::structure`]).
     pub fn begin_step(&mut self, stats: &mut StepStats) -> Result<(), Error> {
+        stats.factorizations += std::mem::take(&mut self.pending_factorizations);
         self.update_contacts()?;
         let (structure, mut cx) = self.structure_step();
         let refactored = structure

@@ -89,13 +89,21 @@ mod form;
 mod free;
 mod newton;
 mod position;
+mod step_size;
 mod workspace;
 
-pub(crate) use build::{check_block_rows, check_vector, fixed_rows};
+pub use super::sizing::{DEFAULT_MAX_ACTIVE_ROWS, NONLINEAR_COLUMNS_MAX};
+pub(crate) use super::sizing::{
+    check_block_rows, matrix_free_rows, workspace_cap, workspace_ledger,
+};
+use super::step_matrix::StepForm;
+pub(crate) use build::fixed_rows;
 pub(crate) use newton::newton_change;
 use newton::*;
 use position::*;
-pub use workspace::*;
+use step_size::StepCache;
+pub use step_size::{STEP_CACHE_BYTES, STEP_CACHE_ENTRIES};
+pub(crate) use workspace::*;
 
 use super::problem::Problem;
 use super::structure::{StepData, StructureModel};
@@ -170,7 +178,11 @@ macro_rules! delegate_to_core {
             self.core.contacts.starting_gaps(q, gap)
         }
         fn save(&self) -> $crate::integrators::saved::IntegratorState {
-            self.core.state.save(self.name())
+            self.core.save(self.name())
+        }
+        fn set_dt(&mut self, h: f64) -> Result<(), $crate::error::Error> {
+            let name = self.name();
+            self.core.set_dt(name, h)
         }
         fn restore(
             &mut self,
@@ -301,6 +313,19 @@ pub struct ThetaCore {
     zq_new: Vec<f64>,
     zq_lin: Vec<f64>,
     zq_k: Vec<f64>,
+    /// The scheme's step matrix, asked again when `h` changes ([`ThetaCore::set_dt`]).
+    form: StepForm,
+    /// The parameters the core was built with (after the nonsymmetric adjustment): the
+    /// Delassus data of another `h` are formed with them.
+    built: SchemeParams,
+    /// Step and time of the last change of `h`: `t_k = t_o + (k − k_o)·h`, `(0, 0)` for a
+    /// run at one `h` (then `k·h` to the bit).
+    origin: (usize, f64),
+    /// The Delassus data (factors included) of other step sizes ([`ThetaCore::set_dt`]).
+    step_cache: StepCache,
+    /// Factorizations [`ThetaCore::set_dt`] made since the last step, counted in the
+    /// next step's [`StepStats::factorizations`].
+    pending_factorizations: usize,
 }
 
 impl ThetaCore {
@@ -315,6 +340,7 @@ impl ThetaCore {
         s: &crate::integrators::saved::IntegratorState,
     ) -> Result<(), Error> {
         self.state.restore(scheme, s)?;
+        self.restore_clock(s);
         self.y_ready = false;
         self.contacts.restart(&self.state.q);
         self.contacts
@@ -365,7 +391,7 @@ impl ThetaCore {
             self.state.projection[c] = self.tau[self.off[c]];
         }
         self.state.step += 1;
-        self.state.time = self.state.step as f64 * self.h;
+        self.state.time = self.origin.1 + (self.state.step - self.origin.0) as f64 * self.h;
         self.evaluate_at_state();
         self.scatter_local_velocity();
         stats.max_violation = self.state.gap.iter().fold(0.0_f64, |acc, &g| acc.max(-g));

@@ -3,30 +3,6 @@
 
 use super::*;
 
-/// Default cap on the rows of the dense one-step workspaces (4096² values = 128 MiB).
-pub const DEFAULT_MAX_ACTIVE_ROWS: usize = 4096;
-
-/// Active rows past which a one-step problem with a nonlinear `G` on the
-/// per-active-column Delassus path is solved matrix-free: its columns would be re-solved
-/// (two solves per row with the projection) at every linearization, where a matrix-free
-/// solve takes a few tens of products (measured 21–25 per solve on the flat impact of
-/// `tests/analytic_flat_impact.rs`); the same threshold as the dense re-forming of
-/// [`crate::delassus::AUTO_DENSE_MAX_CONTACTS`].
-pub const NONLINEAR_COLUMNS_MAX: usize = 64;
-
-/// Active rows past which the θ-method core solves a one-step problem matrix-free: the
-/// workspace rows `ws_cap`, or [`NONLINEAR_COLUMNS_MAX`] for a nonlinear `G` on the
-/// per-active-column path (which would re-solve every stored column at each
-/// linearization, where a matrix-free solve costs a few tens of products). Shared by
-/// [`ThetaCore::new`] and the plan of `signorini check`.
-pub(crate) fn matrix_free_rows(ws_cap: usize, g_constant: bool, dense: bool) -> usize {
-    if !g_constant && !dense {
-        NONLINEAR_COLUMNS_MAX.min(ws_cap)
-    } else {
-        ws_cap
-    }
-}
-
 /// Dense sub-problem workspace: gathers a principal sub-block, solves, scatters. Sized
 /// for `cap` rows (the active rows of a step), not for the candidates.
 #[derive(Debug)]
@@ -114,7 +90,7 @@ impl Workspace {
     /// Buffers for `rows` contact rows and `contacts` contacts, dense blocks capped at
     /// `params.max_active_rows` rows (module doc); `friction` adds the friction solver.
     pub fn new(rows: usize, contacts: usize, params: &SchemeParams, friction: bool) -> Self {
-        let cap = Self::cap(rows, params);
+        let cap = super::super::sizing::workspace_cap(rows, params);
         Workspace {
             cap,
             idx: Vec::with_capacity(rows),
@@ -141,14 +117,6 @@ impl Workspace {
             global: GlobalSolver::with_capacity(if rows > cap { rows } else { 0 }),
             gtol: params.friction.tol,
             gmax: params.friction.max_iterations,
-        }
-    }
-
-    /// Rows of the dense blocks: `rows`, capped by `params.max_active_rows`.
-    pub(crate) fn cap(rows: usize, params: &SchemeParams) -> usize {
-        match params.max_active_rows {
-            0 => rows.min(DEFAULT_MAX_ACTIVE_ROWS),
-            c => rows.min(c),
         }
     }
 
@@ -497,46 +465,4 @@ pub(crate) fn grow_solve(
         }
     }
     Ok(())
-}
-
-/// The one-step workspaces of the θ-method core in a memory ledger: the dense blocks
-/// (the gathered block and the MLCP's three, `scheme.max_active_rows` rows at most), the
-/// coupled position problem (the velocity rows plus one τ per contact, capped alike),
-/// the matrix-free vectors past the cap, and `auto`'s dense friction Newton fallback.
-/// Shared by [`ThetaCore::new`] and the plan of `signorini check`.
-pub(crate) fn workspace_ledger(
-    rows: usize,
-    m: usize,
-    params: &SchemeParams,
-    (friction, with_projection): (bool, bool),
-    mem: &mut crate::limits::MemoryEstimate,
-) {
-    let ws_cap = Workspace::cap(rows, params);
-    let cap = ws_cap as u64;
-    let cc = if with_projection && params.projection_feedback {
-        (rows + m).min(ws_cap) as u64
-    } else {
-        0
-    };
-    mem.add("dense one-step workspaces (4 × rows²)", cap * cap, 32);
-    mem.add("coupled position problem (unknowns²)", cc * cc, 8);
-    if rows > ws_cap {
-        // the matrix-free solves' vectors (`Workspace::gq`…, `GlobalSolver`)
-        mem.add(
-            "matrix-free one-step vectors (15 × rows)",
-            rows as u64,
-            15 * 8,
-        );
-    }
-    // `auto`'s dense Newton fallback: W and J (solvers::newton::NewtonWork)
-    let fn_rows = if friction {
-        cap.min(crate::solvers::newton::STEP_NEWTON_ROWS as u64)
-    } else {
-        0
-    };
-    mem.add(
-        "friction Newton workspace (2 × rows²)",
-        fn_rows * fn_rows,
-        16,
-    );
 }

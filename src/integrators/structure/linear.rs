@@ -9,71 +9,13 @@
 //! row), and a load that is `+0.0` everywhere (the bar) as the constant.
 
 use super::{StepData, StructureModel, add_step_loads};
-use crate::assembly::linear_combination;
 use crate::error::Error;
 use crate::integrators::StepStats;
-use crate::linalg::{LinearSolver, SparseMatrix, SpdAnalysis, sym_spmv_add};
+use crate::integrators::step_matrix::{
+    StepAnalysis, StepForm, StepMatrix, analyse_spd_step, factor_step_matrix,
+};
+use crate::linalg::{LinearSolver, SparseMatrix, sym_spmv_add};
 use crate::model::LinearSystem;
-
-/// The step matrix `M + a·K + b·C` of a scheme with its coefficients, formed (and, for
-/// the factor of an SPD matrix, analysed) when the run was planned and kept for the build
-/// ([`super::super::problem::Problem::plan`]).
-#[derive(Debug)]
-pub struct StepMatrix {
-    coefficients: (f64, f64),
-    matrix: SparseMatrix,
-    analysis: Option<SpdAnalysis>,
-}
-
-impl StepMatrix {
-    /// `M + a·K + b·C` of `sys`.
-    pub fn form(sys: &LinearSystem, (a, b): (f64, f64)) -> Self {
-        let mut terms = vec![(1.0, &sys.mass), (a, &sys.stiffness)];
-        if let Some(c) = &sys.damping {
-            terms.push((b, c));
-        }
-        StepMatrix {
-            coefficients: (a, b),
-            matrix: linear_combination(&terms),
-            analysis: None,
-        }
-    }
-
-    /// The matrix.
-    pub fn matrix(&self) -> &SparseMatrix {
-        &self.matrix
-    }
-
-    /// Keeps the symbolic analysis of the matrix's pattern for its factorization.
-    pub fn keep_analysis(&mut self, analysis: Option<SpdAnalysis>) {
-        self.analysis = analysis;
-    }
-}
-
-/// Forms and factors `M + a·K + b·C` (the step matrix of a scheme), naming it `what` in
-/// errors; `planned` is the one the run's plan formed and analysed, taken when its
-/// coefficients are `(a, b)` bit for bit. The inputs were checked once by
-/// [`crate::integrators::problem::Problem::validate`].
-pub fn factor_step_matrix(
-    sys: &LinearSystem,
-    (a, b): (f64, f64),
-    what: &str,
-    planned: Option<StepMatrix>,
-) -> Result<Box<dyn LinearSolver>, Error> {
-    let same = |p: &StepMatrix| {
-        p.coefficients.0.to_bits() == a.to_bits() && p.coefficients.1.to_bits() == b.to_bits()
-    };
-    let step = match planned.filter(same) {
-        Some(p) => p,
-        None => StepMatrix::form(sys, (a, b)),
-    };
-    crate::linalg::solver::factor_spd_analysed(
-        step.matrix.as_ref(),
-        what,
-        sys.ordering.as_ref(),
-        step.analysis,
-    )
-}
 
 /// The linear structure's step data (module doc).
 #[derive(Debug)]
@@ -100,19 +42,19 @@ impl StructureModel for LinearStructure {
         true
     }
 
+    /// `M̂(h)` formed and analysed as an SPD matrix ([`analyse_spd_step`]).
+    fn analyse(&self, sys: &LinearSystem, form: StepForm, h: f64) -> Result<StepAnalysis, Error> {
+        analyse_spd_step(sys, form, h)
+    }
+
     fn factor(
         &mut self,
         sys: &LinearSystem,
-        (h, theta): (f64, f64),
+        (form, h): (StepForm, f64),
         _: (&[f64], &[f64]),
         planned: Option<StepMatrix>,
     ) -> Result<Box<dyn LinearSolver>, Error> {
-        factor_step_matrix(
-            sys,
-            (h * h * theta * theta, h * theta),
-            "iteration matrix M + hθC + h²θ²K",
-            planned,
-        )
+        factor_step_matrix(sys, form, h, planned)
     }
 
     fn tangent<'a>(&'a self, sys: &'a LinearSystem) -> &'a SparseMatrix {

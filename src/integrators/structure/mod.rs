@@ -34,7 +34,8 @@
 mod linear;
 mod nonlinear;
 
-pub use linear::{LinearStructure, StepMatrix, factor_step_matrix};
+pub use super::step_matrix::{StepAnalysis, StepForm, StepMatrix, factor_step_matrix};
+pub use linear::LinearStructure;
 pub use nonlinear::{DENSE_MAX, MATRIX_NAME, NonlinearStructure};
 
 use super::{NewtonParams, State, StepStats};
@@ -85,13 +86,22 @@ pub trait StructureModel: Send + std::fmt::Debug {
     /// through `W_D`.
     fn step_matrix_constant(&self) -> bool;
 
-    /// Forms and factors `M̂` at set-up for the step `(h, θ)`, at the initial state
-    /// `(q0, v0)` (the pattern's analysis; a nonlinear structure forms its values again at
-    /// the first step); `planned`: the step matrix the run's plan formed, where it has one.
+    /// What the step matrix `M̂(h)` of `form` will cost, before anything is factored:
+    /// the factor's backend, entries and scratch from a symbolic analysis, and (where the
+    /// matrix is formed once) the matrix with its analysis for [`StructureModel::factor`]
+    /// to take. The plan of `signorini check` and the build both ask here
+    /// ([`super::step_matrix`]).
+    fn analyse(&self, sys: &LinearSystem, form: StepForm, h: f64) -> Result<StepAnalysis, Error>;
+
+    /// Forms and factors `M̂` of `form` at step `h`, at the initial state `(q0, v0)`
+    /// (the pattern's analysis; a nonlinear structure forms its values again at the
+    /// first step); `planned`: the step matrix [`StructureModel::analyse`] kept, where the
+    /// plan ran. A constant `M̂` is asked again through this call when `h` changes
+    /// ([`super::core::ThetaCore::set_dt`]).
     fn factor(
         &mut self,
         sys: &LinearSystem,
-        step: (f64, f64),
+        step: (StepForm, f64),
         initial: (&[f64], &[f64]),
         planned: Option<StepMatrix>,
     ) -> Result<Box<dyn LinearSolver>, Error>;

@@ -49,7 +49,8 @@ use faer::sparse::SymbolicSparseColMat;
 use super::{StepData, StructureModel, add_step_loads};
 use crate::error::Error;
 use crate::integrators::StepStats;
-use crate::linalg::{LinearSolver, SolverKind, SparseMatrix};
+use crate::integrators::step_matrix::{StepAnalysis, StepForm, StepMatrix};
+use crate::linalg::{FactorPlan, LinearSolver, SolverKind, SparseMatrix};
 use crate::model::LinearSystem;
 
 /// The name of `M̂ⁿ` in errors and summaries.
@@ -343,7 +344,7 @@ impl NonlinearStructure {
             let t = self.tangent.val_mut();
             t.copy_from_slice(&self.stiffness);
             self.tan.add_to(1.0, t);
-            let (a, b) = (h * h * th * th, h * th);
+            let (a, b) = StepForm::Theta { theta: th }.coefficients(h);
             let t = self.tangent.val();
             let mass = if self.has_mass {
                 &self.mass_now
@@ -461,12 +462,43 @@ impl StructureModel for NonlinearStructure {
     fn factor(
         &mut self,
         sys: &LinearSystem,
-        (h, theta): (f64, f64),
+        (form, h): (StepForm, f64),
         (q0, v0): (&[f64], &[f64]),
-        _: Option<super::StepMatrix>,
+        _: Option<StepMatrix>,
     ) -> Result<Box<dyn LinearSolver>, Error> {
-        self.evaluate(sys, (h, theta), (q0, v0), (q0, v0), true)?;
+        self.evaluate(sys, (h, form.theta()), (q0, v0), (q0, v0), true)?;
         self.factor_step_matrix()
+    }
+
+    /// The symbolic analysis of the structure's own pattern (the union of `M`, `K`, `C`
+    /// and its parts' tangents), with the backend [`NonlinearStructure::factor`] takes:
+    /// `LDLᵀ` when symmetric, dense LU up to [`DENSE_MAX`] dofs, sparse LU (its fill
+    /// estimated by the symmetric pattern's) past them. Nothing is kept: each step
+    /// forms its own values.
+    fn analyse(&self, _: &LinearSystem, _: StepForm, _: f64) -> Result<StepAnalysis, Error> {
+        let step = self.step_matrix.as_ref();
+        let n = step.nrows();
+        let factor = if self.symmetric {
+            crate::linalg::analyse_ldlt(step, MATRIX_NAME)?
+        } else if n <= DENSE_MAX {
+            FactorPlan {
+                backend: "dense LU".to_string(),
+                entries: (n * n) as u64,
+                scratch_bytes: 0,
+                supernodal: false,
+            }
+        } else {
+            let f = crate::linalg::analyse_ldlt(step, MATRIX_NAME)?;
+            FactorPlan {
+                backend: format!("faer LU (fill after pivoting; about {} entries)", f.entries),
+                ..f
+            }
+        };
+        Ok(StepAnalysis {
+            factor,
+            matrix_entries: step.val().len() as u64,
+            kept: None,
+        })
     }
 
     fn tangent<'a>(&'a self, _: &'a LinearSystem) -> &'a SparseMatrix {
