@@ -84,6 +84,12 @@ pub trait Integrator: Send {
     /// The same system, shared: nothing changes it after the build, so a writer thread
     /// may read it while the run steps (the history's energies).
     fn shared_system(&self) -> std::sync::Arc<LinearSystem>;
+    /// Whether the step matrix `M̂` is constant for a given `h` (a linear structure:
+    /// [`structure::StructureModel::step_matrix_constant`]), which the run's checks read
+    /// instead of the system's kind.
+    fn step_matrix_constant(&self) -> bool {
+        true
+    }
     /// The time step `h` (s) of the next step.
     fn dt(&self) -> f64;
     /// Makes `h` the step of the next steps: the step matrix `M̂(h)` and the Delassus data

@@ -358,9 +358,7 @@ impl RunInProgress {
                         checks.energy_floor.joules(integ.system()),
                     ),
                     theta,
-                    max: checks.energy_excess_limit(
-                        integ.system().linearity() == crate::model::system::Linearity::Linear,
-                    ),
+                    max: checks.energy_excess_limit(integ.step_matrix_constant()),
                     caps_allowed: checks.allow_caps,
                 }
             }),
@@ -598,13 +596,11 @@ impl RunInProgress {
                 products: acc.global[1],
                 products_per_solve: acc.global[1] as f64 / acc.global[0] as f64,
             }),
-            nonlinear: (sys.linearity() != crate::model::system::Linearity::Linear).then(|| {
-                summary::NonlinearSummary {
-                    factorizations: acc.factorizations,
-                    factorizations_per_step: acc.factorizations as f64 / steps.max(1) as f64,
-                    assembly_seconds: acc.assembly_seconds,
-                    factorization_seconds: acc.factorization_seconds,
-                }
+            nonlinear: (!integ.step_matrix_constant()).then(|| summary::NonlinearSummary {
+                factorizations: acc.factorizations,
+                factorizations_per_step: acc.factorizations as f64 / steps.max(1) as f64,
+                assembly_seconds: acc.assembly_seconds,
+                factorization_seconds: acc.factorization_seconds,
             }),
             max_lcp_residual: acc.lcp_res,
             energy: [energy0, energy1],

@@ -168,6 +168,9 @@ macro_rules! delegate_to_core {
         fn dt(&self) -> f64 {
             self.core.h
         }
+        fn step_matrix_constant(&self) -> bool {
+            self.core.step_matrix_constant()
+        }
         fn path(&self) -> String {
             self.core.path()
         }

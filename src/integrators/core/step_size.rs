@@ -57,6 +57,11 @@ impl StepCache {
 }
 
 impl ThetaCore {
+    /// Whether the structure's `M̂` is constant at a given `h`.
+    pub fn step_matrix_constant(&self) -> bool {
+        self.structure.step_matrix_constant()
+    }
+
     /// Makes `h` the step of the next steps (module doc). On a constant `M̂` the factor
     /// and Delassus data of `h` come from the cache or are formed (counted in the next
     /// step's [`StepStats::factorizations`]); the state, the impulses and the contact data
