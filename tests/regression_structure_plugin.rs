@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use signorini::error::Error;
 use signorini::integrators::step_matrix::{StepAnalysis, StepForm, StepMatrix};
 use signorini::integrators::structure::{LinearStructure, StepData, StructureModel};
-use signorini::integrators::{Integrator, Problem, StepStats, build_problem};
+use signorini::integrators::{Problem, StepStats, build_problem};
 use signorini::linalg::{LinearSolver, SparseMatrix};
 use signorini::model::LinearSystem;
 use signorini::scene::bar::BarScene;
