@@ -52,11 +52,11 @@ impl Integrator for CombinedProjection {
         let mut st = StepStats::default();
         let c = &mut self.core;
         c.begin_step(&mut st)?;
-        c.vel_mask.iter_mut().for_each(|x| *x = false);
+        c.rs.vel_mask.iter_mut().for_each(|x| *x = false);
         let rule = PositionRule::Combined { rule: self.rule };
         loop {
             st.index_set_iterations += 1;
-            c.pos_mask.copy_from_slice(&c.vel_mask);
+            c.rs.pos_mask.copy_from_slice(&c.rs.vel_mask);
             let (caps, friction_caps) = (st.caps_hit, st.friction_caps);
             c.newton(VelocityLaw::Impact, rule, &mut st)?;
             if st.caps_hit > caps || st.held_rows > 0 {
@@ -74,7 +74,7 @@ impl Integrator for CombinedProjection {
             if !c.activate_violated(false) {
                 break;
             }
-            if st.index_set_iterations > c.m {
+            if st.index_set_iterations > c.cfg.m {
                 // unreachable while the set only grows; kept as a reported cap
                 st.caps_hit += 1;
                 break;

@@ -94,81 +94,91 @@ impl ThetaCore {
             sys: std::sync::Arc::new(sys),
             contacts,
             h,
-            theta,
-            n,
-            m,
-            rows,
-            off,
-            mu,
-            friction,
-            friction_params: params.friction,
-            normal,
-            del,
-            e,
-            with_projection,
-            feedback: params.projection_feedback,
-            restitution_floor: params
-                .energy_consistent_restitution
-                .then(|| ((1.0 - params.theta) / params.theta, !with_projection)),
-            g_constant,
-            coordinate_scale,
-            operators_constant,
             structure,
-            last_converged: false,
-            jac_at_qk: true,
-            w_at_qk: false,
-            newton: params.newton,
-            projection_tolerance: params.projection_tolerance,
-            state,
-            u_rows: vec![0.0; rows],
-            vp_a: vec![0.0; np],
-            vp_b: vec![0.0; np],
-            v_free: vec![0.0; n],
-            work: vec![0.0; n],
-            y_ready: false,
-            state_finite: None,
-            q_lin: vec![0.0; n],
-            v_new: vec![0.0; n],
-            q_new: vec![0.0; n],
-            g_at_lin: vec![0.0; m],
-            u_k: vec![0.0; rows],
-            u_free: vec![0.0; rows],
-            u_new: vec![0.0; rows],
-            wp: vec![0.0; rows],
-            wt: vec![0.0; rows],
-            coupling: vec![0.0; rows],
-            a: vec![0.0; rows],
-            b: vec![0.0; rows],
-            g_lin: vec![0.0; rows],
-            p: vec![0.0; rows],
-            p_warm: vec![0.0; rows],
-            tau: vec![0.0; rows],
-            tau_prev: vec![0.0; rows],
-            tau_used: vec![0.0; rows],
-            dtau: vec![0.0; rows],
-            vel_mask: vec![false; m],
-            pos_mask: vec![false; m],
-            eq_rows: vec![false; rows],
+            del,
             ws: Workspace::new(rows, m, params, friction),
             coupled: coupled_cap.map(|c| Coupled::new(c, m)),
-            velocity_accuracy: 0.0,
-            zone: Vec::new(),
-            zv: Vec::new(),
-            zq: Vec::new(),
-            zq_new: Vec::new(),
-            zq_lin: Vec::new(),
-            zq_k: Vec::new(),
-            form: params.step_form(),
-            built: *params,
-            origin: (0, 0.0),
             step_cache: StepCache::default(),
-            pending_factorizations: 0,
+            state,
+            cfg: ThetaConfig {
+                theta,
+                n,
+                m,
+                rows,
+                off,
+                mu,
+                friction,
+                friction_params: params.friction,
+                normal,
+                e,
+                with_projection,
+                feedback: params.projection_feedback,
+                restitution_floor: params
+                    .energy_consistent_restitution
+                    .then(|| ((1.0 - params.theta) / params.theta, !with_projection)),
+                g_constant,
+                coordinate_scale,
+                operators_constant,
+                newton: params.newton,
+                projection_tolerance: params.projection_tolerance,
+                step_form: params.step_form(),
+                built: *params,
+            },
+            carry: StepCarry {
+                u_rows: vec![0.0; rows],
+                p_warm: vec![0.0; rows],
+                y_ready: false,
+                state_finite: None,
+                last_converged: false,
+                jac_at_qk: true,
+                w_at_qk: false,
+                origin: (0, 0.0),
+                pending_factorizations: 0,
+            },
+            dofs: DofScratch {
+                v_free: vec![0.0; n],
+                work: vec![0.0; n],
+                q_lin: vec![0.0; n],
+                v_new: vec![0.0; n],
+                q_new: vec![0.0; n],
+                prescribed_a: vec![0.0; np],
+                prescribed_b: vec![0.0; np],
+            },
+            rs: RowScratch {
+                g_at_lin: vec![0.0; m],
+                u_k: vec![0.0; rows],
+                u_free: vec![0.0; rows],
+                u_new: vec![0.0; rows],
+                w_p: vec![0.0; rows],
+                wn_tau: vec![0.0; rows],
+                wd_tau: vec![0.0; rows],
+                lcp_rhs: vec![0.0; rows],
+                gap_unprojected: vec![0.0; rows],
+                g_lin: vec![0.0; rows],
+                p: vec![0.0; rows],
+                tau: vec![0.0; rows],
+                tau_prev: vec![0.0; rows],
+                tau_used: vec![0.0; rows],
+                dtau: vec![0.0; rows],
+                vel_mask: vec![false; m],
+                pos_mask: vec![false; m],
+                eq_rows: vec![false; rows],
+                velocity_accuracy: 0.0,
+            },
+            zone: ZoneScratch {
+                dofs: Vec::new(),
+                velocity_correction: Vec::new(),
+                position_correction: Vec::new(),
+                q_iterate: Vec::new(),
+                q_last: Vec::new(),
+                q_start: Vec::new(),
+            },
         };
         core.contacts
             .evaluate(&core.state.q, &mut core.state.gap, &mut core.del.jac);
         if core.structure.step_matrix_constant() {
             core.condense(params);
-            core.w_at_qk = true;
+            core.carry.w_at_qk = true;
         } else {
             // a nonlinear structure condenses with each step's first iteration matrix,
             // and carries the projection's feedback in F: W_D is never read
@@ -181,7 +191,9 @@ impl ThetaCore {
                 core.del.use_kinetic_metric(&core.sys.mass)?;
             }
         }
-        core.del.jac.transpose_mul(&core.state.v, &mut core.u_rows);
+        core.del
+            .jac
+            .transpose_mul(&core.state.v, &mut core.carry.u_rows);
         core.scatter_local_velocity();
         core.del.start_stepping();
         Ok(core)
@@ -189,34 +201,34 @@ impl ThetaCore {
 
     /// A description of the linear-algebra path, for summaries.
     pub fn path(&self) -> String {
-        let structure = self
-            .structure
-            .describe(&self.sys, &self.del.factor.backend_name(), self.n);
+        let structure =
+            self.structure
+                .describe(&self.sys, &self.del.factor.backend_name(), self.cfg.n);
         format!(
             "{structure}; {} contact(s){}, {}; {}{}",
-            self.m,
-            if self.friction {
+            self.cfg.m,
+            if self.cfg.friction {
                 format!(
                     " with Coulomb friction ({} rows; {} on the velocity problem)",
-                    self.rows,
-                    self.friction_params.solver.name()
+                    self.cfg.rows,
+                    self.cfg.friction_params.solver.name()
                 )
             } else {
                 String::new()
             },
-            if self.operators_constant {
+            if self.cfg.operators_constant {
                 "linear gap: G and W constant (condensed once), one sparse solve per step; \
                  Newton iterations only re-solve the contact-space problem (eq. 56a)"
-            } else if self.g_constant {
+            } else if self.cfg.g_constant {
                 "linear gap: G constant, W condensed again with each new M̂ⁿ"
-            } else if !self.zone.is_empty() {
+            } else if !self.zone.dofs.is_empty() {
                 "nonlinear gap: G(q) re-linearized every Newton iteration, which iterates on \
                  the contact zone's dofs (F B P, no sparse solve) and forms the state once"
             } else {
                 "nonlinear gap: G(q) re-linearized every Newton iteration"
             },
             self.del.describe(),
-            if self.with_projection {
+            if self.cfg.with_projection {
                 format!(
                     "; projection metric {}",
                     if self.del.kinetic() {

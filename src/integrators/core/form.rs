@@ -8,38 +8,46 @@ use super::*;
 impl ThetaCore {
     /// `v = v_free + M̂⁻¹G P − hθ M̂⁻¹K N G τ_used`, `q = q_k + h(1−θ)v_k + hθ v + N G τ`.
     pub(crate) fn form(&mut self) {
-        let (h, th) = (self.h, self.theta);
-        if self.operators_constant {
+        let (h, th) = (self.h, self.cfg.theta);
+        if self.cfg.operators_constant {
             // called once per step: v_free is not needed afterwards (begin_step
             // rewrites it), so hand its buffer over instead of copying
-            std::mem::swap(&mut self.v_new, &mut self.v_free);
+            std::mem::swap(&mut self.dofs.v_new, &mut self.dofs.v_free);
         } else {
-            self.v_new.copy_from_slice(&self.v_free);
+            self.dofs.v_new.copy_from_slice(&self.dofs.v_free);
         }
         // a nonlinear structure has the projection's feedback in F(q_θ) (module doc of
         // `structure`)
-        let kfac = if self.feedback && self.structure.step_matrix_constant() {
+        let kfac = if self.cfg.feedback && self.structure.step_matrix_constant() {
             -h * th
         } else {
             0.0
         };
-        self.state_finite = None;
-        if self.operators_constant && self.form_fused(kfac) {
+        self.carry.state_finite = None;
+        if self.cfg.operators_constant && self.form_fused(kfac) {
             return;
         }
         self.del.add_velocity_correction(
-            &self.p,
+            &self.rs.p,
             kfac,
-            &self.tau_used,
-            &self.tau,
-            &mut self.v_new,
+            &self.rs.tau_used,
+            &self.rs.tau,
+            &mut self.dofs.v_new,
             &self.sys.stiffness,
         );
         let s = &self.state;
-        for (((qn, q), v), vn) in self.q_new.iter_mut().zip(&s.q).zip(&s.v).zip(&self.v_new) {
+        for (((qn, q), v), vn) in self
+            .dofs
+            .q_new
+            .iter_mut()
+            .zip(&s.q)
+            .zip(&s.v)
+            .zip(&self.dofs.v_new)
+        {
             *qn = q + h * ((1.0 - th) * v + th * vn);
         }
-        self.del.add_position_correction(&self.tau, &mut self.q_new);
+        self.del
+            .add_position_correction(&self.rs.tau, &mut self.dofs.q_new);
     }
 
     /// [`ThetaCore::form`] in one pass over the state where the corrections are dense
@@ -54,7 +62,7 @@ impl ThetaCore {
         let Some((cg, d)) = self.del.dense_columns() else {
             return false;
         };
-        let n = self.n;
+        let n = self.cfg.n;
         // the one nonzero row of each vector, if one: (column offset, scale)
         let one = |x: &[f64], s: f64| -> Result<Option<(usize, f64)>, ()> {
             let mut it = x.iter().enumerate().filter(|(_, v)| **v != 0.0);
@@ -65,13 +73,13 @@ impl ThetaCore {
             }
         };
         let (Ok(p), Ok(fb), Ok(t)) = (
-            one(&self.p, 1.0),
+            one(&self.rs.p, 1.0),
             if kfac != 0.0 {
-                one(&self.tau_used, kfac)
+                one(&self.rs.tau_used, kfac)
             } else {
                 Ok(None)
             },
-            one(&self.tau, 1.0),
+            one(&self.rs.tau, 1.0),
         ) else {
             return false;
         };
@@ -84,14 +92,14 @@ impl ThetaCore {
             None => (&s.q[..], 0.0),
         });
         let out = (
-            &mut self.q_new[..],
-            &mut self.v_new[..],
-            &mut self.q_lin[..],
+            &mut self.dofs.q_new[..],
+            &mut self.dofs.v_new[..],
+            &mut self.dofs.q_lin[..],
         );
-        let args = (&s.q[..], &s.v[..], out, cols, (self.h, self.theta));
+        let args = (&s.q[..], &s.v[..], out, cols, (self.h, self.cfg.theta));
         let finite = fused_update_with((p.is_some(), fb.is_some(), t.is_some()), args);
-        self.state_finite = Some(finite);
-        self.y_ready = true;
+        self.carry.state_finite = Some(finite);
+        self.carry.y_ready = true;
         true
     }
 
@@ -101,20 +109,21 @@ impl ThetaCore {
     /// ([`Delassus::zone_corrections`]), so a Newton iteration needs no sparse solve;
     /// [`ThetaCore::commit`] forms the whole state once with the converged impulses.
     pub(super) fn form_zone(&mut self) {
-        let (h, th) = (self.h, self.theta);
-        let kfac = if self.feedback { -h * th } else { 0.0 };
+        let (h, th) = (self.h, self.cfg.theta);
+        let kfac = if self.cfg.feedback { -h * th } else { 0.0 };
         self.del.zone_corrections(
-            &self.p,
+            &self.rs.p,
             kfac,
-            &self.tau_used,
-            &self.tau,
-            &mut self.zv,
-            &mut self.zq,
+            &self.rs.tau_used,
+            &self.rs.tau,
+            &mut self.zone.velocity_correction,
+            &mut self.zone.position_correction,
         );
         let s = &self.state;
-        for (k, &d) in self.zone.iter().enumerate() {
-            let vn = self.v_free[d] + self.zv[k];
-            self.zq_new[k] = s.q[d] + h * ((1.0 - th) * s.v[d] + th * vn) + self.zq[k];
+        for (k, &d) in self.zone.dofs.iter().enumerate() {
+            let vn = self.dofs.v_free[d] + self.zone.velocity_correction[k];
+            self.zone.q_iterate[k] =
+                s.q[d] + h * ((1.0 - th) * s.v[d] + th * vn) + self.zone.position_correction[k];
         }
     }
 }

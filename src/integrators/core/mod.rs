@@ -157,7 +157,7 @@ macro_rules! delegate_to_core {
             &self.core.state
         }
         fn state_finite(&self) -> Option<bool> {
-            self.core.state_finite
+            self.core.carry.state_finite
         }
         fn system(&self) -> &$crate::model::LinearSystem {
             &self.core.sys
@@ -201,13 +201,54 @@ macro_rules! delegate_to_core {
 }
 pub(crate) use delegate_to_core;
 
-/// Shared θ-method data and buffers (see the module doc).
+/// Shared θ-method data (see the module doc), in the parts a step treats differently:
+/// what the build fixed ([`ThetaConfig`]), the model and the sub-solvers (fields here),
+/// the state and what else the next step reads ([`StepCarry`]), and the scratch of one
+/// step ([`DofScratch`], [`RowScratch`], [`ZoneScratch`]), whose contents mean nothing
+/// between steps.
+///
+/// The stages of a step, each in its file: the free step and the structure's calls
+/// (`free.rs`: [`ThetaCore::begin_step`]), the Newton loop with the velocity and
+/// position problems (`newton.rs`, `position.rs`), forming and accepting the state
+/// (`form.rs`, [`ThetaCore::commit`] here), and a change of `h` (`step_size.rs`:
+/// [`ThetaCore::set_dt`]); the build is `build.rs`.
 pub struct ThetaCore {
     /// The structure, shared (read-only after the build) with the history thread.
     pub(crate) sys: std::sync::Arc<LinearSystem>,
+    /// The candidate contacts.
     pub(crate) contacts: Box<dyn ContactSet>,
+    /// The step of the next step ([`ThetaCore::set_dt`]).
     pub(crate) h: f64,
+    /// The structure's side of the step ([`super::structure`]): the free velocity, the
+    /// linearization of each iterate, eq. 41's residual.
+    structure: Box<dyn StructureModel>,
+    /// `M̂` factored, `G` and the condensed operators.
+    pub(crate) del: Delassus,
+    /// The one-step problems' workspaces and solvers.
+    pub(crate) ws: Workspace,
+    /// The coupled position problem's buffers (projection with feedback only).
+    coupled: Option<Coupled>,
+    /// The Delassus data (factors included) of other step sizes ([`ThetaCore::set_dt`]).
+    step_cache: StepCache,
+    /// `q`, `v` and the contact quantities at `t_k`.
+    pub(crate) state: State,
+    /// What the build fixed.
+    pub(crate) cfg: ThetaConfig,
+    /// What the next step reads beyond the state.
+    pub(crate) carry: StepCarry,
+    /// `n`-vectors of one step.
+    pub(crate) dofs: DofScratch,
+    /// Contact-space vectors and masks of one step.
+    pub(crate) rs: RowScratch,
+    /// The contact zone's scratch when the loop iterates on it.
+    pub(crate) zone: ZoneScratch,
+}
+
+/// What the build fixed for the run: sizes, laws, the scheme's options ([`ThetaCore`]).
+pub(crate) struct ThetaConfig {
+    /// `θ` of the θ-method.
     pub(crate) theta: f64,
+    /// Free dofs.
     pub(crate) n: usize,
     /// Contacts.
     pub(crate) m: usize,
@@ -216,78 +257,122 @@ pub struct ThetaCore {
     /// First row of each contact's block (`m + 1` values).
     pub(crate) off: Vec<usize>,
     /// Friction coefficient per contact.
-    mu: Vec<f64>,
+    pub(crate) mu: Vec<f64>,
     /// Some contact has friction (blocks of more than one row).
-    friction: bool,
-    friction_params: FrictionParams,
+    pub(crate) friction: bool,
+    /// The friction solver's settings.
+    pub(crate) friction_params: FrictionParams,
     /// Row is a normal row.
-    normal: Vec<bool>,
-    /// `M̂` factored, `G` and the condensed operators.
-    pub(crate) del: Delassus,
+    pub(crate) normal: Vec<bool>,
     /// Restitution per row (0 on tangential rows).
     pub(crate) e: Vec<f64>,
-    with_projection: bool,
-    feedback: bool,
+    /// The scheme projects positions (Algorithms 1 and 2).
+    pub(crate) with_projection: bool,
+    /// The projection's feedback `hθ W_D τ` enters the velocity problem.
+    pub(crate) feedback: bool,
     /// [`SchemeParams::energy_consistent_restitution`]: the restitution of a normal row
     /// separating at the step's start is at least `(1 − θ)/θ` (the first value); on
     /// every such row under Moreau–Jean (the second, true), on rows open in the last
     /// step under the projection schemes ([`ThetaCore::restitution`]).
-    restitution_floor: Option<(f64, bool)>,
+    pub(crate) restitution_floor: Option<(f64, bool)>,
     /// `G` does not depend on `q` (every contact set is linear).
     pub(crate) g_constant: bool,
     /// [`ContactSet::coordinate_scale`], for the convergence measure's round-off floor.
-    coordinate_scale: f64,
+    pub(crate) coordinate_scale: f64,
     /// `G` constant and the structure linear: `M̂`, `W` are condensed once and the
     /// Newton loop only re-solves the contact-space problem (eq. 56a).
     pub(crate) operators_constant: bool,
-    /// The structure's side of the step ([`super::structure`]): the free velocity, the
-    /// linearization of each iterate, eq. 41's residual.
-    structure: Box<dyn StructureModel>,
-    /// The last Newton loop of the step converged: a later round of Algorithm 2 starts
-    /// from its velocity ([`ThetaCore::restart_iterate`]).
-    last_converged: bool,
-    jac_at_qk: bool,
-    /// The Delassus data were formed at `q_k` (the step's start) and not since: a round
-    /// that re-evaluates `G` at `q_k` need not form them again.
-    w_at_qk: bool,
+    /// Newton's tolerance and caps.
     pub(crate) newton: NewtonParams,
+    /// The position problem's tolerance (m).
     pub(crate) projection_tolerance: f64,
-    pub(crate) state: State,
+    /// The scheme's step matrix, asked again when `h` changes ([`ThetaCore::set_dt`]).
+    pub(crate) step_form: StepForm,
+    /// The parameters the core was built with (after the nonsymmetric adjustment): the
+    /// Delassus data of another `h` are formed with them.
+    pub(crate) built: SchemeParams,
+}
+
+/// What a step leaves for the next beyond the [`State`]: `U` at `t_k`, the warm start,
+/// flags saying which data are already at `q_k`, the clock's origin ([`ThetaCore`]).
+pub(crate) struct StepCarry {
     /// `U = Gᵀ v` at the start of the step, all rows.
-    u_rows: Vec<f64>,
-    /// Scratch of the prescribed dofs' velocities and displacements.
-    vp_a: Vec<f64>,
-    vp_b: Vec<f64>,
-    // n-vectors
-    pub(crate) v_free: Vec<f64>,
-    work: Vec<f64>,
+    pub(crate) u_rows: Vec<f64>,
+    /// The last step's impulse, the warm start of the next solve.
+    pub(crate) p_warm: Vec<f64>,
     /// `q_lin` holds `y = q + hθ v` of the state, written by [`ThetaCore::form_fused`]
     /// and read (once) by [`ThetaCore::begin_step`] instead of another pass.
-    y_ready: bool,
+    pub(crate) y_ready: bool,
     /// Whether the state's `q` and `v` are all finite, when [`ThetaCore::form_fused`]
     /// formed them ([`super::Integrator::state_finite`]).
     pub(crate) state_finite: Option<bool>,
-    q_lin: Vec<f64>,
+    /// The last Newton loop of the step converged: a later round of Algorithm 2 starts
+    /// from its velocity ([`ThetaCore::restart_iterate`]).
+    pub(crate) last_converged: bool,
+    pub(crate) jac_at_qk: bool,
+    /// The Delassus data were formed at `q_k` (the step's start) and not since: a round
+    /// that re-evaluates `G` at `q_k` need not form them again.
+    pub(crate) w_at_qk: bool,
+    /// Step and time of the last change of `h`: `t_k = t_o + (k − k_o)·h`, `(0, 0)` for a
+    /// run at one `h` (then `k·h` to the bit).
+    pub(crate) origin: (usize, f64),
+    /// Factorizations [`ThetaCore::set_dt`] made since the last step, counted in the
+    /// next step's [`StepStats::factorizations`].
+    pub(crate) pending_factorizations: usize,
+}
+
+/// The `n`-vectors of one step ([`ThetaCore`]): meaningless between steps.
+pub(crate) struct DofScratch {
+    /// The free velocity of the step (or iteration).
+    pub(crate) v_free: Vec<f64>,
+    /// `n`-scratch of the solves.
+    pub(crate) work: Vec<f64>,
+    pub(crate) q_lin: Vec<f64>,
+    /// The iterate's velocity.
     pub(crate) v_new: Vec<f64>,
+    /// The iterate's displacement.
     pub(crate) q_new: Vec<f64>,
-    // per contact
-    g_at_lin: Vec<f64>,
-    // per row
+    /// Scratch of the prescribed dofs' velocities and displacements.
+    pub(crate) prescribed_a: Vec<f64>,
+    /// See `prescribed_a`.
+    pub(crate) prescribed_b: Vec<f64>,
+}
+
+/// The contact-space vectors (one entry per row, or per contact where said) and masks of
+/// one step ([`ThetaCore`]).
+pub(crate) struct RowScratch {
+    /// The gaps at the linearization point, per contact.
+    pub(crate) g_at_lin: Vec<f64>,
+    /// `U_k = Gᵀ v_k` per row (the impact law's `e U_k`).
     pub(crate) u_k: Vec<f64>,
+    /// `U_free = Gᵀ v_free` per row.
     pub(crate) u_free: Vec<f64>,
-    u_new: Vec<f64>,
-    wp: Vec<f64>,
-    wt: Vec<f64>,
-    coupling: Vec<f64>,
-    a: Vec<f64>,
-    pub(crate) b: Vec<f64>,
+    /// `U` of the iterate per row.
+    pub(crate) u_new: Vec<f64>,
+    /// `W P` of the iterate (or `W_D Δτ` in the convergence measure).
+    pub(crate) w_p: Vec<f64>,
+    /// `W_N τ` of the iterate (or `W_N Δτ` in the convergence measure).
+    pub(crate) wn_tau: Vec<f64>,
+    /// The projection's feedback on the velocities, `hθ W_D τ`.
+    pub(crate) wd_tau: Vec<f64>,
+    /// The right-hand side of the one-step problem being solved (the velocity LCP's
+    /// `U_free − hθW_Dτ + eU_k`, or the position problem's gaps).
+    pub(crate) lcp_rhs: Vec<f64>,
+    /// The linearized gaps at the end of the step before the projection's `W_N τ`
+    /// (`g_lin + hθU`).
+    pub(crate) gap_unprojected: Vec<f64>,
+    /// The linearized gaps of eq. 51 at the iterate.
     pub(crate) g_lin: Vec<f64>,
+    /// The iterate's impulse `P` per row.
     pub(crate) p: Vec<f64>,
-    p_warm: Vec<f64>,
+    /// The iterate's projection `τ` per row.
     pub(crate) tau: Vec<f64>,
-    tau_prev: Vec<f64>,
-    tau_used: Vec<f64>,
-    dtau: Vec<f64>,
+    /// `τ` of the last iterate.
+    pub(crate) tau_prev: Vec<f64>,
+    /// `τ` whose feedback the free velocity of this iterate carries.
+    pub(crate) tau_used: Vec<f64>,
+    /// The change of `τ` between iterates.
+    pub(crate) dtau: Vec<f64>,
     /// Contacts whose velocity-level impact law is enforced this round.
     pub(crate) vel_mask: Vec<bool>,
     /// Contacts projected this round (Algorithm 2).
@@ -296,39 +381,31 @@ pub struct ThetaCore {
     /// iterate). The set only grows within a loop, so the decoupled iteration cannot
     /// cycle between two equality sets (with friction, a lifting contact's `P_N`
     /// alternated between 0 and > 0 every iteration until the cap).
-    eq_rows: Vec<bool>,
-    pub(crate) ws: Workspace,
-    /// The coupled position problem's buffers (projection with feedback only).
-    coupled: Option<Coupled>,
+    pub(crate) eq_rows: Vec<bool>,
     /// Velocity accuracy (m/s) of the friction solves of this Newton loop (the largest
     /// [`crate::solvers::friction::velocity_error`] met, so that the tolerances derived
     /// from it do not move between iterations); 0 without friction, where the LCP
     /// solves are exact to rounding.
-    velocity_accuracy: f64,
+    pub(crate) velocity_accuracy: f64,
+}
+
+/// The contact zone's scratch when the Newton loop iterates on the zone's dofs alone
+/// ([`ThetaCore::form_zone`]); empty otherwise.
+pub(crate) struct ZoneScratch {
     /// The contact zone's dofs when the Newton loop iterates on the zone alone
     /// ([`ThetaCore::form_zone`]: a linear structure, a nonlinear `G`, the zone keeping its
     /// flexibilities only, [`Delassus::flexibility_zone`]); empty otherwise.
-    zone: Vec<usize>,
-    /// Zone scratch (zone order): the velocity and position corrections, and `q` at the
-    /// iterate, at the last iterate and at the step's start.
-    zv: Vec<f64>,
-    zq: Vec<f64>,
-    zq_new: Vec<f64>,
-    zq_lin: Vec<f64>,
-    zq_k: Vec<f64>,
-    /// The scheme's step matrix, asked again when `h` changes ([`ThetaCore::set_dt`]).
-    form: StepForm,
-    /// The parameters the core was built with (after the nonsymmetric adjustment): the
-    /// Delassus data of another `h` are formed with them.
-    built: SchemeParams,
-    /// Step and time of the last change of `h`: `t_k = t_o + (k − k_o)·h`, `(0, 0)` for a
-    /// run at one `h` (then `k·h` to the bit).
-    origin: (usize, f64),
-    /// The Delassus data (factors included) of other step sizes ([`ThetaCore::set_dt`]).
-    step_cache: StepCache,
-    /// Factorizations [`ThetaCore::set_dt`] made since the last step, counted in the
-    /// next step's [`StepStats::factorizations`].
-    pending_factorizations: usize,
+    pub(crate) dofs: Vec<usize>,
+    /// The zone's velocity correction (zone order).
+    pub(crate) velocity_correction: Vec<f64>,
+    /// The zone's position correction.
+    pub(crate) position_correction: Vec<f64>,
+    /// `q` on the zone at the iterate.
+    pub(crate) q_iterate: Vec<f64>,
+    /// `q` on the zone at the last iterate.
+    pub(crate) q_last: Vec<f64>,
+    /// `q` on the zone at the step's start.
+    pub(crate) q_start: Vec<f64>,
 }
 
 impl ThetaCore {
@@ -344,7 +421,7 @@ impl ThetaCore {
     ) -> Result<(), Error> {
         self.state.restore(scheme, s)?;
         self.restore_clock(s);
-        self.y_ready = false;
+        self.carry.y_ready = false;
         self.contacts.restart(&self.state.q);
         self.contacts
             .update(&self.state.q)
@@ -360,7 +437,7 @@ impl ThetaCore {
             .contacts
             .update(&self.state.q)
             .map_err(|e| step_error(&self.state, self.h, e))?;
-        if changed && !self.g_constant {
+        if changed && !self.cfg.g_constant {
             self.evaluate_at_state();
         }
         Ok(())
@@ -371,30 +448,33 @@ impl ThetaCore {
     fn evaluate_at_state(&mut self) {
         self.contacts
             .evaluate(&self.state.q, &mut self.state.gap, &mut self.del.jac);
-        if !self.g_constant {
+        if !self.cfg.g_constant {
             if self.structure.step_matrix_constant() {
                 // (a nonlinear structure condenses at the next step's first iterate)
                 self.del.refresh(&self.sys.stiffness);
-                self.w_at_qk = true;
+                self.carry.w_at_qk = true;
             }
-            self.jac_at_qk = true;
+            self.carry.jac_at_qk = true;
         }
-        self.del.jac.transpose_mul(&self.state.v, &mut self.u_rows);
+        self.del
+            .jac
+            .transpose_mul(&self.state.v, &mut self.carry.u_rows);
     }
 
     pub fn commit(&mut self, stats: &mut StepStats) {
-        if self.operators_constant || !self.zone.is_empty() {
+        if self.cfg.operators_constant || !self.zone.dofs.is_empty() {
             self.form();
         }
-        std::mem::swap(&mut self.state.q, &mut self.q_new);
-        std::mem::swap(&mut self.state.v, &mut self.v_new);
-        self.state.impulse_rows.copy_from_slice(&self.p);
-        for c in 0..self.m {
-            self.state.impulse[c] = self.p[self.off[c]];
-            self.state.projection[c] = self.tau[self.off[c]];
+        std::mem::swap(&mut self.state.q, &mut self.dofs.q_new);
+        std::mem::swap(&mut self.state.v, &mut self.dofs.v_new);
+        self.state.impulse_rows.copy_from_slice(&self.rs.p);
+        for c in 0..self.cfg.m {
+            self.state.impulse[c] = self.rs.p[self.cfg.off[c]];
+            self.state.projection[c] = self.rs.tau[self.cfg.off[c]];
         }
         self.state.step += 1;
-        self.state.time = self.origin.1 + (self.state.step - self.origin.0) as f64 * self.h;
+        self.state.time =
+            self.carry.origin.1 + (self.state.step - self.carry.origin.0) as f64 * self.h;
         self.evaluate_at_state();
         self.scatter_local_velocity();
         stats.max_violation = self.state.gap.iter().fold(0.0_f64, |acc, &g| acc.max(-g));
@@ -408,13 +488,14 @@ impl ThetaCore {
     fn scatter_local_velocity(&mut self) {
         let td = self.state.tangent_dim;
         let vs = self
+            .rs
             .u_free
             .iter()
-            .chain(&self.u_rows)
+            .chain(&self.carry.u_rows)
             .fold(0.0_f64, |s, x| s.max(x.abs()));
-        for c in 0..self.m {
-            let (o, e) = (self.off[c], self.off[c + 1]);
-            self.state.local_velocity[c] = self.u_rows[o];
+        for c in 0..self.cfg.m {
+            let (o, e) = (self.cfg.off[c], self.cfg.off[c + 1]);
+            self.state.local_velocity[c] = self.carry.u_rows[o];
             if td == 0 {
                 continue;
             }
@@ -422,7 +503,7 @@ impl ThetaCore {
             let mut pt2 = 0.0;
             for t in 0..td {
                 let (ut, pt) = if o + 1 + t < e {
-                    (self.u_rows[o + 1 + t], self.p[o + 1 + t])
+                    (self.carry.u_rows[o + 1 + t], self.rs.p[o + 1 + t])
                 } else {
                     (0.0, 0.0)
                 };
@@ -431,12 +512,12 @@ impl ThetaCore {
                 ut2 += ut * ut;
                 pt2 += pt * pt;
             }
-            let pn = self.p[o];
+            let pn = self.rs.p[o];
             self.state.status[c] = if pn <= 0.0 {
                 ContactStatus::Open
-            } else if self.mu[c] == 0.0 || e - o == 1 {
+            } else if self.cfg.mu[c] == 0.0 || e - o == 1 {
                 ContactStatus::Frictionless
-            } else if ut2.sqrt() <= 1e-9 * vs || pt2.sqrt() < (1.0 - 1e-9) * self.mu[c] * pn {
+            } else if ut2.sqrt() <= 1e-9 * vs || pt2.sqrt() < (1.0 - 1e-9) * self.cfg.mu[c] * pn {
                 ContactStatus::Stick
             } else {
                 ContactStatus::Slip

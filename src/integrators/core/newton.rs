@@ -79,28 +79,30 @@ impl ThetaCore {
         rule: PositionRule,
         stats: &mut StepStats,
     ) -> Result<(), Error> {
-        let (h, th, m, rows) = (self.h, self.theta, self.m, self.rows);
-        if !self.g_constant && !self.jac_at_qk {
+        let (h, th, m, rows) = (self.h, self.cfg.theta, self.cfg.m, self.cfg.rows);
+        if !self.cfg.g_constant && !self.carry.jac_at_qk {
             self.contacts
-                .evaluate(&self.state.q, &mut self.g_at_lin, &mut self.del.jac);
+                .evaluate(&self.state.q, &mut self.rs.g_at_lin, &mut self.del.jac);
             if self.structure.step_matrix_constant() {
-                if !self.w_at_qk {
+                if !self.carry.w_at_qk {
                     self.del.refresh(&self.sys.stiffness);
-                    self.w_at_qk = true;
+                    self.carry.w_at_qk = true;
                 }
-                self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
+                self.del
+                    .jac
+                    .transpose_mul(&self.dofs.v_free, &mut self.rs.u_free);
             }
-            self.jac_at_qk = true;
+            self.carry.jac_at_qk = true;
         }
         // a round with no row in any problem reads no Delassus entry: its
         // re-linearizations evaluate the gaps and G (for the activation test) and leave
         // the operators as they are (formed at q_k, or re-formed by the next round)
         let empty_round = law == VelocityLaw::Impact
             && self.structure.step_matrix_constant()
-            && !self.vel_mask.iter().any(|&x| x)
+            && !self.rs.vel_mask.iter().any(|&x| x)
             && match rule {
                 PositionRule::None => true,
-                PositionRule::Combined { .. } => !self.pos_mask.iter().any(|&x| x),
+                PositionRule::Combined { .. } => !self.rs.pos_mask.iter().any(|&x| x),
                 PositionRule::AllComplementarity => false,
             };
         // a later round of Algorithm 2 (or its complementarity redo) on a nonlinear
@@ -108,17 +110,17 @@ impl ThetaCore {
         self.restart_structure(stats)?;
         // modified Newton: the last two changes of the iterate, for its contraction test
         let (mut change, mut change_before) = (f64::INFINITY, f64::INFINITY);
-        self.tau_prev.iter_mut().for_each(|x| *x = 0.0);
-        self.p.iter_mut().for_each(|x| *x = 0.0);
-        self.eq_rows.iter_mut().for_each(|x| *x = false);
-        self.velocity_accuracy = 0.0;
-        if !self.operators_constant {
-            self.q_lin.copy_from_slice(&self.state.q);
+        self.rs.tau_prev.iter_mut().for_each(|x| *x = 0.0);
+        self.rs.p.iter_mut().for_each(|x| *x = 0.0);
+        self.rs.eq_rows.iter_mut().for_each(|x| *x = false);
+        self.rs.velocity_accuracy = 0.0;
+        if !self.cfg.operators_constant {
+            self.dofs.q_lin.copy_from_slice(&self.state.q);
         }
-        self.g_at_lin.copy_from_slice(&self.state.gap);
-        for (k, &d) in self.zone.iter().enumerate() {
-            self.zq_k[k] = self.state.q[d];
-            self.zq_lin[k] = self.state.q[d];
+        self.rs.g_at_lin.copy_from_slice(&self.state.gap);
+        for (k, &d) in self.zone.dofs.iter().enumerate() {
+            self.zone.q_start[k] = self.state.q[d];
+            self.zone.q_last[k] = self.state.q[d];
         }
         let mut relinearized = false;
         let mut converged = false;
@@ -127,31 +129,36 @@ impl ThetaCore {
         // |qⁿ⁺¹ − qⁿ|∞ / |qⁿ⁺¹|∞ of the last iterate (nonlinear contacts only)
         let mut configuration_change = f64::INFINITY;
         let mut it = 0;
-        while it < self.newton.max_iterations {
+        while it < self.cfg.newton.max_iterations {
             it += 1;
             stats.newton_iterations += 1;
-            if it > 1 && !self.operators_constant {
-                if !self.g_constant {
-                    self.contacts
-                        .evaluate(&self.q_lin, &mut self.g_at_lin, &mut self.del.jac);
+            if it > 1 && !self.cfg.operators_constant {
+                if !self.cfg.g_constant {
+                    self.contacts.evaluate(
+                        &self.dofs.q_lin,
+                        &mut self.rs.g_at_lin,
+                        &mut self.del.jac,
+                    );
                     relinearized = true;
-                    self.jac_at_qk = false;
+                    self.carry.jac_at_qk = false;
                 }
                 // a nonlinear structure: the next iterate's M̂ⁿ (full Newton, or modified
                 // Newton when the last change was not at most half the one before) and
                 // free velocity
                 let refactored = self.relinearize_structure((change, change_before), stats)?;
-                if (!self.g_constant || refactored) && !empty_round {
+                if (!self.cfg.g_constant || refactored) && !empty_round {
                     self.del.refresh(self.structure.tangent(&self.sys));
-                    self.w_at_qk = false;
+                    self.carry.w_at_qk = false;
                 }
-                self.del.jac.transpose_mul(&self.v_free, &mut self.u_free);
+                self.del
+                    .jac
+                    .transpose_mul(&self.dofs.v_free, &mut self.rs.u_free);
             }
             // coupling hθ W_D τⁿ (zero without projection)
-            self.coupling.iter_mut().for_each(|x| *x = 0.0);
-            if self.feedback
+            self.rs.wd_tau.iter_mut().for_each(|x| *x = 0.0);
+            if self.cfg.feedback
                 && self.structure.step_matrix_constant()
-                && self.tau_prev.iter().any(|&t| t != 0.0)
+                && self.rs.tau_prev.iter().any(|&t| t != 0.0)
             {
                 // with a constant G the columns stay and serve every later step; with a
                 // nonlinear G they are forgotten at the next linearization, and the
@@ -159,32 +166,33 @@ impl ThetaCore {
                 // column solves, which would also take pool slots the position problem
                 // of this iteration needs (81 contacts of two cubes: τ on 42 rows, then
                 // 33 other rows violated, past the 64-column pool)
-                if self.g_constant {
+                if self.cfg.g_constant {
                     self.del
-                        .ensure_support(&self.tau_prev, &self.sys.stiffness)
+                        .ensure_support(&self.rs.tau_prev, &self.sys.stiffness)
                         .map_err(|e| fail(&self.state, "Delassus columns", e))?;
                 }
                 self.del.mul_add(
                     Op::Wd,
                     h * th,
-                    &self.tau_prev,
-                    &mut self.coupling,
+                    &self.rs.tau_prev,
+                    &mut self.rs.wd_tau,
                     &self.sys.stiffness,
                 );
             }
             for a in 0..rows {
-                self.a[a] = self.u_free[a] - self.coupling[a] + self.restitution(a) * self.u_k[a];
+                self.rs.lcp_rhs[a] =
+                    self.rs.u_free[a] - self.rs.wd_tau[a] + self.restitution(a) * self.rs.u_k[a];
             }
             // linearized gaps without contact impulse or projection (eq. 51), normal rows
             for c in 0..m {
-                let a = self.off[c];
-                self.g_lin[a] = if self.g_constant || !relinearized {
-                    self.state.gap[c] + h * (1.0 - th) * self.u_k[a]
+                let a = self.cfg.off[c];
+                self.rs.g_lin[a] = if self.cfg.g_constant || !relinearized {
+                    self.state.gap[c] + h * (1.0 - th) * self.rs.u_k[a]
                 } else {
-                    self.g_at_lin[c]
+                    self.rs.g_at_lin[c]
                         + self.del.jac.dot(a, &self.state.q)
                         + h * (1.0 - th) * self.del.jac.dot(a, &self.state.v)
-                        - self.del.jac.dot(a, &self.q_lin)
+                        - self.del.jac.dot(a, &self.dofs.q_lin)
                 };
             }
             match law {
@@ -194,13 +202,13 @@ impl ThetaCore {
                     self.ws.idx.clear();
                     self.ws.blocks.clear();
                     let mut frictional = false;
-                    for c in (0..m).filter(|&c| self.vel_mask[c]) {
-                        let (o, d) = (self.off[c], self.off[c + 1] - self.off[c]);
-                        if self.friction {
+                    for c in (0..m).filter(|&c| self.rs.vel_mask[c]) {
+                        let (o, d) = (self.cfg.off[c], self.cfg.off[c + 1] - self.cfg.off[c]);
+                        if self.cfg.friction {
                             self.ws.blocks.push(Block {
                                 offset: self.ws.idx.len(),
                                 dim: d,
-                                mu: self.mu[c],
+                                mu: self.cfg.mu[c],
                             });
                             frictional |= d > 1;
                         }
@@ -216,22 +224,22 @@ impl ThetaCore {
                         let warm = if frictional && it == 1 {
                             &self.state.impulse_rows
                         } else {
-                            &self.p
+                            &self.rs.p
                         };
                         self.ws
-                            .gather(&self.del, Op::W, 1.0, &self.a, warm, |_| false)
+                            .gather(&self.del, Op::W, 1.0, &self.rs.lcp_rhs, warm, |_| false)
                             .map_err(|e| fail(&self.state, "velocity problem", e))?;
                         if frictional {
                             let (info, acc) = self
                                 .ws
                                 .solve_friction(
-                                    &self.friction_params,
+                                    &self.cfg.friction_params,
                                     &mut self.del,
                                     &self.sys.stiffness,
                                     stats,
                                 )
                                 .map_err(|e| fail(&self.state, "friction problem", e))?;
-                            self.velocity_accuracy = self.velocity_accuracy.max(acc);
+                            self.rs.velocity_accuracy = self.rs.velocity_accuracy.max(acc);
                             stats.friction_solves += 1;
                             stats.friction_iterations += info.iterations;
                             stats.friction_residual = stats.friction_residual.max(info.residual);
@@ -249,95 +257,105 @@ impl ThetaCore {
                             stats.lcp_iterations += info.iterations;
                             stats.lcp_residual = stats.lcp_residual.max(info.residual);
                         }
-                        self.ws.scatter(&mut self.p);
+                        self.ws.scatter(&mut self.rs.p);
                     } else {
-                        self.p.iter_mut().for_each(|x| *x = 0.0);
+                        self.rs.p.iter_mut().for_each(|x| *x = 0.0);
                     }
                 }
                 VelocityLaw::PositionLevel => {
                     // 0 ≤ g_base + hθ (U_free + W P) ⊥ P ≥ 0 on every contact
                     // (frictionless only: one row per contact)
                     for a in 0..m {
-                        self.a[a] = self.g_lin[a] + h * th * self.u_free[a];
+                        self.rs.lcp_rhs[a] = self.rs.g_lin[a] + h * th * self.rs.u_free[a];
                     }
-                    self.p_warm.copy_from_slice(&self.p);
+                    self.carry.p_warm.copy_from_slice(&self.rs.p);
                     grow_solve(
                         &mut self.ws,
                         &mut self.del,
                         (Op::W, &self.sys.stiffness),
                         h * th,
-                        &self.a,
-                        &self.p_warm,
-                        &mut self.p,
-                        (0.0, &self.normal),
+                        &self.rs.lcp_rhs,
+                        &self.carry.p_warm,
+                        &mut self.rs.p,
+                        (0.0, &self.cfg.normal),
                         stats,
                     )
                     .map_err(|e| fail(&self.state, "position-level LCP", e))?;
                 }
             }
-            self.wp.iter_mut().for_each(|x| *x = 0.0);
-            self.del
-                .mul_add(Op::W, 1.0, &self.p, &mut self.wp, &self.sys.stiffness);
+            self.rs.w_p.iter_mut().for_each(|x| *x = 0.0);
+            self.del.mul_add(
+                Op::W,
+                1.0,
+                &self.rs.p,
+                &mut self.rs.w_p,
+                &self.sys.stiffness,
+            );
             for a in 0..rows {
-                self.u_new[a] = self.u_free[a] + self.wp[a] - self.coupling[a];
+                self.rs.u_new[a] = self.rs.u_free[a] + self.rs.w_p[a] - self.rs.wd_tau[a];
             }
             for c in 0..m {
-                let a = self.off[c];
-                self.b[a] = self.g_lin[a] + h * th * self.u_new[a];
+                let a = self.cfg.off[c];
+                self.rs.gap_unprojected[a] = self.rs.g_lin[a] + h * th * self.rs.u_new[a];
             }
             // position problem
             let projected = self.solve_position(rule, stats)?;
             if projected {
                 stats.projection_iterations += 1;
             }
-            self.wt.iter_mut().for_each(|x| *x = 0.0);
-            if self.with_projection {
-                self.del
-                    .mul_add(Op::Wn, 1.0, &self.tau, &mut self.wt, &self.sys.stiffness);
+            self.rs.wn_tau.iter_mut().for_each(|x| *x = 0.0);
+            if self.cfg.with_projection {
+                self.del.mul_add(
+                    Op::Wn,
+                    1.0,
+                    &self.rs.tau,
+                    &mut self.rs.wn_tau,
+                    &self.sys.stiffness,
+                );
             }
             for c in 0..m {
-                let a = self.off[c];
-                self.g_lin[a] = self.b[a] + self.wt[a];
+                let a = self.cfg.off[c];
+                self.rs.g_lin[a] = self.rs.gap_unprojected[a] + self.rs.wn_tau[a];
             }
-            self.tau_used.copy_from_slice(&self.tau_prev);
+            self.rs.tau_used.copy_from_slice(&self.rs.tau_prev);
             for a in 0..rows {
-                self.dtau[a] = self.tau[a] - self.tau_prev[a];
+                self.rs.dtau[a] = self.rs.tau[a] - self.rs.tau_prev[a];
             }
-            self.tau_prev.copy_from_slice(&self.tau);
+            self.rs.tau_prev.copy_from_slice(&self.rs.tau);
             // convergence
-            let r = if self.operators_constant {
+            let r = if self.cfg.operators_constant {
                 self.linear_residual()?
-            } else if !self.zone.is_empty() {
+            } else if !self.zone.dofs.is_empty() {
                 // the iterate on the contact zone alone: the rest of the state follows
                 // the zone's impulses linearly and is formed once, at commit
                 self.form_zone();
                 let r = newton_change(
-                    &self.zq_new,
-                    &self.zq_lin,
-                    &self.zq_k,
-                    self.coordinate_scale,
+                    &self.zone.q_iterate,
+                    &self.zone.q_last,
+                    &self.zone.q_start,
+                    self.cfg.coordinate_scale,
                 );
-                configuration_change = relative_change(&self.zq_new, &self.zq_lin);
-                self.zq_lin.copy_from_slice(&self.zq_new);
-                for (&d, &x) in self.zone.iter().zip(&self.zq_new) {
-                    self.q_lin[d] = x;
+                configuration_change = relative_change(&self.zone.q_iterate, &self.zone.q_last);
+                self.zone.q_last.copy_from_slice(&self.zone.q_iterate);
+                for (&d, &x) in self.zone.dofs.iter().zip(&self.zone.q_iterate) {
+                    self.dofs.q_lin[d] = x;
                 }
                 r
             } else {
                 self.form();
                 let r = newton_change(
-                    &self.q_new,
-                    &self.q_lin,
+                    &self.dofs.q_new,
+                    &self.dofs.q_lin,
                     &self.state.q,
-                    self.coordinate_scale,
+                    self.cfg.coordinate_scale,
                 );
-                configuration_change = relative_change(&self.q_new, &self.q_lin);
-                self.q_lin.copy_from_slice(&self.q_new);
+                configuration_change = relative_change(&self.dofs.q_new, &self.dofs.q_lin);
+                self.dofs.q_lin.copy_from_slice(&self.dofs.q_new);
                 match self.structure_residual(stats)? {
                     // eq. 41 at the new iterate; with a constant G the gaps are exact
                     // (eq. 49 holds identically) and R alone decides
                     Some(rs) => {
-                        let r = if self.g_constant { rs } else { r.max(rs) };
+                        let r = if self.cfg.g_constant { rs } else { r.max(rs) };
                         (change_before, change) = (change, r);
                         r
                     }
@@ -349,18 +367,20 @@ impl ThetaCore {
             // loop cannot tell iterates apart below a relative 16 × that (two iterates of
             // error ≤ acc each, through the position problem, which moved rows of the
             // undamped block by up to 8 × the change of its right-hand side)
-            let tol = if self.velocity_accuracy > 0.0 {
+            let tol = if self.rs.velocity_accuracy > 0.0 {
                 let s_v = self
+                    .rs
                     .u_free
                     .iter()
-                    .chain(&self.u_k)
-                    .chain(&self.u_new)
+                    .chain(&self.rs.u_k)
+                    .chain(&self.rs.u_new)
                     .fold(0.0_f64, |a, x| a.max(x.abs()));
-                self.newton
+                self.cfg
+                    .newton
                     .tol
-                    .max(16.0 * self.velocity_accuracy / s_v.max(f64::MIN_POSITIVE))
+                    .max(16.0 * self.rs.velocity_accuracy / s_v.max(f64::MIN_POSITIVE))
             } else {
-                self.newton.tol
+                self.cfg.newton.tol
             };
             if r <= tol {
                 converged = true;
@@ -399,14 +419,16 @@ impl ThetaCore {
             }
             last_r = r;
         }
-        self.last_converged = converged;
+        self.carry.last_converged = converged;
         if !converged {
             stats.caps_hit += 1;
         }
         if let PositionRule::Combined { .. } = rule {
             stats.held_rows = (0..m)
-                .filter(|&c| self.pos_mask[c])
-                .filter(|&c| self.p[self.off[c]] <= 0.0 && self.tau[self.off[c]] < 0.0)
+                .filter(|&c| self.rs.pos_mask[c])
+                .filter(|&c| {
+                    self.rs.p[self.cfg.off[c]] <= 0.0 && self.rs.tau[self.cfg.off[c]] < 0.0
+                })
                 .count();
         }
         Ok(())
@@ -414,37 +436,48 @@ impl ThetaCore {
 
     /// Dimensionless change that the last `Δτ` would make to the next iterate (linear `G`).
     pub(super) fn linear_residual(&mut self) -> Result<f64, Error> {
-        if !self.with_projection || !self.feedback || self.dtau.iter().all(|&x| x == 0.0) {
+        if !self.cfg.with_projection || !self.cfg.feedback || self.rs.dtau.iter().all(|&x| x == 0.0)
+        {
             return Ok(0.0);
         }
         self.del
-            .ensure_support(&self.dtau, &self.sys.stiffness)
+            .ensure_support(&self.rs.dtau, &self.sys.stiffness)
             .map_err(|e| fail(&self.state, "Delassus columns", e))?;
-        let (h, th, rows) = (self.h, self.theta, self.rows);
+        let (h, th, rows) = (self.h, self.cfg.theta, self.cfg.rows);
         let mut s_v: f64 = 0.0;
         let mut s_g: f64 = 0.0;
         for a in 0..rows {
             s_v = s_v
-                .max(self.u_free[a].abs())
-                .max(self.u_k[a].abs())
-                .max(self.u_new[a].abs());
+                .max(self.rs.u_free[a].abs())
+                .max(self.rs.u_k[a].abs())
+                .max(self.rs.u_new[a].abs());
         }
-        for c in 0..self.m {
-            s_g = s_g.max(self.b[self.off[c]].abs());
+        for c in 0..self.cfg.m {
+            s_g = s_g.max(self.rs.gap_unprojected[self.cfg.off[c]].abs());
         }
-        self.wp.iter_mut().for_each(|x| *x = 0.0);
-        self.wt.iter_mut().for_each(|x| *x = 0.0);
-        self.del
-            .mul_add(Op::Wd, 1.0, &self.dtau, &mut self.wp, &self.sys.stiffness);
-        self.del
-            .mul_add(Op::Wn, 1.0, &self.dtau, &mut self.wt, &self.sys.stiffness);
+        self.rs.w_p.iter_mut().for_each(|x| *x = 0.0);
+        self.rs.wn_tau.iter_mut().for_each(|x| *x = 0.0);
+        self.del.mul_add(
+            Op::Wd,
+            1.0,
+            &self.rs.dtau,
+            &mut self.rs.w_p,
+            &self.sys.stiffness,
+        );
+        self.del.mul_add(
+            Op::Wn,
+            1.0,
+            &self.rs.dtau,
+            &mut self.rs.wn_tau,
+            &self.sys.stiffness,
+        );
         let mut dv: f64 = 0.0;
         let mut dg: f64 = 0.0;
         for a in 0..rows {
-            dv = dv.max(h * th * self.wp[a].abs());
+            dv = dv.max(h * th * self.rs.w_p[a].abs());
         }
-        for c in 0..self.m {
-            dg = dg.max(self.wt[self.off[c]].abs());
+        for c in 0..self.cfg.m {
+            dg = dg.max(self.rs.wn_tau[self.cfg.off[c]].abs());
         }
         // Rounding floor: 8 ulps of the quantities the iterate is built from (what the
         // friction solve resolves enters through the tolerance, in `newton`).
@@ -489,10 +522,10 @@ impl ThetaCore {
     pub(super) fn restitution(&self, a: usize) -> f64 {
         let s = &self.state;
         restitution(
-            self.restitution_floor,
-            self.e[a],
-            self.normal[a],
-            self.u_k[a],
+            self.cfg.restitution_floor,
+            self.cfg.e[a],
+            self.cfg.normal[a],
+            self.rs.u_k[a],
             s.impulse_rows[a],
         )
     }
@@ -504,14 +537,14 @@ impl ThetaCore {
     /// set grew.
     pub fn activate_violated(&mut self, before_projection: bool) -> bool {
         let gaps = if before_projection {
-            &self.b
+            &self.rs.gap_unprojected
         } else {
-            &self.g_lin
+            &self.rs.g_lin
         };
         let mut grew = false;
-        for a in 0..self.m {
-            if !self.vel_mask[a] && gaps[self.off[a]] <= 0.0 {
-                self.vel_mask[a] = true;
+        for a in 0..self.cfg.m {
+            if !self.rs.vel_mask[a] && gaps[self.cfg.off[a]] <= 0.0 {
+                self.rs.vel_mask[a] = true;
                 grew = true;
             }
         }
@@ -535,7 +568,7 @@ impl ThetaCore {
                 return Ok(());
             }
             st.index_set_iterations += 1;
-            if st.index_set_iterations > self.m {
+            if st.index_set_iterations > self.cfg.m {
                 // unreachable while the set only grows; kept as a reported cap
                 st.caps_hit += 1;
                 return Ok(());

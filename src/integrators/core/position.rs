@@ -79,22 +79,22 @@ impl ThetaCore {
         let Some(cp) = self.coupled.as_mut() else {
             return Ok(false);
         };
-        let (h, th, m) = (self.h, self.theta, self.m);
+        let (h, th, m) = (self.h, self.cfg.theta, self.cfg.m);
         let c = h * th;
         cp.unknowns.clear();
         cp.cols.clear();
-        for k in (0..m).filter(|&k| self.vel_mask[k]) {
-            let (o, d) = (self.off[k], self.off[k + 1] - self.off[k]);
-            let pn = self.p[o];
+        for k in (0..m).filter(|&k| self.rs.vel_mask[k]) {
+            let (o, d) = (self.cfg.off[k], self.cfg.off[k + 1] - self.cfg.off[k]);
+            let pn = self.rs.p[o];
             if pn <= 0.0 {
                 continue;
             }
-            let pt = self.p[o + 1..o + d]
+            let pt = self.rs.p[o + 1..o + d]
                 .iter()
                 .map(|x| x * x)
                 .sum::<f64>()
                 .sqrt();
-            let mu = self.mu[k];
+            let mu = self.cfg.mu[k];
             // the buffers hold `cap` unknowns: a larger problem is not attempted (and
             // must not grow them inside the step)
             if cp.unknowns.len() + d > cp.cap || cp.cols.len() + d > cp.cols.capacity() {
@@ -109,7 +109,7 @@ impl ThetaCore {
                 if d > 1 && mu > 0.0 && pt > 0.0 {
                     u.slip_dim = d - 1;
                     for j in 0..d - 1 {
-                        u.slip[j] = mu * self.p[o + 1 + j] / pt;
+                        u.slip[j] = mu * self.rs.p[o + 1 + j] / pt;
                     }
                 }
                 cp.unknowns.push(u);
@@ -122,15 +122,16 @@ impl ThetaCore {
             }
             cp.cols.extend(o..o + d);
         }
-        for k in (0..m).filter(|&k| self.pos_mask[k] || rule == PositionRule::AllComplementarity) {
-            let a = self.off[k];
+        for k in (0..m).filter(|&k| self.rs.pos_mask[k] || rule == PositionRule::AllComplementarity)
+        {
+            let a = self.cfg.off[k];
             let eq = match rule {
                 PositionRule::Combined { rule } => {
-                    self.pos_mask[k] && (rule == ProjectionRule::AllActive || self.eq_rows[a])
+                    self.rs.pos_mask[k] && (rule == ProjectionRule::AllActive || self.rs.eq_rows[a])
                 }
                 _ => false,
             };
-            if eq || self.tau[a] > 0.0 {
+            if eq || self.rs.tau[a] > 0.0 {
                 if cp.unknowns.len() == cp.cap || cp.cols.len() == cp.cols.capacity() {
                     return Ok(false);
                 }
@@ -183,19 +184,20 @@ impl ThetaCore {
             }
             for (k, uk) in cp.unknowns.iter().enumerate() {
                 let i = uk.row;
-                cp.rhs[k] = if uk.tau && self.g_constant {
+                cp.rhs[k] = if uk.tau && self.cfg.g_constant {
                     -(self.state.gap[uk.contact]
-                        + h * (1.0 - th) * self.u_k[i]
-                        + c * self.u_free[i])
+                        + h * (1.0 - th) * self.rs.u_k[i]
+                        + c * self.rs.u_free[i])
                 } else if uk.tau {
                     // a nonlinear G: the gap linearized at this iterate (eq. 51), which
                     // `b = g_lin + hθ U` still holds
-                    -(self.b[i] - c * self.u_new[i] + c * self.u_free[i])
+                    -(self.rs.gap_unprojected[i] - c * self.rs.u_new[i] + c * self.rs.u_free[i])
                 } else {
-                    let (e, u_k) = (self.e[i], self.u_k[i]);
+                    let (e, u_k) = (self.cfg.e[i], self.rs.u_k[i]);
                     let p_k = self.state.impulse_rows[i];
-                    -(self.u_free[i]
-                        + restitution(self.restitution_floor, e, self.normal[i], u_k, p_k) * u_k)
+                    -(self.rs.u_free[i]
+                        + restitution(self.cfg.restitution_floor, e, self.cfg.normal[i], u_k, p_k)
+                            * u_k)
                 };
             }
             if !cp.lu.solve(&mut cp.mat[..n * n], n, &mut cp.rhs[..n]) {
@@ -209,7 +211,7 @@ impl ThetaCore {
                 let wrong = if u.tau {
                     !u.equality && y < 0.0
                 } else {
-                    u.row == self.off[u.contact] && y < 0.0
+                    u.row == self.cfg.off[u.contact] && y < 0.0
                 };
                 if wrong {
                     cp.drop[2 * u.contact + usize::from(u.tau)] = true;
@@ -224,10 +226,10 @@ impl ThetaCore {
                 .retain(|u| !drop[2 * u.contact + usize::from(u.tau)]);
         }
         let n = cp.unknowns.len();
-        self.tau_prev.iter_mut().for_each(|x| *x = 0.0);
+        self.rs.tau_prev.iter_mut().for_each(|x| *x = 0.0);
         for (u, &y) in cp.unknowns.iter().zip(&cp.rhs[..n]) {
             if u.tau {
-                self.tau_prev[u.row] = y;
+                self.rs.tau_prev[u.row] = y;
             }
         }
         Ok(true)
@@ -239,18 +241,19 @@ impl ThetaCore {
         rule: PositionRule,
         stats: &mut StepStats,
     ) -> Result<bool, Error> {
-        let m = self.m;
+        let m = self.cfg.m;
         // Gaps are known only to hθ times the velocity accuracy of the friction solve
         // (0 without friction): a row within twice that of zero is neither violated nor
         // projected, or the rows resting at g ≈ 0 flip in and out of the position problem
         // on the solver's last digits and the loop never settles (seen at h = 1e-5 on the
         // undamped sliding block: gaps of ±5e-18 m flipping with U_N known to 1e-12 m/s).
         let ptol = self
+            .cfg
             .projection_tolerance
-            .max(2.0 * self.h * self.theta * self.velocity_accuracy);
+            .max(2.0 * self.h * self.cfg.theta * self.rs.velocity_accuracy);
         match rule {
             PositionRule::None => {
-                self.tau.iter_mut().for_each(|x| *x = 0.0);
+                self.rs.tau.iter_mut().for_each(|x| *x = 0.0);
                 return Ok(false);
             }
             PositionRule::AllComplementarity => {
@@ -261,10 +264,10 @@ impl ThetaCore {
                     &mut self.del,
                     (Op::Wn, &self.sys.stiffness),
                     1.0,
-                    &self.b,
-                    &self.tau_prev,
-                    &mut self.tau,
-                    (ptol, &self.normal),
+                    &self.rs.gap_unprojected,
+                    &self.rs.tau_prev,
+                    &mut self.rs.tau,
+                    (ptol, &self.cfg.normal),
                     stats,
                 )
                 .map_err(|e| fail(&self.state, "position LCP", e))?;
@@ -281,21 +284,21 @@ impl ThetaCore {
                 // Keeping them equalities ends the loop; a final P = 0 with τ < 0 is
                 // counted in `StepStats::held_rows`.
                 for c in 0..m {
-                    let a = self.off[c];
-                    if self.pos_mask[c]
-                        && self.p[a] > 0.0
+                    let a = self.cfg.off[c];
+                    if self.rs.pos_mask[c]
+                        && self.rs.p[a] > 0.0
                         && rule.holds(self.state.impulse_rows[a] > 0.0)
                     {
-                        self.eq_rows[a] = true;
+                        self.rs.eq_rows[a] = true;
                     }
                 }
-                let (b, eq_rows) = (&self.b, &self.eq_rows);
+                let (b, eq_rows) = (&self.rs.gap_unprojected, &self.rs.eq_rows);
                 let eq = |a: usize| rule == ProjectionRule::AllActive || eq_rows[a];
                 self.ws.idx.clear();
                 self.ws
                     .idx
-                    .extend((0..m).map(|c| (c, self.off[c])).filter_map(|(c, a)| {
-                        (self.pos_mask[c]
+                    .extend((0..m).map(|c| (c, self.cfg.off[c])).filter_map(|(c, a)| {
+                        (self.rs.pos_mask[c]
                             && if eq(a) {
                                 b[a].abs() > ptol || (ptol == 0.0 && b[a] != 0.0)
                             } else {
@@ -303,7 +306,7 @@ impl ThetaCore {
                             })
                         .then_some(a)
                     }));
-                self.tau.iter_mut().for_each(|x| *x = 0.0);
+                self.rs.tau.iter_mut().for_each(|x| *x = 0.0);
                 // The rows are chosen at τ = 0; the projection of the equality rows can
                 // push a complementarity row of the active set below zero (seen with
                 // friction: a lifting node next to projected ones). Such rows join and
@@ -321,7 +324,7 @@ impl ThetaCore {
                             .map_err(|e| fail(&self.state, "Delassus columns", e))?;
                     }
                     self.ws
-                        .gather(&self.del, Op::Wn, 1.0, b, &self.tau_prev, eq)
+                        .gather(&self.del, Op::Wn, 1.0, b, &self.rs.tau_prev, eq)
                         .map_err(|e| fail(&self.state, "position MLCP", e))?;
                     let info = self
                         .ws
@@ -329,15 +332,15 @@ impl ThetaCore {
                         .map_err(|e| fail(&self.state, "position MLCP", e))?;
                     stats.lcp_iterations += info.iterations;
                     stats.lcp_residual = stats.lcp_residual.max(info.residual);
-                    self.ws.scatter(&mut self.tau);
+                    self.ws.scatter(&mut self.rs.tau);
                     // complementarity rows of the active set left out and now violated
-                    let (off, pos) = (&self.off, &self.pos_mask);
+                    let (off, pos) = (&self.cfg.off, &self.rs.pos_mask);
                     let candidates = (0..m).filter(|&c| pos[c]).map(|c| off[c]);
                     let grew = self.ws.add_violated(
                         (&mut self.del, &self.sys.stiffness),
                         (Op::Wn, 1.0),
                         b,
-                        &self.tau,
+                        &self.rs.tau,
                         ptol,
                         candidates,
                         eq,
@@ -352,6 +355,6 @@ impl ThetaCore {
                 }
             }
         }
-        Ok(self.tau.iter().any(|&t| t != 0.0))
+        Ok(self.rs.tau.iter().any(|&t| t != 0.0))
     }
 }

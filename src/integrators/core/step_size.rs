@@ -82,9 +82,9 @@ impl ThetaCore {
                 None => Some(self.factor_at(h)?),
             };
             if let Some(del) = fresh {
-                self.pending_factorizations += 1;
+                self.carry.pending_factorizations += 1;
                 let old = std::mem::replace(&mut self.del, del);
-                let p = self.built;
+                let p = self.cfg.built;
                 self.condense(&p);
                 self.del.start_stepping();
                 self.step_cache.put(self.h, old);
@@ -98,10 +98,10 @@ impl ThetaCore {
     /// as [`ThetaCore::new`] sizes it, with `G` evaluated at the state (not yet condensed:
     /// [`ThetaCore::condense`]).
     fn factor_at(&mut self, h: f64) -> Result<Delassus, Error> {
-        let p = self.built;
+        let p = self.cfg.built;
         let factor = self.structure.factor(
             &self.sys,
-            (self.form, h),
+            (self.cfg.step_form, h),
             (&self.state.q, &self.state.v),
             None,
         )?;
@@ -109,14 +109,14 @@ impl ThetaCore {
         let mut del = Delassus::new(
             factor,
             jac,
-            self.n,
+            self.cfg.n,
             (p.delassus, p.delassus_pool),
-            self.with_projection,
+            self.cfg.with_projection,
             p.metric,
-            self.operators_constant,
+            self.cfg.operators_constant,
         )?;
-        del.limit_columns(workspace_cap(self.rows, &p));
-        let mut gap = vec![0.0; self.m];
+        del.limit_columns(workspace_cap(self.cfg.rows, &p));
+        let mut gap = vec![0.0; self.cfg.m];
         self.contacts
             .evaluate(&self.state.q, &mut gap, &mut del.jac);
         Ok(del)
@@ -127,29 +127,29 @@ impl ThetaCore {
     /// column limit, the products' flexibilities), on `self.del`; the zone's and the
     /// workspaces' buffers are sized by the first call (the build's) and only read after.
     pub(super) fn condense(&mut self, params: &SchemeParams) {
-        if !self.g_constant && self.contacts.condensed() {
+        if !self.cfg.g_constant && self.contacts.condensed() {
             let zone = self.contacts.zone();
             let fixed = fixed_rows(self.contacts.as_ref());
             self.del
                 .condense_zone(&zone, fixed, &self.sys.stiffness, true);
-            if self.zone.is_empty()
+            if self.zone.dofs.is_empty()
                 && let Some(dofs) = self.del.flexibility_zone()
             {
                 let z = dofs.len();
-                self.zone = dofs.to_vec();
+                self.zone.dofs = dofs.to_vec();
                 for buf in [
-                    &mut self.zv,
-                    &mut self.zq,
-                    &mut self.zq_new,
-                    &mut self.zq_lin,
-                    &mut self.zq_k,
+                    &mut self.zone.velocity_correction,
+                    &mut self.zone.position_correction,
+                    &mut self.zone.q_iterate,
+                    &mut self.zone.q_last,
+                    &mut self.zone.q_start,
                 ] {
                     *buf = vec![0.0; z];
                 }
             }
         }
         self.del.refresh(&self.sys.stiffness);
-        let rows_mf = matrix_free_rows(self.ws.cap, self.g_constant, self.del.is_dense());
+        let rows_mf = matrix_free_rows(self.ws.cap, self.cfg.g_constant, self.del.is_dense());
         if rows_mf < self.ws.cap {
             self.ws.matrix_free_from(rows_mf, params);
             self.del.limit_columns(rows_mf);
@@ -159,7 +159,7 @@ impl ThetaCore {
         }
         // a constant G whose problems may go matrix-free: its products through the
         // zone flexibilities F (formed once from the factor) instead of a solve each
-        if self.g_constant && self.ws.global.capacity() > 0 {
+        if self.cfg.g_constant && self.ws.matrix_free.capacity() > 0 {
             self.del.condense_products();
         }
     }
@@ -169,16 +169,17 @@ impl ThetaCore {
     pub fn save(&self, scheme: &str) -> IntegratorState {
         let mut s = self.state.save(scheme);
         s.dt = Some(Bits(self.h));
-        s.origin = (self.origin != (0, 0.0)).then_some((self.origin.0, Bits(self.origin.1)));
+        s.origin = (self.carry.origin != (0, 0.0))
+            .then_some((self.carry.origin.0, Bits(self.carry.origin.1)));
         s
     }
 
     /// The clock of a restored state `s`: its origin, or the restored step when it ran at
     /// another `h` than this core's.
     pub(super) fn restore_clock(&mut self, s: &IntegratorState) {
-        self.origin = s.origin.map_or((0, 0.0), |(k, t)| (k, t.0));
+        self.carry.origin = s.origin.map_or((0, 0.0), |(k, t)| (k, t.0));
         if s.dt.is_some_and(|d| d.0.to_bits() != self.h.to_bits()) {
-            self.origin = (s.step, s.time.0);
+            self.carry.origin = (s.step, s.time.0);
         }
     }
 }

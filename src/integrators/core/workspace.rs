@@ -7,16 +7,27 @@ use super::*;
 /// for `cap` rows (the active rows of a step), not for the candidates.
 #[derive(Debug)]
 pub(crate) struct Workspace {
+    /// Rows of the dense blocks.
     pub(super) cap: usize,
+    /// The gathered rows (indices in contact space).
     pub idx: Vec<usize>,
-    pub(super) sub: Vec<f64>,
-    pub(super) q: Vec<f64>,
-    pub(super) z: Vec<f64>,
-    pub(super) w: Vec<f64>,
-    pub(super) eq: Vec<bool>,
+    /// The gathered principal sub-block, `cap × cap` column-major.
+    pub(super) block: Vec<f64>,
+    /// The gathered problem's right-hand side.
+    pub(super) rhs: Vec<f64>,
+    /// Its solution (impulses or projections).
+    pub(super) solution: Vec<f64>,
+    /// Its complementary slack (`block · solution + rhs`).
+    pub(super) slack: Vec<f64>,
+    /// Rows held as equalities (the MLCP's).
+    pub(super) equality: Vec<bool>,
+    /// Per contact-space row, whether it is gathered.
     pub(super) member: Vec<bool>,
-    pub(super) res: Vec<f64>,
+    /// Per contact-space row, the residual of the last solve.
+    pub(super) residual: Vec<f64>,
+    /// The LCP solver of the velocity problems.
     pub lcp: LcpSolver,
+    /// The MLCP solver of the position problems.
     pub(super) mlcp: Mlcp,
     /// Friction blocks of the gathered problem (offsets in the gathered rows).
     pub(super) blocks: Vec<Block>,
@@ -28,18 +39,25 @@ pub(crate) struct Workspace {
     /// [`Workspace::matrix_free_from`]).
     pub(super) mf_from: usize,
     /// Operator and scale of the recorded problem.
-    pub(super) gop: (Op, f64),
-    pub(super) gq: Vec<f64>,
-    pub(super) gz: Vec<f64>,
-    pub(super) gw: Vec<f64>,
-    pub(super) geq: Vec<bool>,
-    /// Full contact-space vectors for the restricted products.
-    pub(super) gx: Vec<f64>,
-    pub(super) gy: Vec<f64>,
-    pub(super) global: GlobalSolver,
+    pub(super) mf_op: (Op, f64),
+    /// The recorded problem's right-hand side, solution, slack and equality rows.
+    pub(super) mf_rhs: Vec<f64>,
+    /// See `mf_rhs`.
+    pub(super) mf_solution: Vec<f64>,
+    /// See `mf_rhs`.
+    pub(super) mf_slack: Vec<f64>,
+    /// See `mf_rhs`.
+    pub(super) mf_equality: Vec<bool>,
+    /// Full contact-space vectors for the restricted products (argument and result).
+    pub(super) mf_x: Vec<f64>,
+    /// See `mf_x`.
+    pub(super) mf_y: Vec<f64>,
+    /// The matrix-free solver (MPRGP, or the accelerated projected gradient).
+    pub(super) matrix_free: GlobalSolver,
     /// Tolerance and product cap of the matrix-free solves (the friction solver's).
-    pub(super) gtol: f64,
-    pub(super) gmax: usize,
+    pub(super) mf_tol: f64,
+    /// See `mf_tol`.
+    pub(super) mf_max_products: usize,
 }
 
 /// The principal sub-block `scale · op[idx, idx]` of a Delassus operator, applied by
@@ -94,29 +112,29 @@ impl Workspace {
         Workspace {
             cap,
             idx: Vec::with_capacity(rows),
-            sub: vec![0.0; cap * cap],
-            q: vec![0.0; cap],
-            z: vec![0.0; cap],
-            w: vec![0.0; cap],
-            eq: vec![false; cap],
+            block: vec![0.0; cap * cap],
+            rhs: vec![0.0; cap],
+            solution: vec![0.0; cap],
+            slack: vec![0.0; cap],
+            equality: vec![false; cap],
             member: vec![false; rows],
-            res: vec![0.0; rows],
+            residual: vec![0.0; rows],
             lcp: LcpSolver::new(params.lcp, cap),
             mlcp: Mlcp::with_capacity(cap),
             blocks: Vec::with_capacity(if friction { contacts } else { 0 }),
             friction: FrictionSolver::with_capacity(if friction { cap } else { 0 }),
             over: false,
             mf_from: cap,
-            gop: (Op::W, 1.0),
-            gq: vec![0.0; if rows > cap { rows } else { 0 }],
-            gz: vec![0.0; if rows > cap { rows } else { 0 }],
-            gw: vec![0.0; if rows > cap { rows } else { 0 }],
-            geq: vec![false; if rows > cap { rows } else { 0 }],
-            gx: vec![0.0; if rows > cap { rows } else { 0 }],
-            gy: vec![0.0; if rows > cap { rows } else { 0 }],
-            global: GlobalSolver::with_capacity(if rows > cap { rows } else { 0 }),
-            gtol: params.friction.tol,
-            gmax: params.friction.max_iterations,
+            mf_op: (Op::W, 1.0),
+            mf_rhs: vec![0.0; if rows > cap { rows } else { 0 }],
+            mf_solution: vec![0.0; if rows > cap { rows } else { 0 }],
+            mf_slack: vec![0.0; if rows > cap { rows } else { 0 }],
+            mf_equality: vec![false; if rows > cap { rows } else { 0 }],
+            mf_x: vec![0.0; if rows > cap { rows } else { 0 }],
+            mf_y: vec![0.0; if rows > cap { rows } else { 0 }],
+            matrix_free: GlobalSolver::with_capacity(if rows > cap { rows } else { 0 }),
+            mf_tol: params.friction.tol,
+            mf_max_products: params.friction.max_iterations,
         }
     }
 
@@ -124,7 +142,7 @@ impl Workspace {
     /// `through_f`: its products go through the flexibilities of `G`'s dofs
     /// ([`Delassus::condense_products`]), not through the factor.
     pub fn describe(&self, through_f: bool) -> String {
-        if self.global.capacity() == 0 {
+        if self.matrix_free.capacity() == 0 {
             return String::new();
         }
         format!(
@@ -159,16 +177,16 @@ impl Workspace {
             return;
         }
         self.mf_from = rows;
-        if self.global.capacity() < all {
-            self.gq = vec![0.0; all];
-            self.gz = vec![0.0; all];
-            self.gw = vec![0.0; all];
-            self.geq = vec![false; all];
-            self.gx = vec![0.0; all];
-            self.gy = vec![0.0; all];
-            self.global = GlobalSolver::with_capacity(all);
-            self.gtol = params.friction.tol;
-            self.gmax = params.friction.max_iterations;
+        if self.matrix_free.capacity() < all {
+            self.mf_rhs = vec![0.0; all];
+            self.mf_solution = vec![0.0; all];
+            self.mf_slack = vec![0.0; all];
+            self.mf_equality = vec![false; all];
+            self.mf_x = vec![0.0; all];
+            self.mf_y = vec![0.0; all];
+            self.matrix_free = GlobalSolver::with_capacity(all);
+            self.mf_tol = params.friction.tol;
+            self.mf_max_products = params.friction.max_iterations;
         }
     }
 
@@ -188,21 +206,21 @@ impl Workspace {
         let k = self.idx.len();
         self.over = self.over_cap();
         if self.over {
-            self.gop = (op, scale);
+            self.mf_op = (op, scale);
             for (b, &j) in self.idx.iter().enumerate() {
-                self.gq[b] = rhs[j];
-                self.gz[b] = warm[j];
-                self.geq[b] = eq(j);
+                self.mf_rhs[b] = rhs[j];
+                self.mf_solution[b] = warm[j];
+                self.mf_equality[b] = eq(j);
             }
             return Ok(());
         }
         for (b, &j) in self.idx.iter().enumerate() {
             for (a, &i) in self.idx.iter().enumerate() {
-                self.sub[a + b * k] = scale * del.entry(op, i, j);
+                self.block[a + b * k] = scale * del.entry(op, i, j);
             }
-            self.q[b] = rhs[j];
-            self.z[b] = warm[j];
-            self.eq[b] = eq(j);
+            self.rhs[b] = rhs[j];
+            self.solution[b] = warm[j];
+            self.equality[b] = eq(j);
         }
         Ok(())
     }
@@ -241,25 +259,25 @@ impl Workspace {
             let a = Self::restricted(
                 del,
                 stiffness,
-                self.gop,
+                self.mf_op,
                 &self.idx,
-                &mut self.gx,
-                &mut self.gy,
+                &mut self.mf_x,
+                &mut self.mf_y,
             );
-            let info = self.global.solve_box(
+            let info = self.matrix_free.solve_box(
                 &a,
-                &self.gq[..k],
-                &self.geq[..k],
-                &mut self.gz[..k],
-                &mut self.gw[..k],
-                self.gtol,
-                self.gmax,
+                &self.mf_rhs[..k],
+                &self.mf_equality[..k],
+                &mut self.mf_solution[..k],
+                &mut self.mf_slack[..k],
+                self.mf_tol,
+                self.mf_max_products,
             );
             stats.global_solves += 1;
             stats.global_products += info.products;
             if !info.converged {
                 return Err(SolveError::Cap {
-                    cap: self.gmax,
+                    cap: self.mf_max_products,
                     residual: info.residual,
                 });
             }
@@ -268,23 +286,23 @@ impl Workspace {
                 residual: info.accuracy,
             });
         }
-        if self.eq[..k].iter().any(|&e| e) {
+        if self.equality[..k].iter().any(|&e| e) {
             self.mlcp.solve(
-                &self.sub[..k * k],
+                &self.block[..k * k],
                 k,
-                &self.q[..k],
-                &self.eq[..k],
+                &self.rhs[..k],
+                &self.equality[..k],
                 &mut self.lcp,
-                &mut self.z[..k],
-                &mut self.w[..k],
+                &mut self.solution[..k],
+                &mut self.slack[..k],
             )
         } else {
             self.lcp.solve(
-                &self.sub[..k * k],
+                &self.block[..k * k],
                 k,
-                &self.q[..k],
-                &mut self.z[..k],
-                &mut self.w[..k],
+                &self.rhs[..k],
+                &mut self.solution[..k],
+                &mut self.slack[..k],
             )
         }
     }
@@ -303,17 +321,17 @@ impl Workspace {
             let a = Self::restricted(
                 del,
                 stiffness,
-                self.gop,
+                self.mf_op,
                 &self.idx,
-                &mut self.gx,
-                &mut self.gy,
+                &mut self.mf_x,
+                &mut self.mf_y,
             );
-            let info = self.global.solve_friction(
+            let info = self.matrix_free.solve_friction(
                 &a,
-                &self.gq[..k],
+                &self.mf_rhs[..k],
                 &self.blocks,
-                &mut self.gz[..k],
-                &mut self.gw[..k],
+                &mut self.mf_solution[..k],
+                &mut self.mf_slack[..k],
                 params.tol,
                 params.max_iterations,
             );
@@ -331,17 +349,21 @@ impl Workspace {
             };
             return Ok((fi, info.accuracy));
         }
-        let op = DenseOperator::new(k, &self.sub[..k * k]);
+        let op = DenseOperator::new(k, &self.block[..k * k]);
         let prob = FrictionProblem {
             w: &op,
-            q: &self.q[..k],
+            q: &self.rhs[..k],
             blocks: &self.blocks,
         };
-        let info = self
-            .friction
-            .solve(prob, params, &mut self.z[..k], &mut self.w[..k])?;
-        let acc =
-            crate::solvers::friction::velocity_error(&op, &self.blocks, &self.z[..k], &self.w[..k]);
+        let info =
+            self.friction
+                .solve(prob, params, &mut self.solution[..k], &mut self.slack[..k])?;
+        let acc = crate::solvers::friction::velocity_error(
+            &op,
+            &self.blocks,
+            &self.solution[..k],
+            &self.slack[..k],
+        );
         Ok((info, acc))
     }
 
@@ -364,11 +386,11 @@ impl Workspace {
         for &a in &self.idx {
             self.member[a] = true;
         }
-        self.res.copy_from_slice(rhs);
-        del.mul_add(op, scale, z, &mut self.res, stiffness);
+        self.residual.copy_from_slice(rhs);
+        del.mul_add(op, scale, z, &mut self.residual, stiffness);
         let before = self.idx.len();
         for a in candidates {
-            let r = self.res[a];
+            let r = self.residual[a];
             let violated = if eq(a) {
                 r.abs() > tol || (tol == 0.0 && r != 0.0)
             } else {
@@ -384,7 +406,11 @@ impl Workspace {
     /// `out[idx] = z`, zero elsewhere.
     pub fn scatter(&self, out: &mut [f64]) {
         out.iter_mut().for_each(|x| *x = 0.0);
-        let z = if self.over { &self.gz } else { &self.z };
+        let z = if self.over {
+            &self.mf_solution
+        } else {
+            &self.solution
+        };
         for (a, &i) in self.idx.iter().enumerate() {
             out[i] = z[a];
         }
