@@ -561,3 +561,43 @@ fn steps_of_contacts_between_bodies_do_not_allocate() {
         }
     }
 }
+
+/// Issue 49: a step after a change of `h` allocates nothing, and a change back to a
+/// step whose factor and Delassus data are cached (the accuracy mode's ladder) allocates
+/// nothing either (the state is saved into a kept snapshot, the cache's list never
+/// grows). The first change to a new `h` factors and condenses, and may allocate.
+#[test]
+fn steps_after_a_change_of_step_do_not_allocate() {
+    for kind in [
+        SchemeKind::MoreauJean,
+        SchemeKind::DirectProjection,
+        SchemeKind::CombinedProjection,
+    ] {
+        for delassus in [DelassusKind::Dense, DelassusKind::Columns] {
+            let mut s = BarScene {
+                elements: 100,
+                dt: 2e-6,
+                ..BarScene::default()
+            };
+            s.scheme.kind = kind;
+            s.scheme.delassus = delassus;
+            let m = s.build().unwrap();
+            let mut integ = m.into_integrator(&s.scheme, s.dt).unwrap();
+            let label = format!("{} {delassus:?}", kind.name());
+            assert_eq!(count_steps(integ.as_mut(), 20), 0, "{label}");
+            integ.set_dt(1e-6).unwrap();
+            assert_eq!(count_steps(integ.as_mut(), 50), 0, "{label} at h/2");
+            integ.set_dt(2e-6).unwrap();
+            assert_eq!(count_steps(integ.as_mut(), 50), 0, "{label} back at h");
+            let before = ALLOCS.with(|c| c.get());
+            integ.set_dt(1e-6).unwrap();
+            integ.set_dt(2e-6).unwrap();
+            let n = ALLOCS.with(|c| c.get()) - before;
+            assert_eq!(
+                n, 0,
+                "{label}: changes between cached steps allocated {n} times"
+            );
+            assert_eq!(count_steps(integ.as_mut(), 300), 0, "{label} to flight");
+        }
+    }
+}

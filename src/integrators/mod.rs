@@ -124,6 +124,11 @@ pub trait Integrator: Send {
     /// What the next step reads beyond the model, for a checkpoint
     /// ([`crate::run::checkpoint`]).
     fn save(&self) -> crate::integrators::saved::IntegratorState;
+    /// [`Integrator::save`] into `s`, reusing its buffers: the θ-method schemes allocate
+    /// nothing once `s` holds a state of this size (a snapshot to step back to).
+    fn save_into(&self, s: &mut crate::integrators::saved::IntegratorState) {
+        *s = self.save();
+    }
     /// Restores a state saved by an integrator built from the same model and parameters;
     /// the gaps, Jacobians and Delassus data are evaluated again at the restored `q`.
     fn restore(&mut self, s: &crate::integrators::saved::IntegratorState) -> Result<(), Error>;

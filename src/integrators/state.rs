@@ -97,8 +97,19 @@ impl State {
 impl State {
     /// The vectors every scheme's state holds, for a checkpoint.
     pub fn save(&self, scheme: &str) -> crate::integrators::saved::IntegratorState {
+        let mut s = crate::integrators::saved::IntegratorState::default();
+        self.save_into(scheme, &mut s);
+        s
+    }
+
+    /// [`State::save`] into `s`, reusing its buffers: no allocation once `s` holds a
+    /// state of this size (a snapshot taken at every step of an adaptive run).
+    pub fn save_into(&self, scheme: &str, s: &mut crate::integrators::saved::IntegratorState) {
         use crate::integrators::saved::{Bits, Floats};
-        let mut vectors = std::collections::BTreeMap::new();
+        s.scheme.clear();
+        s.scheme.push_str(scheme);
+        s.step = self.step;
+        s.time = Bits(self.time);
         for (name, v) in [
             ("q", &self.q),
             ("v", &self.v),
@@ -109,17 +120,17 @@ impl State {
             ("tangent_impulse", &self.tangent_impulse),
             ("impulse_rows", &self.impulse_rows),
         ] {
-            vectors.insert(name.to_string(), Floats(v.clone()));
+            match s.vectors.get_mut(name) {
+                Some(f) => f.0.clone_from(v),
+                None => {
+                    s.vectors.insert(name.to_string(), Floats(v.clone()));
+                }
+            }
         }
-        crate::integrators::saved::IntegratorState {
-            scheme: scheme.to_string(),
-            step: self.step,
-            time: Bits(self.time),
-            vectors,
-            status: self.status.iter().map(|s| s.code()).collect(),
-            dt: None,
-            origin: None,
-        }
+        s.status.clear();
+        s.status.extend(self.status.iter().map(|c| c.code()));
+        s.dt = None;
+        s.origin = None;
     }
 
     /// Restores the vectors of [`State::save`] (same sizes) into this state.

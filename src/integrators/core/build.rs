@@ -98,7 +98,7 @@ impl ThetaCore {
             del,
             ws: Workspace::new(rows, m, params, friction),
             coupled: coupled_cap.map(|c| Coupled::new(c, m)),
-            step_cache: StepCache::default(),
+            step_cache: StepCache::new(),
             state,
             cfg: ThetaConfig {
                 theta,
@@ -134,6 +134,7 @@ impl ThetaCore {
                 w_at_qk: false,
                 origin: (0, 0.0),
                 pending_factorizations: 0,
+                snapshot: Default::default(),
             },
             dofs: DofScratch {
                 v_free: vec![0.0; n],

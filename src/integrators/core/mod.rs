@@ -183,6 +183,9 @@ macro_rules! delegate_to_core {
         fn save(&self) -> $crate::integrators::saved::IntegratorState {
             self.core.save(self.name())
         }
+        fn save_into(&self, s: &mut $crate::integrators::saved::IntegratorState) {
+            self.core.save_into(self.name(), s)
+        }
         fn set_dt(&mut self, h: f64) -> Result<(), $crate::error::Error> {
             let name = self.name();
             self.core.set_dt(name, h)
@@ -319,6 +322,9 @@ pub(crate) struct StepCarry {
     /// Factorizations [`ThetaCore::set_dt`] made since the last step, counted in the
     /// next step's [`StepStats::factorizations`].
     pub(crate) pending_factorizations: usize,
+    /// The state saved by [`ThetaCore::set_dt`] around a change of step, kept so that a
+    /// change to a cached `h` allocates nothing.
+    pub(crate) snapshot: crate::integrators::saved::IntegratorState,
 }
 
 /// The `n`-vectors of one step ([`ThetaCore`]): meaningless between steps.

@@ -29,9 +29,18 @@ pub const STEP_CACHE_ENTRIES: usize = 4;
 pub const STEP_CACHE_BYTES: u64 = 1 << 30;
 
 /// The Delassus data of other step sizes (module doc), most recently used last.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub(crate) struct StepCache {
     entries: Vec<(u64, Delassus)>,
+}
+
+impl StepCache {
+    /// An empty cache whose list never grows past its first allocation.
+    pub(crate) fn new() -> Self {
+        StepCache {
+            entries: Vec::with_capacity(STEP_CACHE_ENTRIES + 1),
+        }
+    }
 }
 
 impl StepCache {
@@ -71,7 +80,8 @@ impl ThetaCore {
             return Ok(());
         }
         crate::error::require_positive("dt", h)?;
-        let saved = self.save(scheme);
+        let mut saved = std::mem::take(&mut self.carry.snapshot);
+        self.save_into(scheme, &mut saved);
         if self.structure.step_matrix_constant() {
             let fresh = match self.step_cache.take(h) {
                 Some(d) => {
@@ -91,7 +101,9 @@ impl ThetaCore {
             }
         }
         self.h = h;
-        self.restore(scheme, &saved)
+        let restored = self.restore(scheme, &saved);
+        self.carry.snapshot = saved;
+        restored
     }
 
     /// The factor of `M̂(h)` through the structure's one call, in Delassus storage sized
@@ -167,11 +179,18 @@ impl ThetaCore {
     /// The state a checkpoint saves ([`IntegratorState`]), with the step it ran at and the
     /// clock's origin.
     pub fn save(&self, scheme: &str) -> IntegratorState {
-        let mut s = self.state.save(scheme);
+        let mut s = IntegratorState::default();
+        self.save_into(scheme, &mut s);
+        s
+    }
+
+    /// [`ThetaCore::save`] into `s`, reusing its buffers (no allocation once `s` holds a
+    /// state of this size).
+    pub fn save_into(&self, scheme: &str, s: &mut IntegratorState) {
+        self.state.save_into(scheme, s);
         s.dt = Some(Bits(self.h));
         s.origin = (self.carry.origin != (0, 0.0))
             .then_some((self.carry.origin.0, Bits(self.carry.origin.1)));
-        s
     }
 
     /// The clock of a restored state `s`: its origin, or the restored step when it ran at
