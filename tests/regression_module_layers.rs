@@ -757,17 +757,17 @@ impl Graph {
             return Some(Target::Module(m));
         }
         for u in &self.files[f].uses {
-            if u.alias.as_deref() == Some(name) {
-                if let Some(t) = self.resolve(module, &u.path, seen) {
-                    return Some(t);
-                }
+            if u.alias.as_deref() == Some(name)
+                && let Some(t) = self.resolve(module, &u.path, seen)
+            {
+                return Some(t);
             }
         }
         for u in self.files[f].uses.iter().filter(|u| u.alias.is_none()) {
-            if let Some(Target::Module(g)) = self.resolve(module, &u.path, seen) {
-                if let Some(t) = self.lookup(&g, name, seen) {
-                    return Some(t);
-                }
+            if let Some(Target::Module(g)) = self.resolve(module, &u.path, seen)
+                && let Some(t) = self.lookup(&g, name, seen)
+            {
+                return Some(t);
             }
         }
         None
@@ -922,9 +922,12 @@ fn cycles(n: usize, edges: &BTreeMap<(usize, usize), BTreeSet<String>>) -> Vec<V
     t.out
 }
 
-/// Every cycle of every crate as its files (relative to the crate's source directory)
-/// with the edges inside it, one line each.
-fn file_cycles() -> (Vec<(Vec<String>, Vec<String>)>, usize) {
+/// A cycle: its files (relative to the crate's source directory) and the edges inside
+/// it, one line each.
+type Cycle = (Vec<String>, Vec<String>);
+
+/// Every cycle of every crate, and how many file edges the scan read.
+fn file_cycles() -> (Vec<Cycle>, usize) {
     let mut out = Vec::new();
     let mut edge_count = 0;
     for c in crates() {
