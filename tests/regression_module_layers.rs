@@ -205,8 +205,9 @@ const KNOWN_LONG: &[(&str, &str)] = &[
     ),
     (
         "src/run/mod.rs",
-        "631 lines before issue 49; the driver's `RunInProgress::start` (220 lines) is where \
-         `Integrator::kind()` (issue 49 §3) lands: split with that change",
+        "631 lines before issue 49; its `RunInProgress::start` (the name parsed back into a \
+         scheme) and `finish` (`linearity()`) are what issue 49 §3's `Integrator::kind()` \
+         and structure seam change: split with them",
     ),
 ];
 
