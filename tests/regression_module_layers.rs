@@ -429,11 +429,15 @@ fn test_blocks(code: &str) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
     let bytes = code.as_bytes();
     for (at, _) in code.match_indices("#[cfg(test)]") {
-        let rest = code[at + "#[cfg(test)]".len()..].trim_start();
-        let Some(after_mod) = rest
-            .strip_prefix("mod ")
-            .or_else(|| rest.strip_prefix("pub mod "))
-        else {
+        let mut rest = code[at + "#[cfg(test)]".len()..].trim_start();
+        // a visibility: `pub`, `pub(crate)`, `pub(super)`, `pub(in …)`
+        if let Some(r) = rest.strip_prefix("pub") {
+            rest = r.trim_start();
+            if rest.starts_with('(') {
+                rest = rest[rest.find(')').map_or(rest.len(), |k| k + 1)..].trim_start();
+            }
+        }
+        let Some(after_mod) = rest.strip_prefix("mod ") else {
             continue;
         };
         let head = after_mod.find(['{', ';']).unwrap_or(after_mod.len());
@@ -1069,6 +1073,10 @@ fn the_file_scan_reads_uses_and_finds_a_glob_cycle() {
     let text =
         "//! doc\n\nfn f() {}\n#[cfg(test)]\nmod tests {\n    fn g() { let _ = \"}\"; }\n}\n";
     assert_eq!(non_test_lines(text), 2);
+    // other test-only modules are no imports, but only `mod tests` leaves the line count
+    let grids = "#[cfg(test)]\npub(crate) mod grids {\n    use crate::x;\n}\n";
+    assert_eq!(test_blocks(grids), [(0, grids.len() - 1)]);
+    assert_eq!(non_test_lines(grids), 4);
 
     // a/mod.rs globs its children; x.rs reads y's type through `use super::*`, y.rs calls
     // x's function: a cycle, which the parent's globs alone do not make
