@@ -91,10 +91,9 @@ use condense::*;
 use products::ProductFlex;
 pub use products::acting_dofs;
 
-pub use policy::DelassusPlan;
 use policy::*;
+pub use policy::{DelassusPlan, ZONE_CHUNK, ZoneStorage};
 use zone::*;
-pub use zone::{ZONE_CHUNK, ZoneStorage};
 
 /// Position projection metric `N` (eq. 58 and remark 3, eq. 59–60).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

@@ -1,9 +1,27 @@
 //! The storage policy: which path a contact set takes (dense, per-active-column, the
-//! contact zone's columns or flexibilities), its memory, and the phrase that says which
-//! ran; shared by [`Delassus::plan`] (`signorini check`, the memory ledger) and
-//! [`Delassus::new`].
+//! contact zone's columns or flexibilities, [`ZoneStorage`]), its memory, and the phrase
+//! that says which ran; shared by [`Delassus::plan`] (`signorini check`, the memory
+//! ledger), [`Delassus::new`] and [`Delassus::condense_zone`] (`zone.rs`, which forms
+//! what this file chose).
 
 use super::*;
+
+/// What the contact zone keeps ([`Delassus::condense_zone`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ZoneStorage {
+    /// `Y = Â⁻¹S`, `E = Â⁻¹K N S` (`n × z`) and `F`, `F_E` (`z × z`): corrections are
+    /// combinations of the columns of `Y` and `E`.
+    Full,
+    /// `F`, `F_E` only: `n`-space corrections by one sparse solve of `G x`, zone rows by
+    /// [`Delassus::zone_corrections`].
+    Flexibility,
+}
+
+/// Columns of the zone formed per pass by [`ZoneStorage::Flexibility`]'s set-up: a
+/// multiple of [`crate::linalg::SOLVE_CHUNK`], so that the factor's block solves see the
+/// same chunks as [`ZoneStorage::Full`]'s and give `F`, `F_E` bit for bit, and two
+/// chunks so that both threads solve at once.
+pub const ZONE_CHUNK: usize = 2 * crate::linalg::SOLVE_CHUNK;
 
 /// The planned Delassus data ([`Delassus::plan`]).
 #[derive(Clone, Debug, PartialEq)]

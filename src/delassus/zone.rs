@@ -5,23 +5,6 @@
 
 use super::*;
 
-/// What the contact zone keeps ([`Delassus::condense_zone`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ZoneStorage {
-    /// `Y = Â⁻¹S`, `E = Â⁻¹K N S` (`n × z`) and `F`, `F_E` (`z × z`): corrections are
-    /// combinations of the columns of `Y` and `E`.
-    Full,
-    /// `F`, `F_E` only: `n`-space corrections by one sparse solve of `G x`, zone rows by
-    /// [`Delassus::zone_corrections`].
-    Flexibility,
-}
-
-/// Columns of the zone formed per pass by [`ZoneStorage::Flexibility`]'s set-up: a
-/// multiple of [`crate::linalg::SOLVE_CHUNK`], so that the factor's block solves see the
-/// same chunks as [`ZoneStorage::Full`]'s and give `F`, `F_E` bit for bit, and two
-/// chunks so that both threads solve at once.
-pub const ZONE_CHUNK: usize = 2 * crate::linalg::SOLVE_CHUNK;
-
 /// The step matrix condensed once onto the contact-zone dofs `S`: `Y = Â⁻¹S` and
 /// `E = Â⁻¹K N S` (`n × z` each) and the zone's flexibilities `F = SᵀY`, `F_E = SᵀE`
 /// (`z × z`). With `G = S B` (`B` the few entries of each column), a re-linearization is

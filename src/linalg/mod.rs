@@ -1,8 +1,8 @@
 //! Sparse and small dense linear algebra used by the integrators.
 //!
 //! Owns:
-//! - [`solver`]: the [`LinearSolver`] trait of the iteration matrix and its backends
-//!   (Cholesky, LDLᵀ, sparse LU, dense LU);
+//! - [`solver`]: the backends of the iteration matrix (Cholesky, LDLᵀ, sparse LU, dense
+//!   LU) behind the [`LinearSolver`] trait (with [`SolverKind`], in `backend`);
 //! - [`SpdFactor`]: the Cholesky factorization of the iteration matrix
 //!   `M̂ = M + hθC + h²θ²K` (eq. 47): faer's sparse Cholesky (AMD ordering, symbolic
 //!   analysis once, numeric factorization into a buffer we own), or our tridiagonal
@@ -28,10 +28,11 @@
 //! By file: `spd` (the Cholesky backends and their solves), `plan` (the symbolic
 //! analysis), `sparse_rhs` (set-up solves that skip zero blocks), `sparse` (the matrix
 //! type and products), `forms` (energies and dots of the step loop), `arith` (FMA or
-//! portable arithmetic), `dense` (small dense factorizations), `solver` (the trait and
-//! its backends), `subnormals`, `metis` and `mumps` (features).
+//! portable arithmetic), `dense` (small dense factorizations), `backend` (the trait and
+//! the kinds, a leaf), `solver` (the faer backends and the dispatch), `subnormals`, `metis` and `mumps` (features).
 
 mod arith;
+mod backend;
 mod dense;
 mod forms;
 #[cfg(feature = "metis")]
@@ -53,7 +54,7 @@ pub use plan::*;
 pub use sparse::*;
 pub use spd::*;
 
-pub use solver::{LinearSolver, SolverKind};
+pub use backend::{LinearSolver, SolverKind};
 pub use subnormals::{FlushGuard, Subnormals, set_ieee_subnormals, subnormals};
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};

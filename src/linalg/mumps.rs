@@ -48,7 +48,7 @@ use faer::sparse::SparseColMatRef;
 use mpi::topology::{Communicator, SimpleCommunicator};
 use mpi::traits::Root;
 
-use super::{LinearSolver, SolverKind};
+use super::backend::{LinearSolver, SolverKind};
 use crate::error::Error;
 
 #[allow(

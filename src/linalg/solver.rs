@@ -32,104 +32,14 @@
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::sparse::SparseColMatRef;
-use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LdltRef, SymbolicCholesky, SymmetricOrdering,
-    factorize_symbolic_cholesky,
-};
+use faer::sparse::linalg::cholesky::{LdltRef, SymbolicCholesky};
 use faer::sparse::linalg::lu::{LuRef, NumericLu, SymbolicLu, factorize_symbolic_lu};
 use faer::{Conj, MatMut, Par, Side};
 
+pub use super::backend::{LinearSolver, SolverKind};
+use super::plan::symbolic_ldlt;
 use super::{SOLVE_CHUNK, SpdFactor};
 use crate::error::Error;
-
-/// A factorization of a square sparse matrix that can be refactored for new values on
-/// the same pattern and solved in place (module doc).
-pub trait LinearSolver: Send {
-    /// Order of the factored matrix.
-    fn dim(&self) -> usize;
-    /// Which backend factored the matrix (for `check` and summaries).
-    fn backend_name(&self) -> String;
-    /// Recomputes the numeric factor of `a`, whose pattern must be the one the solver
-    /// was built on; `what` names the matrix in errors.
-    fn refactor(&mut self, a: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<(), Error>;
-    /// Overwrites `x` with `A⁻¹ x`.
-    fn solve_in_place(&mut self, x: &mut [f64]);
-    /// `out = base + A⁻¹ x`, leaving `x` as scratch (its content afterwards is not
-    /// specified): the free velocity `v_free = v_k + M̂⁻¹ r` of every linear step. The
-    /// tridiagonal factor forms it within its backward sweep (one pass over the state
-    /// fewer, issue 35); every backend gives the bits of `solve_in_place` then the sum.
-    fn solve_add(&mut self, x: &mut [f64], base: &[f64], out: &mut [f64]) {
-        self.solve_in_place(x);
-        for ((o, b), d) in out.iter_mut().zip(base).zip(x.iter()) {
-            *o = b + d;
-        }
-    }
-    /// Overwrites the `k` columns of the column-major `n × k` block `x` with `A⁻¹ x`,
-    /// each column alone, so that its result does not depend on the others'.
-    fn solve_columns_independently(&mut self, x: &mut [f64], k: usize) {
-        let n = self.dim();
-        for col in x.chunks_exact_mut(n.max(1)).take(k) {
-            self.solve_in_place(col);
-        }
-    }
-    /// Overwrites the `k` columns of `x` with `A⁻¹ x`, several per pass where the
-    /// backend has block solves; does not allocate (the step loop's form).
-    fn solve_block_in_place(&mut self, x: &mut [f64], k: usize) {
-        self.solve_columns_independently(x, k);
-    }
-    /// Like [`LinearSolver::solve_block_in_place`], spread over rayon's threads where
-    /// the backend can (allocates per thread: set-ups only).
-    fn solve_block_in_place_par(&mut self, x: &mut [f64], k: usize) {
-        self.solve_block_in_place(x, k);
-    }
-    /// Like [`LinearSolver::solve_block_in_place_par`] where only `rows` of the result
-    /// are read (all when `None`; the others are then unspecified): a supernodal factor
-    /// skips the blocks that are zero or not needed (`linalg::sparse_rhs`, the zone
-    /// flexibilities' set-up); other backends solve every row.
-    fn solve_block_for_rows(&mut self, x: &mut [f64], k: usize, rows: Option<&[usize]>) {
-        let _ = rows;
-        self.solve_block_in_place_par(x, k);
-    }
-    /// The zone flexibilities `F = SᵀA⁻¹S` and, given `k`, `F_E = SᵀA⁻¹KA⁻¹S` for the
-    /// unit columns `S` on the dofs `zone` (`z × z` each, column-major, in the order of
-    /// `zone`), without a full sweep per column (`linalg::zone_flex`); `None` where the
-    /// backend cannot (the caller then solves the columns).
-    fn zone_flexibilities(
-        &self,
-        zone: &[usize],
-        k: Option<SparseColMatRef<'_, usize, f64>>,
-    ) -> Option<(Vec<f64>, Vec<f64>)> {
-        let _ = (zone, k);
-        None
-    }
-    /// Sizes what [`LinearSolver::solve_sparse_rhs_in_place`] needs for `k` columns
-    /// (at set-up; nothing for backends without it).
-    fn reserve_sparse_rhs(&mut self, k: usize) {
-        let _ = k;
-    }
-    /// Stored entries of the factor (`nnz(L)`), where the backend knows them: what one
-    /// solve reads twice (the cost model of `Delassus::condense_products`).
-    fn factor_entries(&self) -> Option<u64> {
-        None
-    }
-    /// Like [`LinearSolver::solve_block_in_place`] for right-hand sides supported on a
-    /// few rows: a supernodal factor skips the forward sweep's zero blocks
-    /// (`linalg::sparse_rhs`); the same results on every row; does not allocate.
-    fn solve_sparse_rhs_in_place(&mut self, x: &mut [f64], k: usize) {
-        self.solve_block_in_place(x, k);
-    }
-}
-
-impl std::fmt::Debug for dyn LinearSolver {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "LinearSolver({}, n = {})",
-            self.backend_name(),
-            self.dim()
-        )
-    }
-}
 
 impl LinearSolver for SpdFactor {
     fn dim(&self) -> usize {
@@ -178,19 +88,6 @@ impl LinearSolver for SpdFactor {
     fn solve_sparse_rhs_in_place(&mut self, x: &mut [f64], k: usize) {
         SpdFactor::solve_sparse_rhs_in_place(self, x, k)
     }
-}
-
-/// Which backend a [`factor`] call builds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SolverKind {
-    /// Symmetric positive definite ([`SpdFactor`]).
-    Cholesky,
-    /// Symmetric, possibly indefinite ([`SparseLdlt`]).
-    Ldlt,
-    /// Any nonsingular matrix ([`SparseLu`]).
-    Lu,
-    /// Any nonsingular matrix, stored dense ([`DenseSolver`]).
-    Dense,
 }
 
 /// Factors `a` with the backend `kind`; `ordering` is a candidate fill-reducing order
@@ -249,26 +146,6 @@ pub struct SparseLdlt {
     symbolic: SymbolicCholesky<usize>,
     values: Vec<f64>,
     mem: MemBuffer,
-}
-
-/// The symbolic analysis [`SparseLdlt::new`] factors on (AMD), with the scratch of its
-/// numeric factorization and solves; [`super::analyse_ldlt`] plans from it.
-pub(crate) fn symbolic_ldlt(
-    a: SparseColMatRef<'_, usize, f64>,
-    what: &str,
-) -> Result<(SymbolicCholesky<usize>, StackReq), Error> {
-    let symbolic = factorize_symbolic_cholesky(
-        a.symbolic(),
-        Side::Lower,
-        SymmetricOrdering::Amd,
-        CholeskySymbolicParams::default(),
-    )
-    .map_err(|e| Error::Numerical(format!("{what}: symbolic LDLᵀ failed: {e:?}")))?;
-    let req = StackReq::any_of(&[
-        symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-        symbolic.solve_in_place_scratch::<f64>(SOLVE_CHUNK, Par::Seq),
-    ]);
-    Ok((symbolic, req))
 }
 
 impl SparseLdlt {

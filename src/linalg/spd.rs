@@ -10,15 +10,6 @@ use super::*;
 /// fraction of 16 single solves (see `cargo bench --bench kernels`).
 pub const SOLVE_BLOCK: usize = 16;
 
-/// Right-hand sides per faer call in [`SpdFactor::solve_block_in_place`]. A supernodal
-/// solve streams the whole factor once per call, so on a large factor it is bound by
-/// memory bandwidth, and more right-hand sides per pass cost little more than one:
-/// on the 98 304-dof cube (nnz(L) = 1.9e8) the 1024 columns of `M̂⁻¹G` took 18.7 s in
-/// calls of 16, 15.2 s in calls of 32, 12.9 s in calls of 64 and 13.1 s in calls of
-/// 256 (one thread). [`SpdFactor::solve_block_in_place_par`] spreads the chunks over
-/// rayon's threads, each with its own scratch: 8.4 s on two threads.
-pub const SOLVE_CHUNK: usize = 64;
-
 /// Cholesky factor of a symmetric positive definite sparse matrix.
 ///
 /// Two backends, chosen by the matrix:
@@ -120,16 +111,6 @@ impl<const ADD: bool, const FUSED: bool> pulp::WithSimd for Sweeps<'_, ADD, FUSE
 }
 
 impl Tridiagonal {
-    /// Whether every entry of `a` lies within one diagonal of the main one.
-    pub(super) fn is_tridiagonal(a: SparseColMatRef<'_, usize, f64>) -> bool {
-        let (cp, ri) = (a.col_ptr(), a.row_idx());
-        (0..a.ncols()).all(|j| {
-            ri[cp[j]..cp[j + 1]]
-                .iter()
-                .all(|&i| i + 1 >= j && i <= j + 1)
-        })
-    }
-
     /// Factors a tridiagonal `a`; `Err(i)` if pivot `i` is not positive.
     pub(super) fn factor(a: SparseColMatRef<'_, usize, f64>) -> Result<Self, usize> {
         let n = a.nrows();
@@ -276,7 +257,7 @@ impl SpdFactor {
         what: &str,
         ordering: Option<&DofOrdering>,
     ) -> Result<Self, Error> {
-        if Tridiagonal::is_tridiagonal(a) {
+        if is_tridiagonal(a) {
             let t = Tridiagonal::factor(a)
                 .map_err(|i| not_spd(what, format!("pivot {i} of its LDLᵀ is not positive")))?;
             return Ok(SpdFactor {

@@ -15,6 +15,7 @@
 //! [`FORCE_TRACE_MAX_STEPS`], reserved once).
 
 pub mod checkpoint;
+mod contact;
 pub mod driver;
 pub mod history_thread;
 mod observers;
@@ -22,15 +23,16 @@ pub mod probes;
 pub mod rotations;
 pub mod summary;
 
+pub use contact::FORCE_TRACE_MAX_STEPS;
 pub use driver::{Observer, Progress, Quiet, RunChecks, drive, drive_to};
-pub use observers::{ENERGY_CHECK_STRIDE, FORCE_TRACE_MAX_STEPS};
+pub use observers::ENERGY_CHECK_STRIDE;
 pub use summary::{
     ContactSummary, EnergyBalance, FrictionSummary, Iterations, MeanMax, NewtonLoops,
     RotationSummary, RunResult, Summary, forecast_name, write_summary,
 };
 
-use observers::{Acc, CheckpointPlan, ContactTracker, EnergyCheck, RunObserver, Writers};
-use summary::contact_summary;
+use contact::{ContactTracker, contact_summary};
+use observers::{Acc, CheckpointPlan, EnergyCheck, RunObserver, Writers};
 
 use std::path::Path;
 use std::time::Instant;

@@ -1,5 +1,5 @@
 //! The run's own observers: the statistics accumulator, the contact measurement
-//! ([`ContactTracker`]), the history and frame writers, the energy balance check and
+//! ([`ContactTracker`], in [`super::contact`]), the history and frame writers, the energy balance check and
 //! the checkpoint writer, all behind one [`RunObserver`] that the driver calls after
 //! every step.
 
@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use super::checkpoint::{self, Checkpoint, RunState};
+use super::contact::ContactTracker;
 use super::driver::Observer;
 use super::summary::{FrictionSummary, Iterations, MeanMax};
 use crate::error::Error;
@@ -99,63 +100,6 @@ impl Acc {
             projection: mm(1),
             index_set: mm(2),
             lcp: mm(3),
-        }
-    }
-}
-
-/// The per-step contact force `Σ P / h` is kept in [`RunResult::force`](super::RunResult::force) for runs of at
-/// most this many steps (32 MiB); longer runs keep only the first contact interval,
-/// which the contact measurement needs.
-pub const FORCE_TRACE_MAX_STEPS: usize = 1 << 22;
-
-/// Measures the contact as the run goes: the total impulse, and the samples of the
-/// first contact interval (from the first positive impulse to one step after the last
-/// closed step), which is all [`contact_summary`](super::summary::contact_summary) reads.
-///
-/// What grows with the run is kept only where something reads it, so that a checkpoint
-/// (which saves the tracker) does not grow with the run (issue 16 §4: each held the
-/// whole force trace, and the bytes written grew quadratically with the run's length):
-/// the per-step trace only for runs that do not checkpoint (library callers read it in
-/// [`RunResult::force`](super::RunResult::force)), the first interval only for scenes with the impacting-bar
-/// reference (whose interval ends after `2L/c0`).
-#[derive(Default)]
-pub(super) struct ContactTracker {
-    pub(super) trace: Option<Vec<f64>>,
-    pub(super) interval: bool,
-    pub(super) first: Option<usize>,
-    pub(super) force: Vec<f64>,
-    pub(super) min_gap: Vec<f64>,
-    pub(super) done: bool,
-    pub(super) total_force: f64,
-}
-
-impl ContactTracker {
-    pub(super) fn new(steps: usize, trace: bool, interval: bool) -> Self {
-        ContactTracker {
-            trace: (trace && steps <= FORCE_TRACE_MAX_STEPS).then(|| Vec::with_capacity(steps)),
-            interval,
-            ..ContactTracker::default()
-        }
-    }
-
-    pub(super) fn push(&mut self, k: usize, f: f64, min_gap: f64) {
-        if let Some(t) = self.trace.as_mut() {
-            t.push(f);
-        }
-        self.total_force += f;
-        if self.done || !self.interval {
-            return;
-        }
-        if self.first.is_none() && f > 0.0 {
-            self.first = Some(k);
-        }
-        if self.first.is_some() {
-            self.force.push(f);
-            self.min_gap.push(min_gap);
-            // the interval ended at the previous sample: this one is the sample after it
-            if !(f > 0.0 || min_gap <= 0.0) {
-                self.done = true;
-            }
         }
     }
 }

@@ -1,17 +1,15 @@
 //! What a run reports: the [`Summary`] written to `summary.json` (iterations, caps,
-//! friction, contact measurement against the analytic reference, energy balance) and
-//! the first-contact-interval measurement behind it.
+//! friction, contact measurement against the analytic reference, energy balance). The
+//! first-contact-interval measurement behind its [`ContactSummary`] is in
+//! `run/contact.rs`.
 
 use std::path::Path;
 
 use serde::Serialize;
 
-use crate::analytic::ImpactingBar;
 use crate::error::Error;
 use crate::integrators::Forecast;
 use crate::io::write_atomic;
-
-use super::observers::ContactTracker;
 
 /// Mean and maximum of a per-step count.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -276,73 +274,6 @@ pub struct RunResult {
 pub fn write_summary(summary: &Summary, dir: &Path) -> Result<(), Error> {
     let json = serde_json::to_string_pretty(summary).expect("summary serializes");
     write_atomic(&dir.join("summary.json"), json.as_bytes())
-}
-
-/// Measures the first contact interval.
-///
-/// The interval is the first run of steps that are closed (positive impulse, or
-/// gap ≤ 0) and contain a positive impulse. Sample `k` (0-based) is the mean force
-/// over `[k h, (k+1) h]`, placed at its midpoint. The plateau is the mean over the
-/// middle 80 % of the interval's steps. The duration is measured between the
-/// half-plateau crossings (linear interpolation between samples, zero force before
-/// the first sample): the release front of a space-discretized bar is smeared over a
-/// few steps by dispersion, and the half-height width is the time its centre takes,
-/// independent of how far the tails reach. `closed_duration` counts the whole run.
-pub(super) fn contact_summary(
-    tracker: &ContactTracker,
-    h: f64,
-    sys: &crate::model::LinearSystem,
-    v: &[f64],
-    r: ImpactingBar,
-) -> ContactSummary {
-    let (force, min_gap) = (&tracker.force, &tracker.min_gap);
-    let mut c = ContactSummary {
-        analytic_force: r.contact_force(),
-        analytic_duration: r.contact_duration(),
-        first_contact_time: f64::NAN,
-        release_velocity: sys.momentum(v) / sys.total_mass(),
-        analytic_release_velocity: r.release_velocity(),
-        total_impulse: tracker.total_force * h,
-        analytic_total_impulse: r.total_impulse(),
-        ..ContactSummary::default()
-    };
-    // the tracker's window starts at the first positive impulse, step `first`
-    let (Some(first), Some(i0)) = (tracker.first, force.iter().position(|&f| f > 0.0)) else {
-        return c;
-    };
-    let mut last = i0;
-    let mut k = i0;
-    while k < force.len() && (force[k] > 0.0 || min_gap[k] <= 0.0) {
-        if force[k] > 0.0 {
-            last = k;
-        }
-        k += 1;
-    }
-    let len = last + 1 - i0;
-    let lo = i0 + len / 10;
-    let hi = (last + 1 - len / 10).max(lo + 1);
-    let win = &force[lo..hi];
-    let plateau = win.iter().sum::<f64>() / win.len() as f64;
-    c.plateau_force = plateau;
-    c.plateau_std =
-        (win.iter().map(|f| (f - plateau).powi(2)).sum::<f64>() / win.len() as f64).sqrt();
-    c.closed_duration = len as f64 * h;
-    c.first_contact_time = (first + i0) as f64 * h;
-    let half = 0.5 * plateau;
-    let at = |j: usize| if j < force.len() { force[j] } else { 0.0 };
-    // rising crossing: first sample ≥ half, interpolated from the previous one
-    let up = (i0..=last).find(|&j| force[j] >= half).unwrap_or(i0);
-    let prev = if up > 0 { force[up - 1] } else { 0.0 };
-    let t_up = (up as f64 - 0.5) * h + h * (half - prev) / (force[up] - prev);
-    // falling crossing: last sample ≥ half, interpolated to the next one
-    let down = (i0..=last)
-        .rev()
-        .find(|&j| force[j] >= half)
-        .unwrap_or(last);
-    let next = at(down + 1);
-    let t_down = (down as f64 + 0.5) * h + h * (force[down] - half) / (force[down] - next);
-    c.duration = t_down - t_up;
-    c
 }
 
 /// The forecast as a short string for printing.

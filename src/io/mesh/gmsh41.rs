@@ -1,6 +1,7 @@
 //! Gmsh files through mshio (format 4.1, ASCII and binary) with the checks mshio
-//! lacks (counts, node tags) made first; the format-version dispatch (2.2 files go to
-//! [`gmsh22`](super::gmsh22)).
+//! lacks (counts, node tags) made first, and what both formats share: the element
+//! types, `$PhysicalNames` and the section search (`gmsh22.rs` reads 2.2 files with
+//! them; the format-version dispatch, `read_msh`, is the parent module's).
 
 use super::*;
 
@@ -49,25 +50,6 @@ pub(super) fn physical_names(text: &[u8]) -> HashMap<(usize, i64), String> {
 
 pub(super) fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
     hay.windows(needle.len()).position(|w| w == needle)
-}
-
-pub(super) fn read_msh(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
-    let fmt = find(bytes, b"$MeshFormat")
-        .ok_or_else(|| bad(path, "no $MeshFormat section: not a Gmsh file"))?;
-    let version: String = String::from_utf8_lossy(&bytes[fmt + 11..(fmt + 40).min(bytes.len())])
-        .split_whitespace()
-        .next()
-        .unwrap_or("")
-        .to_string();
-    let names = physical_names(bytes);
-    match version.as_str() {
-        "4.1" => read_msh41(path, bytes, &names),
-        "2.2" => read_msh22(path, bytes, &names),
-        v => Err(bad(
-            path,
-            format!("Gmsh format version {v} (signorini reads 4.1 and 2.2)"),
-        )),
-    }
 }
 
 /// Checks the counts of a Gmsh 4.1 section header (`$Nodes`: blocks, nodes, min and max

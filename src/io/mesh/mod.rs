@@ -208,3 +208,24 @@ fn guarded<T>(f: impl FnOnce() -> T + std::panic::UnwindSafe) -> Option<T> {
     GUARDED.with(|g| g.set(false));
     r.ok()
 }
+
+/// A Gmsh file of any version signorini reads: 4.1 (`gmsh41.rs`) or 2.2 (`gmsh22.rs`),
+/// chosen by its `$MeshFormat` line.
+fn read_msh(path: &Path, bytes: &[u8]) -> Result<RawMesh, Error> {
+    let fmt = find(bytes, b"$MeshFormat")
+        .ok_or_else(|| bad(path, "no $MeshFormat section: not a Gmsh file"))?;
+    let version: String = String::from_utf8_lossy(&bytes[fmt + 11..(fmt + 40).min(bytes.len())])
+        .split_whitespace()
+        .next()
+        .unwrap_or("")
+        .to_string();
+    let names = physical_names(bytes);
+    match version.as_str() {
+        "4.1" => read_msh41(path, bytes, &names),
+        "2.2" => read_msh22(path, bytes, &names),
+        v => Err(bad(
+            path,
+            format!("Gmsh format version {v} (signorini reads 4.1 and 2.2)"),
+        )),
+    }
+}

@@ -1,9 +1,12 @@
-//! Material laws at large strain and their registry (issue 36 §3).
+//! The body's [`Material`] (its small-strain constants `E`, `ν`, `ρ` and the law that
+//! holds at large strain, [`MaterialModel`]), the material laws at large strain and their
+//! registry (issue 36 §3). The 2-D elasticity matrices, which need the kinematic
+//! formulation, are with it in `model::solid`.
 //!
 //! A hyperelastic law is a [`HyperelasticLaw`]: its strain energy `W(F)`, the second
 //! Piola–Kirchhoff stress `S = ∂W/∂E` and the material tangent `ℂ = ∂S/∂E` (Voigt order
 //! `(11, 22, 33, 23, 13, 12)`, engineering shear), as functions of the Lamé parameters of
-//! the body's [`Material`](super::solid::Material). [`Hyperelastic`] pairs a law with its
+//! the body's [`Material`]. [`Hyperelastic`] pairs a law with its
 //! parameters; the element kernels ([`crate::model::hyperelastic`]), the energy balance and
 //! the frames' Green–Lagrange strain and Cauchy stress ([`green_lagrange_and_cauchy`]) call
 //! it and never name a law.
@@ -18,6 +21,8 @@
 
 use nalgebra::{Matrix3, SMatrix};
 
+use crate::error::{Error, require_in, require_positive};
+
 mod corotational;
 mod neo_hookean;
 mod svk;
@@ -25,6 +30,55 @@ mod svk;
 pub use corotational::Corotational;
 pub use neo_hookean::NeoHookean;
 pub use svk::Svk;
+
+/// An isotropic elastic material: its small-strain constants and the law that holds at
+/// large strain.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// Young's modulus `E` (Pa).
+    pub young: f64,
+    /// Poisson's ratio `ν`, in [0, 0.5).
+    pub poisson: f64,
+    /// Density `ρ` (kg/m³).
+    pub density: f64,
+    /// The constitutive law (default `linear`).
+    #[serde(default)]
+    pub model: MaterialModel,
+}
+
+impl Material {
+    /// Checks the ranges; the error names the field.
+    pub fn validate(&self) -> Result<(), Error> {
+        require_positive("young", self.young)?;
+        require_positive("density", self.density)?;
+        require_in("poisson", self.poisson, 0.0, 0.4999999)?;
+        Ok(())
+    }
+
+    /// Lamé parameters `(λ, μ)`.
+    pub fn lame(&self) -> (f64, f64) {
+        let (e, nu) = (self.young, self.poisson);
+        (
+            e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+            e / (2.0 * (1.0 + nu)),
+        )
+    }
+
+    /// 3-D elasticity matrix (Voigt, engineering shear).
+    pub fn d3(&self) -> SMatrix<f64, 6, 6> {
+        let (l, m) = self.lame();
+        let mut d = SMatrix::<f64, 6, 6>::zeros();
+        for i in 0..3 {
+            for j in 0..3 {
+                d[(i, j)] = l;
+            }
+            d[(i, i)] = l + 2.0 * m;
+            d[(i + 3, i + 3)] = m;
+        }
+        d
+    }
+}
 
 /// Every hyperelastic law a scene can name, by [`HyperelasticLaw::name`].
 pub static LAWS: &[&dyn HyperelasticLaw] = &[&Svk, &NeoHookean, &Corotational];
@@ -71,7 +125,7 @@ pub fn model_names() -> Vec<&'static str> {
         .collect()
 }
 
-/// The constitutive law of a [`Material`](super::solid::Material): the linear small-strain
+/// The constitutive law of a [`Material`]: the linear small-strain
 /// material (the default; the structure stays linear and `M̂` is factored once) or a
 /// registered hyperelastic law ([`LAWS`]), total-Lagrangian. Every law has the same
 /// small-strain limit, the isotropic linear elasticity of `young` and `poisson`. In scene
@@ -103,7 +157,7 @@ impl MaterialModel {
 
     /// The hyperelastic law with the Lamé parameters of `mat`, `None` for the linear
     /// material.
-    pub fn hyperelastic(self, mat: &super::solid::Material) -> Option<Hyperelastic> {
+    pub fn hyperelastic(self, mat: &Material) -> Option<Hyperelastic> {
         self.0.map(|law| Hyperelastic::new(law, mat))
     }
 }
@@ -159,18 +213,18 @@ impl PartialEq for Hyperelastic {
 
 impl Hyperelastic {
     /// `law` with the Lamé parameters of `mat`.
-    pub fn new(law: &'static dyn HyperelasticLaw, mat: &super::solid::Material) -> Self {
+    pub fn new(law: &'static dyn HyperelasticLaw, mat: &Material) -> Self {
         let (lambda, mu) = mat.lame();
         Hyperelastic { law, lambda, mu }
     }
 
     /// St. Venant–Kirchhoff with the Lamé parameters of `mat`.
-    pub fn svk(mat: &super::solid::Material) -> Self {
+    pub fn svk(mat: &Material) -> Self {
         Self::new(&Svk, mat)
     }
 
     /// Neo-Hookean with the Lamé parameters of `mat`.
-    pub fn neo_hookean(mat: &super::solid::Material) -> Self {
+    pub fn neo_hookean(mat: &Material) -> Self {
         Self::new(&NeoHookean, mat)
     }
 

@@ -1,5 +1,9 @@
-//! Isotropic linear elastic solids: element kernels (tri3, quad4, tet4, hex8) and their
-//! parallel assembly into the global `M` and `K` of a [`LinearSystem`].
+//! Elastic solids on first-order cells (tri3, quad4, tet4, hex8): the kinematic
+//! formulation, the cell kinds and the mesh, the small-strain element kernels and their
+//! parallel assembly into the global `M` and `K` of a [`LinearSystem`]. A [`Material`]
+//! (defined in `model::material`, re-exported here) may name a large-strain law; its
+//! internal forces and tangents are `model::hyperelastic`'s, on these cells and
+//! quadrature rules.
 //!
 //! Kernels use nalgebra fixed-size matrices; quadrilaterals and hexahedra are
 //! integrated with 2×2 (×2) Gauss points, triangles and tetrahedra exactly with their
@@ -9,7 +13,7 @@
 //! strains. An element whose Jacobian determinant is not positive at any integration
 //! point is reported as inverted, with its index.
 //!
-//! By role: the material, the formulation, the cell kinds and the mesh here;
+//! By role: the formulation, the cell kinds, the mesh and the 2-D elasticity matrices here;
 //! `quadrature` the integration points, `kernels` the element matrices,
 //! `assemble` the global assembly and the mesh checks, `stress` the cell-centre
 //! strains and stresses of the frames.
@@ -18,25 +22,9 @@ use nalgebra::{Matrix2, Matrix3, SMatrix, Vector3};
 
 use super::{LinearSystem, MassKind};
 use crate::assembly::{Accumulate, PatternAssembler};
-use crate::error::{Error, require_in, require_positive};
+use crate::error::{Error, require_positive};
 
-/// An isotropic elastic material: its small-strain constants and the law that holds at
-/// large strain.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Material {
-    /// Young's modulus `E` (Pa).
-    pub young: f64,
-    /// Poisson's ratio `ν`, in [0, 0.5).
-    pub poisson: f64,
-    /// Density `ρ` (kg/m³).
-    pub density: f64,
-    /// The constitutive law (default `linear`).
-    #[serde(default)]
-    pub model: MaterialModel,
-}
-
-pub use super::material::MaterialModel;
+pub use super::material::{Material, MaterialModel};
 
 mod assemble;
 mod kernels;
@@ -49,38 +37,9 @@ pub(in crate::model) use quadrature::*;
 pub use quadrature::{HEX8_CORNERS, QUAD4_CORNERS};
 pub use stress::*;
 
+// The 2-D matrix needs the formulation, which is this module's: the constants and the
+// 3-D matrix are with `Material` in `model::material`.
 impl Material {
-    /// Checks the ranges; the error names the field.
-    pub fn validate(&self) -> Result<(), Error> {
-        require_positive("young", self.young)?;
-        require_positive("density", self.density)?;
-        require_in("poisson", self.poisson, 0.0, 0.4999999)?;
-        Ok(())
-    }
-
-    /// Lamé parameters `(λ, μ)`.
-    pub fn lame(&self) -> (f64, f64) {
-        let (e, nu) = (self.young, self.poisson);
-        (
-            e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
-            e / (2.0 * (1.0 + nu)),
-        )
-    }
-
-    /// 3-D elasticity matrix (Voigt, engineering shear).
-    pub fn d3(&self) -> SMatrix<f64, 6, 6> {
-        let (l, m) = self.lame();
-        let mut d = SMatrix::<f64, 6, 6>::zeros();
-        for i in 0..3 {
-            for j in 0..3 {
-                d[(i, j)] = l;
-            }
-            d[(i, i)] = l + 2.0 * m;
-            d[(i + 3, i + 3)] = m;
-        }
-        d
-    }
-
     /// 2-D elasticity matrix for plane strain or plane stress.
     pub fn d2(&self, f: Formulation) -> Matrix3<f64> {
         let (e, nu) = (self.young, self.poisson);
@@ -153,7 +112,7 @@ impl Formulation {
     }
 }
 
-/// Linear cell kinds.
+/// First-order (linear-interpolation) cell kinds, for every material law.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum CellKind {
