@@ -214,35 +214,17 @@ const KNOWN_LONG: &[(&str, &str)] = &[
 /// File cycles still in the code, each as its files (paths under the crate's source
 /// directory, any order) with the reason. An entry whose files no longer form exactly that
 /// cycle (a strongly connected set of files) fails the test, so the list only shrinks.
-const KNOWN_CYCLES: &[(&[&str], &str)] = &[
-    (
-        &[
-            "integrators/core/build.rs",
-            "integrators/problem.rs",
-            "integrators/plan.rs",
-        ],
-        "issue 49 §3: `ThetaCore::new` takes a `Problem`, the problem plans itself \
-         (`plan_kept`) and the plan sizes with the core's `check_block_rows`; the sizing \
-         functions move to a leaf (review §7.1) with the `ThetaCore` split",
-    ),
-    (
-        &["integrators/core/newton.rs", "integrators/core/position.rs"],
-        "found by this test (not in the review): `newton` reads `position`'s \
-         `COUPLED_AFTER`, `position` calls `newton`'s `restitution`; src/integrators/ is \
-         being split by its owner",
-    ),
-    (
-        &[
-            "scene/file/build.rs",
-            "scene/file/initial.rs",
-            "scene/file/mesh_spec.rs",
-            "scene/file/validate.rs",
-        ],
-        "issue 49 §4: `validate` calls `build`'s `time_function` while `build` calls \
+const KNOWN_CYCLES: &[(&[&str], &str)] = &[(
+    &[
+        "scene/file/build.rs",
+        "scene/file/initial.rs",
+        "scene/file/mesh_spec.rs",
+        "scene/file/validate.rs",
+    ],
+    "issue 49 §4: `validate` calls `build`'s `time_function` while `build` calls \
          `validate`'s `check_starting_gaps` (and `initial`, `mesh_spec` read `validate`'s \
          bounds and checks); being removed with `Scene::build`'s phases",
-    ),
-];
+)];
 
 /// One crate of the repository whose files the cycle and line rules read.
 struct CrateSrc {

@@ -244,11 +244,3 @@ impl ThetaCore {
         ) + &self.ws.describe(self.del.products_by_flexibility())
     }
 }
-
-/// Per contact row, whether its block of `G` is constant
-/// ([`ContactSet::block_is_linear`]), for the zone condensation.
-pub(crate) fn fixed_rows(contacts: &dyn ContactSet) -> Vec<bool> {
-    (0..contacts.len())
-        .flat_map(|a| std::iter::repeat_n(contacts.block_is_linear(a), contacts.dim(a)))
-        .collect()
-}

@@ -97,11 +97,11 @@ pub(crate) use super::sizing::{
     check_block_rows, matrix_free_rows, workspace_cap, workspace_ledger,
 };
 use super::step_matrix::StepForm;
-pub(crate) use build::fixed_rows;
 pub(crate) use newton::newton_change;
 use newton::*;
 use position::*;
 use step_size::StepCache;
+pub(crate) use step_size::fixed_rows;
 pub use step_size::{STEP_CACHE_BYTES, STEP_CACHE_ENTRIES};
 pub(crate) use workspace::*;
 

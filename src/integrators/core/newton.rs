@@ -69,6 +69,10 @@ pub(crate) fn newton_change(
     }
 }
 
+/// Decoupled iterations after which a step that has not converged takes the coupled
+/// position solve ([`ThetaCore::coupled_correction`]).
+const COUPLED_AFTER: usize = 2;
+
 impl ThetaCore {
     /// Runs the decoupled Newton loop (eq. 56–58) for fixed `vel_mask` (and `pos_mask`
     /// for [`PositionRule::Combined`]), leaving `P`, `τ`, the linearized gaps `g_lin`

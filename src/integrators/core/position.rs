@@ -48,10 +48,6 @@ impl Coupled {
     }
 }
 
-/// Decoupled iterations after which a step that has not converged takes the coupled
-/// position solve ([`ThetaCore::coupled_correction`]).
-pub(super) const COUPLED_AFTER: usize = 2;
-
 impl ThetaCore {
     /// The coupled position problem of eq. 52–55, solved on the contact states of the
     /// current iterate, as the next iterate's `τ`.
