@@ -17,7 +17,6 @@ const LAYERS: &[&str] = &[
     "limits",
     "analytic",
     "linalg",
-    "plot",
     "solvers",
     "assembly",
     "model",
@@ -25,6 +24,8 @@ const LAYERS: &[&str] = &[
     "delassus",
     "integrators",
     "io",
+    // above `io`: the plots read a history back with `io`'s one reader
+    "plot",
     "run",
     "scene",
     "app",
