@@ -191,13 +191,9 @@ fn draw_labeled<DB: DrawingBackend>(
     root.present().map_err(e)
 }
 
-/// The complete lines of a history: a row is complete when its newline was written, so
-/// the row a kill cut (even one cut between two digits, which still parses) is left out.
-pub fn complete_lines(text: &str) -> impl Iterator<Item = &str> {
-    text.split_inclusive('\n')
-        .filter(|l| l.ends_with('\n'))
-        .map(|l| l.trim_end_matches(['\n', '\r']))
-}
+/// The complete lines of a history, as the history reader takes them
+/// ([`crate::io::complete_lines`]).
+pub use crate::io::complete_lines;
 
 /// Reads `dir/history.csv` (or its `.part` when the run was killed) and
 /// `dir/summary.json` (optional) and writes `contact_force`, `energy` and `violation`
@@ -208,14 +204,11 @@ pub fn plot_run(dir: &Path) -> Result<Vec<PathBuf>, Error> {
     if !hist.exists() && dir.join("history.csv.part").exists() {
         hist = dir.join("history.csv.part");
     }
-    let text = crate::limits::read_text(&hist, "history", crate::limits::MAX_TEXT_BYTES)?;
-    let mut lines = complete_lines(&text);
-    let header: Vec<&str> = lines
-        .next()
-        .ok_or_else(|| plot_error(&hist, "empty file"))?
-        .split(',')
-        .collect();
-    let col = |name: &str| header.iter().position(|h| *h == name);
+    let table = crate::io::read_history(&hist)?;
+    if table.header.is_empty() {
+        return Err(plot_error(&hist, "empty file"));
+    }
+    let col = |name: &str| table.column(name);
     let need =
         |name: &str| col(name).ok_or_else(|| plot_error(&hist, format!("no `{name}` column")));
     let (t, ke, pe, viol) = (
@@ -224,29 +217,11 @@ pub fn plot_run(dir: &Path) -> Result<Vec<PathBuf>, Error> {
         need("potential_energy")?,
         need("max_violation")?,
     );
+    let header = &table.header;
     let impulses: Vec<usize> = (0..header.len())
         .filter(|&i| header[i].starts_with("impulse_") || header[i] == "total_impulse")
         .collect();
-    let mut rows: Vec<Vec<f64>> = Vec::new();
-    for (i, l) in lines.enumerate() {
-        let r: Result<Vec<f64>, _> = l.split(',').map(str::parse).collect();
-        match r {
-            Ok(r) if r.len() == header.len() => rows.push(r),
-            // the last line of a killed run's .part may be cut short
-            _ if hist.extension().is_some_and(|e| e == "part") => break,
-            _ => {
-                return Err(Error::bad_file(
-                    &hist,
-                    format!("line {}", i + 2),
-                    format!(
-                        "`{}`: expected {} numbers separated by commas",
-                        l.chars().take(120).collect::<String>(),
-                        header.len()
-                    ),
-                ));
-            }
-        }
-    }
+    let rows = &table.rows;
     let summary: Option<serde_json::Value> = std::fs::read_to_string(dir.join("summary.json"))
         .ok()
         .and_then(|s| serde_json::from_str(&s).ok());

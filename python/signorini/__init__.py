@@ -622,7 +622,10 @@ class Simulation:
         state (a per-node initial field; the summary's initial energy and body measures
         are of it); between steps, the current state, whose gaps and contact data are
         evaluated again at the new ``q``, and the run's energy balance starts again from
-        it (the energy the edit gives or takes is no work of the forces)."""
+        it (the energy the edit gives or takes is no work of the forces). A new ``q`` is
+        checked as the scene's own start is: no contact node may start deeper inside its
+        obstacle or the other body than its contact's ``overlap_tolerance``
+        (:class:`BadInput` naming ``contacts[i].nodes``, the node and its depth)."""
         m = self.mesh
         qd = None if q is None else m.dofs(q, "q")
         vd = None if v is None else m.dofs(v, "v")

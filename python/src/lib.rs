@@ -13,7 +13,9 @@
 //!
 //! By role: `scene` (the scenes: `Kind`, `_Scene`), `tables` (a scene from a dict: its
 //! tables as TOML values and its arrays copied flat, no text), `simulation` (`_Simulation`: the
-//! session, its state, mesh, bodies and history), `progress` (the Python callback,
+//! session, its state, mesh, bodies and history), `sim_state` (what a `_Simulation` holds
+//! between calls), `convert` (the mesh, bodies and history as the arrays Python receives),
+//! `progress` (the Python callback,
 //! Ctrl-C and `cancel()`, model building that can be abandoned), `fclib` (one-step
 //! friction problems); here the exceptions, the argument checks and the module.
 
@@ -88,9 +90,11 @@ fn check_vector(
     Ok(())
 }
 
+mod convert;
 mod fclib;
 mod progress;
 mod scene;
+mod sim_state;
 mod simulation;
 mod tables;
 

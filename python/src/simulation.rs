@@ -3,124 +3,15 @@
 //! as numpy arrays.
 
 use super::*;
-
-/// History columns handed to Python: `(name, array)` in the CSV's order.
-type NamedArrays = Vec<(String, Py<PyArray1<f64>>)>;
-
-/// A history read back from `history.csv`: column names and values by column.
-type Columns = Vec<(String, Vec<f64>)>;
-
-/// The columns of the history file `path` (`history.csv`, or its `.part` mid-run).
-fn read_history(path: &Path) -> Result<Columns, Error> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let mut lines = text.lines();
-    let mut cols: Columns = lines
-        .next()
-        .unwrap_or_default()
-        .split(',')
-        .map(|h| (h.to_string(), Vec::new()))
-        .collect();
-    for (i, line) in lines.enumerate() {
-        for (c, v) in cols.iter_mut().zip(line.split(',')) {
-            // Rust writes the shortest representation that reads back to the same bits
-            c.1.push(v.parse().map_err(|_| {
-                Error::bad_file(
-                    path,
-                    format!("line {}", i + 2),
-                    format!("`{v}` is not a number"),
-                )
-            })?);
-        }
-    }
-    Ok(cols)
-}
+use crate::convert::{
+    BodyRow, MeshArrays, NamedArrays, final_bodies, measure_bodies, mesh_arrays, named_arrays,
+};
+use crate::sim_state::{SimState, temp_dir};
 
 /// `step(n)` holds the GIL for work expected to take less than this (s): a Python loop of
 /// `step(1)` on a small model then pays no release and re-acquisition per call; anything
 /// longer (a mesh's step, a long chunk) runs with the GIL released.
 const GIL_RELEASE_AFTER: f64 = 50e-6;
-
-/// The arrays of [`PySimulation::mesh`]: points `(N, 3)`, node ids `(N,)`, the body of
-/// each point `(N,)` (−1 for a point no cell uses), cells as `(kind, body, nodes)`, the
-/// displacement components per point and the dof map `(N, dim)` (−1: fixed or
-/// prescribed), the bodies' names, and the contacts as `(point, body, target, entry)`.
-type MeshArrays = (
-    Py<numpy::PyArray2<f64>>,
-    Py<PyArray1<u64>>,
-    Py<PyArray1<i64>>,
-    Vec<(String, usize, Vec<usize>)>,
-    usize,
-    Py<numpy::PyArray2<i64>>,
-    Vec<String>,
-    Vec<(usize, usize, String, usize)>,
-);
-
-/// One body's mass, centre, momentum and angular momentum (`_Simulation.bodies`).
-type BodyRow = (f64, [f64; 3], [f64; 3], [f64; 3]);
-
-#[derive(Default)]
-struct SimState {
-    /// The last chunk's seconds per step (0 before the first: the first chunk of a
-    /// new simulation runs with the GIL released).
-    step_seconds: f64,
-    /// The run between its first step and its last: opened by the first `step()` or
-    /// `run()`, advanced by both, finished (and dropped) at the last step.
-    session: Option<Session>,
-    /// Where the session writes: `run(out=…)`'s or `start(out=…)`'s directory, or a
-    /// temporary one (`temporary`), removed once the history is read back at the end.
-    dir: Option<PathBuf>,
-    temporary: bool,
-    /// The last step's statistics, kept when the session ends.
-    last: Option<StepStats>,
-    finished: Option<State>,
-    summary: Option<String>,
-    history: Option<Columns>,
-    out: Option<PathBuf>,
-    /// The model built for `mesh`, `bodies` or `set_state` before the first step, which
-    /// the session then integrates instead of building it again.
-    model: Option<Built>,
-    /// The mesh and dof map of the built model.
-    geometry: Option<std::sync::Arc<signorini::model::geometry::Geometry>>,
-}
-
-impl SimState {
-    fn integ(&self) -> Option<&dyn Integrator> {
-        self.session.as_ref().map(|s| s.integrator())
-    }
-
-    fn state(&self) -> Option<&State> {
-        self.integ().map(|i| i.state()).or(self.finished.as_ref())
-    }
-
-    /// Ends the session advanced to its last step: the summary, the history read back
-    /// (the temporary directory removed), the final state.
-    fn finish(&mut self) -> Result<(), Error> {
-        let session = self.session.take().expect("a session to finish");
-        self.last = session.last_stats().copied().or(self.last);
-        let r = session.finish()?;
-        let dir = self.dir.take().expect("a session has a directory");
-        let history = read_history(&dir.join("history.csv"))?;
-        if self.temporary {
-            let _ = std::fs::remove_dir_all(&dir);
-        } else {
-            self.out = Some(dir);
-        }
-        self.summary = Some(serde_json::to_string(&r.summary).expect("summaries serialize"));
-        self.history = Some(history);
-        self.finished = Some(r.state);
-        Ok(())
-    }
-}
-
-impl Drop for SimState {
-    fn drop(&mut self) {
-        // the session's writer threads end (and its lock goes) before the directory
-        drop(self.session.take());
-        if let (true, Some(dir)) = (self.temporary, self.dir.take()) {
-            let _ = std::fs::remove_dir_all(dir);
-        }
-    }
-}
 
 /// A simulation of a scene (`signorini.Simulation` wraps it): `run()` for a whole run
 /// written as the CLI writes it, or `step(n)` for step-by-step control.
@@ -131,16 +22,6 @@ pub(crate) struct PySimulation {
     /// Set by `cancel()` (no lock: the stepping thread holds `state`), read at every
     /// step, cleared when a call stops on it.
     cancel: std::sync::Arc<std::sync::atomic::AtomicBool>,
-}
-
-fn temp_dir() -> PathBuf {
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    static COUNT: AtomicUsize = AtomicUsize::new(0);
-    std::env::temp_dir().join(format!(
-        "signorini-py-{}-{}",
-        std::process::id(),
-        COUNT.fetch_add(1, Ordering::Relaxed)
-    ))
 }
 
 impl PySimulation {
@@ -521,57 +402,7 @@ impl PySimulation {
         }
         let geo = g.geometry.clone().expect("built");
         drop(g);
-        let n = geo.points.len();
-        let dim = geo.dim;
-        let points: Vec<f64> = geo.points.iter().flatten().copied().collect();
-        let ids: Vec<u64> = if geo.node_ids.len() == n {
-            geo.node_ids.clone()
-        } else {
-            (0..n as u64).collect()
-        };
-        let mut body = vec![-1_i64; n];
-        let mut cells = Vec::with_capacity(geo.cells.len());
-        for (kind, nodes, b) in &geo.cells {
-            for &p in nodes {
-                body[p] = *b as i64;
-            }
-            let name = match kind {
-                signorini::model::geometry::GeomCell::Line => "line".to_string(),
-                signorini::model::geometry::GeomCell::Solid(k) => k.name().to_string(),
-            };
-            cells.push((name, *b, nodes.clone()));
-        }
-        let dofs: Vec<i64> = (0..n * dim)
-            .map(|i| {
-                geo.dof_of
-                    .get(i)
-                    .copied()
-                    .flatten()
-                    .map_or(-1, |d| d as i64)
-            })
-            .collect();
-        let to2 = |v: Vec<f64>, cols: usize| {
-            numpy::PyArray1::from_vec(py, v)
-                .reshape([n, cols])
-                .map(|a| a.unbind())
-        };
-        let points = to2(points, 3)?;
-        let dof_map = numpy::PyArray1::from_vec(py, dofs)
-            .reshape([n, dim])?
-            .unbind();
-        Ok((
-            points,
-            ids.into_pyarray(py).unbind(),
-            body.into_pyarray(py).unbind(),
-            cells,
-            dim,
-            dof_map,
-            self.kind.body_names(),
-            geo.contacts
-                .iter()
-                .map(|c| (c.point, c.body, c.target.clone(), c.entry))
-                .collect(),
-        ))
+        mesh_arrays(py, &geo, self.kind.body_names())
     }
 
     /// Each body's mass (kg), centre of mass (m), linear momentum (kg·m/s) and angular
@@ -581,21 +412,8 @@ impl PySimulation {
     /// initial state (building the model as `mesh()` does).
     fn bodies(&self, py: Python<'_>) -> PyResult<Vec<BodyRow>> {
         let mut g = self.lock()?;
-        let row =
-            |s: &signorini::model::BodyState| (s.mass, s.centre, s.momentum, s.angular_momentum);
         if g.finished.is_some() {
-            let summary = g.summary.clone().unwrap_or_default();
-            let v: serde_json::Value = serde_json::from_str(&summary).unwrap_or_default();
-            let parse = |b: &serde_json::Value| -> Option<BodyRow> {
-                let s: signorini::model::BodyState =
-                    serde_json::from_value(b.get("final")?.clone()).ok()?;
-                Some(row(&s))
-            };
-            return v
-                .get("bodies")
-                .and_then(|b| b.as_array())
-                .map(|b| b.iter().filter_map(parse).collect())
-                .ok_or_else(|| PyRuntimeError::new_err("the finished run recorded no bodies"));
+            return final_bodies(g.summary.as_deref().unwrap_or_default());
         }
         self.ensure_model(py, &mut g)?;
         let geo = g.geometry.clone().expect("built with the model");
@@ -604,12 +422,7 @@ impl PySimulation {
             (None, Some((m, _))) => (&m.problem.system, &m.problem.q0, &m.problem.v0),
             (None, None) => unreachable!("built above"),
         };
-        let Some(mut bm) = signorini::model::BodyMeasures::new(&geo, q.len()) else {
-            return Ok(Vec::new());
-        };
-        let mut out = vec![signorini::model::BodyState::default(); bm.bodies()];
-        bm.measure(&sys.mass, q, v, &mut out);
-        Ok(out.iter().map(row).collect())
+        Ok(measure_bodies(&geo, &sys.mass, q, v))
     }
 
     /// Asks the `step()` or `run()` running (or the next one) to stop after its step:
@@ -620,9 +433,11 @@ impl PySimulation {
     }
 
     /// Replaces the displacements `q` and/or velocities `v` (one value per dof, finite):
-    /// before the first step, the model's initial state (building it as `mesh()` does);
-    /// after, the integrator's state, whose gaps, Jacobians and Delassus data are
-    /// evaluated again at the new `q` (as a checkpoint's restore does).
+    /// before the first step, the model's initial state (building it as `mesh()` does:
+    /// `Model::set_state`); after, the integrator's state, whose gaps, Jacobians and
+    /// Delassus data are evaluated again at the new `q` (`Session::set_state`). A new `q`
+    /// passes the scene's own starting-gap rule (no contact node deeper inside its
+    /// obstacle or the other body than its contact's `overlap_tolerance`).
     #[pyo3(signature = (q=None, v=None))]
     fn set_state(&self, py: Python<'_>, q: Option<Vec<f64>>, v: Option<Vec<f64>>) -> PyResult<()> {
         let mut g = self.lock()?;
@@ -647,43 +462,15 @@ impl PySimulation {
                 )?;
             }
         }
-        let geo = g.geometry.clone().expect("built with the model");
-        let names = self.kind.body_names();
+        // the library's rule, the scene's own start's: the starting gaps within each
+        // contact's `overlap_tolerance`
         let st = &mut *g;
         match (&mut st.session, &mut st.model) {
-            (Some(session), _) => {
-                let integ = session.integrator_mut();
-                if let Some(q) = &q {
-                    let m = integ.state().gap.len();
-                    let gaps = |x: &[f64], g: &mut [f64]| integ.starting_gaps(x, g);
-                    check_gaps(gaps, m, &integ.state().q, q, &geo, &names)?;
-                }
-                let mut saved = integ.save();
-                for (name, x) in [("q", q), ("v", v)] {
-                    if let Some(x) = x {
-                        saved
-                            .vectors
-                            .insert(name.to_string(), signorini::integrators::saved::Floats(x));
-                    }
-                }
-                integ.restore(&saved).map_err(py_err)?;
-                // the energy the edit gave or took is no work of the run's forces
-                session.state_replaced();
-            }
-            (None, Some((m, _))) => {
-                if let Some(q) = q {
-                    let p = &m.problem;
-                    let gaps = |x: &[f64], g: &mut [f64]| p.contacts.starting_gaps(x, g);
-                    check_gaps(gaps, p.contacts.len(), &p.q0, &q, &geo, &names)?;
-                    m.problem.q0 = q;
-                }
-                if let Some(v) = v {
-                    m.problem.v0 = v;
-                }
-            }
+            (Some(session), _) => session.set_state(q, v),
+            (None, Some((m, _))) => m.set_state(q, v),
             (None, None) => unreachable!("built above"),
         }
-        Ok(())
+        .map_err(py_err)
     }
 
     /// Nodal displacements `q` (m), one per dof (owned copy).
@@ -788,7 +575,7 @@ impl PySimulation {
                 // the rows so far, read from the file being written (no copy of it)
                 so_far = py
                     .detach(|| match s.history_so_far()? {
-                        Some(part) => read_history(&part),
+                        Some(part) => signorini::io::read_history(&part).map(|h| h.columns()),
                         None => Ok(Vec::new()),
                     })
                     .map_err(py_err)?;
@@ -797,56 +584,6 @@ impl PySimulation {
             (None, Some(h)) => h,
             _ => return Ok(None),
         };
-        Ok(Some(
-            h.iter()
-                .map(|(name, v)| (name.clone(), v.clone().into_pyarray(py).unbind()))
-                .collect(),
-        ))
+        Ok(Some(named_arrays(py, h)))
     }
-}
-
-/// Refuses a `set_state(q=…)` from `current` to `new` that puts one of the `m` contacts
-/// (`gaps` measures them as a scene's start is checked) deeper inside its obstacle or the
-/// other body than the state it replaces does, by more than 1e-9 of the model's size
-/// (the scenes' default `overlap_tolerance`): the check a scene's own start gets (a
-/// body may not start inside another or inside an obstacle), so that an edited state
-/// cannot run on silently from an overlap.
-fn check_gaps(
-    gaps: impl Fn(&[f64], &mut [f64]),
-    m: usize,
-    current: &[f64],
-    new: &[f64],
-    geo: &signorini::model::geometry::Geometry,
-    names: &[String],
-) -> PyResult<()> {
-    let (mut before, mut after) = (vec![0.0; m], vec![0.0; m]);
-    gaps(current, &mut before);
-    gaps(new, &mut after);
-    let tol = 1e-9 * geo.size();
-    let inside = |(a, b): (&f64, &f64)| *a < b.min(0.0) - tol;
-    let count = after.iter().zip(&before).filter(|&p| inside(p)).count();
-    let Some((k, depth)) = after
-        .iter()
-        .zip(&before)
-        .enumerate()
-        .filter(|&(_, p)| inside(p))
-        .map(|(k, (a, _))| (k, -a))
-        .max_by(|x, y| x.1.total_cmp(&y.1))
-    else {
-        return Ok(());
-    };
-    let what = match geo.contacts.get(k) {
-        Some(c) => format!(
-            "contact {k} (point {} of body {}) would be {depth:.3e} m inside {}",
-            c.point,
-            names.get(c.body).map_or("?", |b| b.as_str()),
-            c.target
-        ),
-        None => format!("contact {k} would be {depth:.3e} m inside its obstacle"),
-    };
-    Err(BadInput::new_err(format!(
-        "set_state(q=…): {what} ({count} contact(s) deeper than before; the deepest is \
-         named); expected every contact at most as deep as in the state it replaces (to \
-         {tol:.1e} m): move the bodies apart"
-    )))
 }

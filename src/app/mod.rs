@@ -83,6 +83,8 @@ pub struct Session {
     planned: u64,
     bodies: Option<BodyRecord>,
     out: Option<(std::path::PathBuf, crate::io::OutputOptions)>,
+    /// The scene's starting-gap rule, for a state set between steps.
+    starting_gaps: crate::scene::file::StartingGaps,
 }
 
 impl Session {
@@ -104,6 +106,7 @@ impl Session {
             }
         };
         let geometry = std::mem::take(&mut model.geometry);
+        let starting_gaps = std::mem::take(&mut model.starting_gaps);
         announce_integrator(&model, progress);
         let t1 = Instant::now();
         let mut integ = model.into_integrator(&scene.scheme, scene.dt)?;
@@ -142,6 +145,7 @@ impl Session {
             planned: scene.memory().total(),
             bodies: None,
             out: out.map(|o| (o.dir.to_path_buf(), o.options.clone())),
+            starting_gaps,
         })
     }
 
@@ -167,6 +171,7 @@ impl Session {
         let probes = probes::ProbeSet::new(&model.probes, &model.geometry);
         let bodies = BodyRecord::start(scene, &model);
         let geometry = std::mem::take(&mut model.geometry);
+        let starting_gaps = std::mem::take(&mut model.starting_gaps);
         let names: Vec<String> = scene.bodies.iter().map(|b| b.name.clone()).collect();
         let rotations =
             crate::run::rotations::RotationCheck::new(&geometry, &names, scene.scheme.max_rotation);
@@ -232,6 +237,7 @@ impl Session {
             planned: plan.ledger.total(),
             bodies: Some(bodies),
             out: out.map(|o| (o.dir.to_path_buf(), o.options.clone())),
+            starting_gaps,
         })
     }
 
@@ -278,6 +284,37 @@ impl Session {
     /// from it.
     pub fn state_replaced(&mut self) {
         self.run.state_replaced(self.integ.as_ref());
+    }
+
+    /// Replaces the state between steps: the displacements `q` and/or the velocities
+    /// `v`, one finite value per dof each ([`crate::scene::check_state`]). A new `q` must
+    /// pass the scene's starting-gap rule ([`crate::scene::file::StartingGaps::check`]:
+    /// no contact node deeper inside its obstacle or the other body than its entry's
+    /// `overlap_tolerance`, the error the scene's own start gives); the gaps, Jacobians
+    /// and Delassus data are then evaluated again at it (as a checkpoint's restore
+    /// does), and the energy balance restarts from the new state (the energy the edit
+    /// gave or took is no work of the run's forces). Refused, the state is left as it
+    /// was.
+    pub fn set_state(&mut self, q: Option<Vec<f64>>, v: Option<Vec<f64>>) -> Result<(), Error> {
+        let integ = self.integ.as_mut();
+        crate::scene::check_state(&q, &v, integ.state().q.len())?;
+        if let Some(q) = &q {
+            let mut gap = vec![0.0; integ.state().gap.len()];
+            integ.starting_gaps(q, &mut gap);
+            self.starting_gaps.check(&gap)?;
+        }
+        // the state's vectors under the names every scheme saves them by
+        // (`State::save`), restored as a checkpoint's are
+        let mut saved = integ.save();
+        for (name, x) in [("q", q), ("v", v)] {
+            if let Some(x) = x {
+                let x = crate::integrators::saved::Floats(x);
+                saved.vectors.insert(name.to_string(), x);
+            }
+        }
+        integ.restore(&saved)?;
+        self.state_replaced();
+        Ok(())
     }
 
     /// Advances to the last step and [`finish`](Session::finish)es; asked to stop, it

@@ -1,5 +1,6 @@
 //! Output writers: the per-step history (`history.csv`) and the run summary
-//! (`summary.json`), the contract of DESIGN.md §6 and issue 2. Numbers are written as
+//! (`summary.json`), the contract of DESIGN.md §6 and issue 2; and the history's one
+//! reader (`history_read`: a cut last row of a `.part` tolerated). Numbers are written as
 //! the shortest decimal that reads back exactly (`ryu`).
 //!
 //! Files are written next to their final name (`NAME.part`), flushed as the run goes,
@@ -14,9 +15,11 @@ pub mod mesh;
 pub(crate) mod vtu;
 
 mod history;
+mod history_read;
 mod run_dir;
 
 pub use history::*;
+pub use history_read::*;
 pub use run_dir::*;
 
 use std::fs::File;

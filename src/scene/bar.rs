@@ -147,6 +147,7 @@ impl BarScene {
                 ..Geometry::rod(self.length, self.elements, self.young, self.density)
             },
             probes: Vec::new(),
+            starting_gaps: Default::default(),
         })
     }
 

@@ -221,6 +221,7 @@ impl ExampleSpec {
                     ),
                     geometry: Geometry::default(),
                     probes: Vec::new(),
+                    starting_gaps: Default::default(),
                 },
                 ExampleSpec::SliderCrank {
                     restitution,
@@ -245,6 +246,7 @@ impl ExampleSpec {
                         ),
                         geometry: Geometry::default(),
                         probes: Vec::new(),
+                        starting_gaps: Default::default(),
                     }
                 }
             })
@@ -309,5 +311,6 @@ fn on_the_line(
         problem: Problem::new(system, Box::new(contact), vec![q0], vec![v0]),
         geometry: Geometry::default(),
         probes: Vec::new(),
+        starting_gaps: Default::default(),
     })
 }

@@ -23,9 +23,34 @@ pub struct Model {
     pub geometry: crate::io::frames::Geometry,
     /// Displacement probes (a scene's `[[probes]]`).
     pub probes: Vec<crate::model::geometry::Probe>,
+    /// The scene's starting-gap rule, which a state set after the build must pass
+    /// ([`Model::set_state`], [`crate::app::Session::set_state`]); empty for the bar and
+    /// the examples.
+    pub starting_gaps: file::StartingGaps,
 }
 
 impl Model {
+    /// Replaces the initial state before the run opens: the displacements `q` (their
+    /// starting gaps checked by the scene's rule, [`file::StartingGaps::check`], as the
+    /// scene's own start is) and/or the velocities `v`, one finite value per dof each.
+    /// Refused, the state is left as it was.
+    pub fn set_state(&mut self, q: Option<Vec<f64>>, v: Option<Vec<f64>>) -> Result<(), Error> {
+        let p = &mut self.problem;
+        check_state(&q, &v, p.q0.len())?;
+        if let Some(q) = &q {
+            let mut gap = vec![0.0; p.contacts.len()];
+            p.contacts.starting_gaps(q, &mut gap);
+            self.starting_gaps.check(&gap)?;
+        }
+        if let Some(q) = q {
+            p.q0 = q;
+        }
+        if let Some(v) = v {
+            p.v0 = v;
+        }
+        Ok(())
+    }
+
     /// Builds the integrator of `params` with step `dt` for this model.
     pub fn into_integrator(
         self,
@@ -56,6 +81,30 @@ impl Model {
     ) -> Result<integrators::plan::Plan, Error> {
         self.problem.plan_only(params, dt)
     }
+}
+
+/// Refuses a state `q`, `v` (either may be absent) whose vectors do not hold `n` finite
+/// values, one per dof: what [`Model::set_state`] and
+/// [`crate::app::Session::set_state`] check before the starting gaps.
+pub fn check_state(q: &Option<Vec<f64>>, v: &Option<Vec<f64>>, n: usize) -> Result<(), Error> {
+    for (name, x) in [("q", q), ("v", v)] {
+        let Some(x) = x else { continue };
+        if x.len() != n {
+            return Err(Error::invalid(
+                name,
+                format!("{} values", x.len()),
+                &format!("expected one per dof ({n})"),
+            ));
+        }
+        if let Some(i) = x.iter().position(|x| !x.is_finite()) {
+            return Err(Error::invalid(
+                &format!("{name}[{i}]"),
+                x[i],
+                "a state is finite",
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The built-in example scene `name` (`bouncing-ball`, `oscillator`, `rocking-block`,

@@ -159,6 +159,7 @@ impl SolidBarScene {
             problem: Problem::new(system, Box::new(contacts), vec![0.0; n], v0),
             geometry,
             probes: Vec::new(),
+            starting_gaps: Default::default(),
         })
     }
 

@@ -41,22 +41,29 @@
 //!
 //! This file holds the schema (the serde types of every table); the rest by role:
 //! `parse` (text, TOML tables and `--set` overrides to a [`Scene`]), `validate` (ranges
-//! and cross-references, starting gaps), `build` (the [`Model`] a scene describes),
+//! and cross-references), `build` (the [`Model`] a scene describes, phase by phase),
+//! `contacts` (each contact entry's nodes and contact set), `gaps` (the starting-gap
+//! rule, [`StartingGaps`]), `meshes` (the build's phases on the meshes before assembly),
+//! `initial` (the initial fields and motions),
 //! `mesh_spec` (a body's mesh and node sets), `arrays` (the flat tables of a mesh or a
 //! field given as arrays, [`Rows`], and their memory from their shapes), `obstacle`
 //! (obstacles: schema, checks, contact sets, outlines).
 
 mod arrays;
 mod build;
+mod contacts;
+mod gaps;
 mod initial;
 mod mesh_spec;
+mod meshes;
 mod obstacle;
 mod parse;
 mod validate;
 
 pub use arrays::{Rows, arrays_memory};
+pub use gaps::StartingGaps;
 pub use obstacle::ObstacleSpec;
-use {build::*, mesh_spec::*, obstacle::*, validate::*};
+use {gaps::*, mesh_spec::*, obstacle::*, validate::*};
 
 use crate::integrators::Problem;
 use std::collections::BTreeMap;
@@ -573,6 +580,14 @@ impl Scene {
             }
         }
         files
+    }
+
+    /// The index of the body named `name` (validated to exist).
+    pub(super) fn body_index(&self, name: &str) -> usize {
+        self.bodies
+            .iter()
+            .position(|b| b.name == name)
+            .expect("validated body name")
     }
 }
 

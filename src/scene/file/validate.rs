@@ -1,6 +1,7 @@
 //! Checking a scene before anything is built: every key's range and cross-reference
-//! (the error names the key path), the mesh generators' arguments, and, once the meshes
-//! exist, the starting gaps (no body starts inside an obstacle or another body).
+//! (the error names the key path), the time functions, the loads' magnitudes and the
+//! mesh generators' arguments. The starting gaps, checked once the meshes exist, are
+//! `gaps`'; the build calls this file, never the other way.
 
 use super::*;
 
@@ -344,62 +345,15 @@ impl Scene {
     }
 }
 
-/// Refuses contact `c` when one of its nodes starts (at the initial displacements `q0`)
-/// inside `against` deeper than its `overlap_tolerance` ([`ContactSpec::overlap_tolerance`]), naming the deepest node by
-/// its file tag, its depth and how many start inside.
-pub(super) fn check_starting_gaps(
-    set: &dyn ContactSet,
-    q0: &[f64],
-    c: &ContactSpec,
-    mesh: &Mesh,
-    nodes: &[usize],
-    against: &str,
-) -> Result<(), Error> {
-    let size = mesh_size(mesh);
-    let tol = match c.overlap_tolerance {
-        Some(t) => crate::error::require_in("overlap_tolerance", t, 0.0, f64::MAX)?,
-        None => 1e-9 * size,
-    };
-    let mut gap = vec![0.0; set.len()];
-    set.starting_gaps(q0, &mut gap);
-    let inside = gap.iter().filter(|&&g| g < -tol).count();
-    let Some((k, &g)) = gap
-        .iter()
-        .enumerate()
-        .filter(|(_, g)| **g < -tol)
-        .min_by(|a, b| a.1.total_cmp(b.1))
-    else {
-        return Ok(());
-    };
-    let node = nodes
-        .get(k)
-        .map_or_else(|| format!("contact {k}"), |&v| mesh.node_label(v));
-    Err(Error::invalid(
-        "nodes",
-        &c.nodes,
-        &format!(
-            "{node} of body \"{}\" starts {:.3e} m inside {against} ({inside} node(s) start \
-             inside; the deepest is named), expected at most overlap_tolerance = {tol:.3e} m: \
-             move the bodies apart, or raise overlap_tolerance where curved non-matching \
-             meshes cut into each other",
-            c.body, -g
-        ),
-    ))
-}
-
-/// The diagonal of a mesh's bounding box (m).
-pub(super) fn mesh_size(mesh: &Mesh) -> f64 {
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for p in &mesh.points {
-        for j in 0..3 {
-            lo[j] = lo[j].min(p[j]);
-            hi[j] = hi[j].max(p[j]);
-        }
+/// The time function of a `[[forces]]` / `[[prescribed]]` entry (1 when absent).
+pub(super) fn time_function(
+    field: &str,
+    t: &Option<Vec<[f64; 2]>>,
+) -> Result<crate::model::TimeFunction, Error> {
+    match t {
+        Some(t) => crate::model::TimeFunction::new(field, t.iter().map(|p| (p[0], p[1])).collect()),
+        None => Ok(crate::model::TimeFunction::one()),
     }
-    (0..3)
-        .map(|j| (hi[j] - lo[j]).max(0.0).powi(2))
-        .sum::<f64>()
-        .sqrt()
 }
 
 /// Checks a generator's request before anything is generated: the cell kind is one it
