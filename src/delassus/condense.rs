@@ -9,49 +9,49 @@ impl Delassus {
     /// per-active-column path forgets its columns and recomputes them on demand.
     pub fn refresh(&mut self, stiffness: &SparseMatrix) {
         self.kinetic_moved();
-        self.slot.iter_mut().for_each(|s| *s = NONE);
-        self.owner.iter_mut().for_each(|s| *s = NONE);
-        self.used = 0;
-        if !self.dense {
+        self.pool.slot.iter_mut().for_each(|s| *s = NONE);
+        self.pool.owner.iter_mut().for_each(|s| *s = NONE);
+        self.pool.used = 0;
+        if !self.shape.dense {
             return;
         }
-        let (n, m) = (self.n, self.m);
+        let (n, m) = (self.shape.n, self.shape.m);
         if let Some(zone) = &mut self.zone {
-            zone.condensed(&self.jac, false, &mut self.w);
+            zone.condensed(&self.jac, false, &mut self.pool.w);
         } else {
             for a in 0..m {
-                let col = &mut self.cg[a * n..(a + 1) * n];
+                let col = &mut self.blocks.cg[a * n..(a + 1) * n];
                 col.iter_mut().for_each(|x| *x = 0.0);
                 self.jac.axpy(a, 1.0, col);
             }
             let once = self.condensing_once();
-            solve_columns(self.factor.as_mut(), &mut self.cg, m, once);
+            solve_columns(self.factor.as_mut(), &mut self.blocks.cg, m, once);
             self.column_solves += m;
             for b in 0..m {
                 for a in 0..m {
-                    self.w[a + b * m] = self.jac.dot(a, &self.cg[b * n..(b + 1) * n]);
+                    self.pool.w[a + b * m] = self.jac.dot(a, &self.blocks.cg[b * n..(b + 1) * n]);
                 }
             }
         }
         for b in 0..m {
-            self.slot[b] = b;
-            self.owner[b] = b;
+            self.pool.slot[b] = b;
+            self.pool.owner[b] = b;
         }
-        self.used = m;
-        if !self.with_d {
+        self.pool.used = m;
+        if !self.shape.with_d {
             return;
         }
-        if self.need_wd {
+        if self.shape.need_wd {
             match &mut self.zone {
-                Some(zone) => zone.condensed(&self.jac, true, &mut self.wd),
+                Some(zone) => zone.condensed(&self.jac, true, &mut self.pool.wd),
                 None => self.form_dense_wd(stiffness),
             }
         }
         for b in 0..m {
             for a in 0..m {
-                self.wn[a + b * m] = match self.metric {
+                self.blocks.wn[a + b * m] = match self.shape.metric {
                     Metric::Euclidean => self.jac.col_dot_col(a, b),
-                    Metric::Mass => self.w[a + b * m],
+                    Metric::Mass => self.pool.w[a + b * m],
                 };
             }
         }
@@ -59,12 +59,12 @@ impl Delassus {
 
     /// The dense path's `Â⁻¹K N G` and `W_D` (after `Â⁻¹G`).
     pub(super) fn form_dense_wd(&mut self, stiffness: &SparseMatrix) {
-        let (n, m) = (self.n, self.m);
+        let (n, m) = (self.shape.n, self.shape.m);
         // K N G column by column: K (Â⁻¹G_b) for the mass metric, K G_b (a combination
         // of the few columns of K that G_b touches) for the Euclidean one. Sequential:
         // the products are bound by memory bandwidth, and on two threads the 98k-dof
         // cube's 1024 columns took 8.7 s against 6.1 s on one.
-        let (cg, jac, metric) = (&self.cg, &self.jac, self.metric);
+        let (cg, jac, metric) = (&self.blocks.cg, &self.jac, self.shape.metric);
         let k = stiffness.as_ref();
         let column = |b: usize, d: &mut [f64]| match metric {
             Metric::Euclidean => {
@@ -81,18 +81,18 @@ impl Delassus {
         };
         if self.condensing_once() && metric == Metric::Mass && m >= PRODUCT_TILE {
             // once, at construction: K times PRODUCT_TILE columns per pass over K
-            k_times_columns(k, cg, &mut self.d, n);
+            k_times_columns(k, cg, &mut self.blocks.d, n);
         } else {
-            for (b, d) in self.d.chunks_mut(n).enumerate() {
+            for (b, d) in self.blocks.d.chunks_mut(n).enumerate() {
                 column(b, d);
             }
         }
         let once = self.condensing_once();
-        solve_columns(self.factor.as_mut(), &mut self.d, m, once);
+        solve_columns(self.factor.as_mut(), &mut self.blocks.d, m, once);
         self.column_solves += m;
         for b in 0..m {
             for a in 0..m {
-                self.wd[a + b * m] = self.jac.dot(a, &self.d[b * n..(b + 1) * n]);
+                self.pool.wd[a + b * m] = self.jac.dot(a, &self.blocks.d[b * n..(b + 1) * n]);
             }
         }
     }

@@ -43,8 +43,9 @@ impl Delassus {
     /// Returns whether it took it (not for the Euclidean metric, nor past
     /// 512 MiB of `W_N`, nor for a singular `M`: the redistributed mass).
     pub fn use_kinetic_metric(&mut self, mass: &SparseMatrix) -> Result<bool, Error> {
-        let m = self.m;
-        if self.metric != Metric::Mass || m.saturating_mul(m).saturating_mul(8) > KINETIC_MAX_BYTES
+        let m = self.shape.m;
+        if self.shape.metric != Metric::Mass
+            || m.saturating_mul(m).saturating_mul(8) > KINETIC_MAX_BYTES
         {
             return Ok(false);
         }
@@ -62,7 +63,7 @@ impl Delassus {
             factor,
             wn: vec![0.0; m * m],
             valid: false,
-            t: vec![0.0; self.n],
+            t: vec![0.0; self.shape.n],
         });
         Ok(true)
     }
@@ -74,7 +75,7 @@ impl Delassus {
 
     /// Forms `W_N = GᵀM⁻¹G` if `G` changed since it was last formed (allocation-free).
     pub fn prepare_position_metric(&mut self) {
-        let (m, jac) = (self.m, &self.jac);
+        let (m, jac) = (self.shape.m, &self.jac);
         let Some(k) = self.kinetic.as_mut() else {
             return;
         };
@@ -96,7 +97,7 @@ impl Delassus {
     /// `G` was re-linearized: `W_N` is formed again before its next use.
     pub(super) fn kinetic_moved(&mut self) {
         if let Some(k) = self.kinetic.as_mut()
-            && !self.g_constant
+            && !self.shape.g_constant
         {
             k.valid = false;
         }
@@ -131,7 +132,7 @@ impl Delassus {
             return true;
         }
         self.prepare_position_metric();
-        let (m, k) = (self.m, self.kinetic.as_ref().expect("checked above"));
+        let (m, k) = (self.shape.m, self.kinetic.as_ref().expect("checked above"));
         for (b, &xb) in x.iter().enumerate() {
             if xb != 0.0 {
                 for (o, &c) in out.iter_mut().zip(&k.wn[b * m..(b + 1) * m]) {

@@ -213,56 +213,24 @@ pub enum Phase {
     Step,
 }
 
-/// The factored step matrix with the Delassus data of one linearization of `G`.
+/// The factored step matrix with the Delassus data of one linearization of `G`: what
+/// it was sized for ([`Shape`]), the dense path's blocks ([`DenseBlocks`]), the
+/// per-active-column pool ([`ColumnPool`]) and the scratch of the solves
+/// ([`DelassusScratch`]), beside the zone's and the products' condensed data.
 #[derive(Debug)]
 pub struct Delassus {
     /// The factored step matrix `Â` (any backend of [`crate::linalg::solver`]).
     pub factor: Box<dyn LinearSolver>,
     /// The contact Jacobian `G` at the current linearization point.
     pub jac: ContactJacobian,
-    n: usize,
-    m: usize,
-    dense: bool,
-    with_d: bool,
-    metric: Metric,
-    /// `G` does not depend on `q`: [`Delassus::refresh`] runs once, at set-up.
-    g_constant: bool,
-    /// `W_D` is formed (`with_d`, unless [`Delassus::without_wd`]): a nonlinear structure's
-    /// Newton loop carries the projection's feedback in `F` and never reads it.
-    need_wd: bool,
-    /// Set-up or step loop ([`Delassus::start_stepping`]): the set-up may spread its
-    /// blocked solves over threads (allocating), the step loop may not.
-    phase: Phase,
-    // dense path: Â⁻¹G and Â⁻¹K N G (n × m), W_N (m × m)
-    cg: Vec<f64>,
-    d: Vec<f64>,
-    wn: Vec<f64>,
-    // both paths: columns of W and W_D (m values each) in slots
-    w: Vec<f64>,
-    wd: Vec<f64>,
-    slot: Vec<usize>,
-    owner: Vec<usize>,
-    stamp: Vec<u64>,
-    used: usize,
-    cap: usize,
-    epoch: u64,
     /// Sparse solves spent on columns since construction (set-up included).
     pub column_solves: usize,
     /// Products through the factor ([`Delassus::product`]) since construction (not
     /// those through the flexibilities of [`Delassus::condense_products`]).
     pub products: usize,
-    /// Largest support whose columns are stored ([`Delassus::limit_columns`]).
-    limit: usize,
-    /// The pool was sized by the memory budget, not by the caller.
-    pool_auto: bool,
-    t1: Vec<f64>,
-    t2: Vec<f64>,
-    // per-active-column path: contacts awaiting columns, and two n × SOLVE_BLOCK blocks
-    pending: Vec<usize>,
-    blk: Vec<f64>,
-    blk2: Vec<f64>,
-    /// `blk[n..2n]` holds `Â⁻¹G τ` for the position correction.
-    ng_ready: bool,
+    /// Set-up or step loop ([`Delassus::start_stepping`]): the set-up may spread its
+    /// blocked solves over threads (allocating), the step loop may not.
+    phase: Phase,
     /// The contact zone's condensed data ([`Delassus::condense_zone`]).
     zone: Option<Zone>,
     /// The zone's flexibilities came from the factor and its tangent
@@ -271,20 +239,101 @@ pub struct Delassus {
     /// `F` on the dofs of a constant `G` for the matrix-free products
     /// ([`Delassus::condense_products`]).
     pflex: Option<ProductFlex>,
-    /// The user's choice of storage (with [`DelassusKind::Auto`] or
-    /// [`DelassusKind::Flexibility`] the zone may switch a per-active-column choice to
-    /// the dense one).
-    kind: DelassusKind,
     /// The kinetic metric `N = M⁻¹` of a large-deformation structure's projection
     /// ([`Delassus::use_kinetic_metric`]).
     kinetic: Option<kinetic::Kinetic>,
+    /// What the data were sized for.
+    pub(crate) shape: Shape,
+    /// The dense path's blocks.
+    pub(crate) blocks: DenseBlocks,
+    /// The per-active-column pool (both paths store `W`'s columns here).
+    pub(crate) pool: ColumnPool,
+    /// The solves' scratch.
+    pub(crate) scratch: DelassusScratch,
+}
+
+/// What a [`Delassus`] was sized for.
+#[derive(Debug)]
+pub(crate) struct Shape {
+    /// Dofs.
+    pub(crate) n: usize,
+    /// Contact-space rows (the columns of `G`).
+    pub(crate) m: usize,
+    /// The dense path (`n × m` blocks) rather than per-active-column storage.
+    pub(crate) dense: bool,
+    /// `W_D` and `W_N` are formed (projection schemes).
+    pub(crate) with_d: bool,
+    /// The projection metric `N`.
+    pub(crate) metric: Metric,
+    /// `G` does not depend on `q`: [`Delassus::refresh`] runs once, at set-up.
+    pub(crate) g_constant: bool,
+    /// `W_D` is formed (`with_d`, unless [`Delassus::without_wd`]): a nonlinear structure's
+    /// Newton loop carries the projection's feedback in `F` and never reads it.
+    pub(crate) need_wd: bool,
+    /// The user's choice of storage (with [`DelassusKind::Auto`] or
+    /// [`DelassusKind::Flexibility`] the zone may switch a per-active-column choice to
+    /// the dense one).
+    pub(crate) kind: DelassusKind,
+}
+
+/// The dense path's `n × m` blocks and `W_N` (empty on the per-active-column path).
+#[derive(Debug)]
+pub(crate) struct DenseBlocks {
+    /// Dense path: `Â⁻¹G` (`n × m`).
+    pub(crate) cg: Vec<f64>,
+    /// Dense path: `Â⁻¹K N G` (`n × m`).
+    pub(crate) d: Vec<f64>,
+    /// Dense path: `W_N` (`m × m`).
+    pub(crate) wn: Vec<f64>,
+}
+
+/// Columns of `W` and `W_D` in slots, least recently used replaced first.
+#[derive(Debug)]
+pub(crate) struct ColumnPool {
+    /// Columns of `W` (`m` values each) in slots.
+    pub(crate) w: Vec<f64>,
+    /// Columns of `W_D` in the same slots.
+    pub(crate) wd: Vec<f64>,
+    /// The slot of each contact-space row's column (`NONE`: not stored).
+    pub(crate) slot: Vec<usize>,
+    /// The row whose column each slot holds.
+    pub(crate) owner: Vec<usize>,
+    /// The epoch each slot was last used in (least recently used goes first).
+    pub(crate) stamp: Vec<u64>,
+    /// Slots in use.
+    pub(crate) used: usize,
+    /// Slots.
+    pub(crate) cap: usize,
+    /// The current epoch (a step).
+    pub(crate) epoch: u64,
+    /// Largest support whose columns are stored ([`Delassus::limit_columns`]).
+    pub(crate) limit: usize,
+    /// The pool was sized by the memory budget, not by the caller.
+    pub(crate) pool_auto: bool,
+}
+
+/// Scratch of the solves that form columns and corrections.
+#[derive(Debug)]
+pub(crate) struct DelassusScratch {
+    /// `n`-scratch.
+    pub(crate) t1: Vec<f64>,
+    /// `n`-scratch.
+    pub(crate) t2: Vec<f64>,
+    /// Per-active-column path: rows awaiting their columns.
+    pub(crate) pending: Vec<usize>,
+    /// Two `n × SOLVE_BLOCK` blocks of right-hand sides (per-active-column path).
+    pub(crate) blk: Vec<f64>,
+    /// See `blk`.
+    pub(crate) blk2: Vec<f64>,
+    /// `blk[n..2n]` holds `Â⁻¹G τ` for the position correction.
+    pub(crate) ng_ready: bool,
 }
 
 impl Delassus {
     /// Stops forming `W_D = GᵀÂ⁻¹K N G` (`W` and `W_N` still are): for a caller that
     /// never reads it (`Op::Wd`, the projection feedback of [`Delassus::add_velocity_correction`]).
     pub fn without_wd(&mut self) {
-        self.need_wd = false;
+        self.shape.need_wd = false;
     }
 
     /// Marks the end of the set-up: from now on the blocks are formed by sequential,
@@ -296,7 +345,7 @@ impl Delassus {
     /// Whether the blocks being formed now are formed once for the whole run (constant
     /// `G`, at set-up): they may then use the threaded solves and the tiled `K` products.
     fn condensing_once(&self) -> bool {
-        self.g_constant && self.phase == Phase::Setup
+        self.shape.g_constant && self.phase == Phase::Setup
     }
 
     /// Sizes the storage for `n` dofs and the `m` columns of `jac`; `with_d` adds
@@ -340,40 +389,48 @@ impl Delassus {
         Ok(Delassus {
             factor,
             jac,
-            n,
-            m,
-            dense,
-            with_d,
-            metric,
-            g_constant,
-            need_wd: with_d,
-            phase: Phase::Setup,
-            cg: vec![0.0; nm],
-            d: vec![0.0; if with_d { nm } else { 0 }],
-            wn: vec![0.0; if dense && with_d { m * m } else { 0 }],
-            w: vec![0.0; m * cap],
-            wd: vec![0.0; if with_d { m * cap } else { 0 }],
-            slot: vec![NONE; m],
-            owner: vec![NONE; cap],
-            stamp: vec![0; cap],
-            used: 0,
-            cap,
-            epoch: 1,
             column_solves: 0,
             products: 0,
-            limit: usize::MAX,
-            pool_auto: pool == 0,
-            t1: vec![0.0; n],
-            t2: vec![0.0; n],
-            pending: Vec::with_capacity(SOLVE_BLOCK),
-            blk: vec![0.0; nb],
-            blk2: vec![0.0; if with_d { nb } else { 0 }],
-            ng_ready: false,
+            phase: Phase::Setup,
             zone: None,
             zone_by_tangent: false,
             pflex: None,
-            kind,
             kinetic: None,
+            shape: Shape {
+                n,
+                m,
+                dense,
+                with_d,
+                metric,
+                g_constant,
+                need_wd: with_d,
+                kind,
+            },
+            blocks: DenseBlocks {
+                cg: vec![0.0; nm],
+                d: vec![0.0; if with_d { nm } else { 0 }],
+                wn: vec![0.0; if dense && with_d { m * m } else { 0 }],
+            },
+            pool: ColumnPool {
+                w: vec![0.0; m * cap],
+                wd: vec![0.0; if with_d { m * cap } else { 0 }],
+                slot: vec![NONE; m],
+                owner: vec![NONE; cap],
+                stamp: vec![0; cap],
+                used: 0,
+                cap,
+                epoch: 1,
+                limit: usize::MAX,
+                pool_auto: pool == 0,
+            },
+            scratch: DelassusScratch {
+                t1: vec![0.0; n],
+                t2: vec![0.0; n],
+                pending: Vec::with_capacity(SOLVE_BLOCK),
+                blk: vec![0.0; nb],
+                blk2: vec![0.0; if with_d { nb } else { 0 }],
+                ng_ready: false,
+            },
         })
     }
 
@@ -383,70 +440,81 @@ impl Delassus {
     /// without a zone, `M̂⁻¹` metric): what the integrator may fuse into one pass over
     /// the state with the same operations in the same order (issue 35).
     pub fn dense_columns(&self) -> Option<(&[f64], &[f64])> {
-        (self.dense && self.zone.is_none() && self.metric == Metric::Mass)
-            .then_some((&self.cg[..], &self.d[..]))
+        (self.shape.dense && self.zone.is_none() && self.shape.metric == Metric::Mass)
+            .then_some((&self.blocks.cg[..], &self.blocks.d[..]))
     }
 
     /// Stores no columns for a support of more than `rows` rows (the one-step
     /// workspaces' cap): such problems are solved matrix-free, and their columns, computed
     /// `rows` solves at a time, would cost more than the products they save.
     pub fn limit_columns(&mut self, rows: usize) {
-        self.limit = rows;
-        if !self.dense && self.pool_auto && self.cap > rows.max(1) && self.used == 0 {
+        self.pool.limit = rows;
+        if !self.shape.dense
+            && self.pool.pool_auto
+            && self.pool.cap > rows.max(1)
+            && self.pool.used == 0
+        {
             // the default pool need not outgrow the largest set stored at once
-            let (m, cap) = (self.m, rows.max(1));
-            self.cap = cap;
-            self.w = vec![0.0; m * cap];
-            self.wd = vec![0.0; if self.with_d { m * cap } else { 0 }];
-            self.owner = vec![NONE; cap];
-            self.stamp = vec![0; cap];
+            let (m, cap) = (self.shape.m, rows.max(1));
+            self.pool.cap = cap;
+            self.pool.w = vec![0.0; m * cap];
+            self.pool.wd = vec![0.0; if self.shape.with_d { m * cap } else { 0 }];
+            self.pool.owner = vec![NONE; cap];
+            self.pool.stamp = vec![0; cap];
         }
     }
 
     /// Number of contacts `m`.
     pub fn len(&self) -> usize {
-        self.m
+        self.shape.m
     }
 
     /// True without contacts.
     pub fn is_empty(&self) -> bool {
-        self.m == 0
+        self.shape.m == 0
     }
 
     /// The projection metric `N`.
     pub fn metric(&self) -> Metric {
-        self.metric
+        self.shape.metric
     }
 
     /// True on the dense path.
     pub fn is_dense(&self) -> bool {
-        self.dense
+        self.shape.dense
     }
 
     /// Columns the per-active-column pool holds at most.
     pub fn capacity(&self) -> usize {
-        self.cap
+        self.pool.cap
     }
 
     /// Bytes the data hold: the factor's entries and the stored blocks and columns (not
     /// the zone's or the products' flexibilities, which are bounded by the plan).
     pub fn bytes(&self) -> u64 {
         let vectors = [
-            &self.cg, &self.d, &self.wn, &self.w, &self.wd, &self.t1, &self.t2, &self.blk,
-            &self.blk2,
+            &self.blocks.cg,
+            &self.blocks.d,
+            &self.blocks.wn,
+            &self.pool.w,
+            &self.pool.wd,
+            &self.scratch.t1,
+            &self.scratch.t2,
+            &self.scratch.blk,
+            &self.scratch.blk2,
         ];
         let values: usize = vectors.iter().map(|v| v.len()).sum();
-        8 * (values as u64 + self.factor.factor_entries().unwrap_or(self.n as u64))
+        8 * (values as u64 + self.factor.factor_entries().unwrap_or(self.shape.n as u64))
     }
 
     /// One phrase for summaries: which path runs.
     pub fn describe(&self) -> String {
         let path = describe_path(
             self.zone.as_ref().map(|z| (z.dofs.len(), z.storage)),
-            self.dense,
-            self.n,
-            self.m,
-            self.cap,
+            self.shape.dense,
+            self.shape.n,
+            self.shape.m,
+            self.pool.cap,
         );
         if self.zone_by_tangent {
             path + "; F from L⁻¹S on the zone's tree paths, F_E from the factor's tangent \

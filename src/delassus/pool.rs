@@ -7,7 +7,7 @@ impl Delassus {
     /// Starts a new step: columns used from now on are protected from eviction until
     /// the next call.
     pub fn next_epoch(&mut self) {
-        self.epoch += 1;
+        self.pool.epoch += 1;
     }
 
     /// Makes column `b` available (computing it on the per-active-column path).
@@ -25,7 +25,7 @@ impl Delassus {
         idx: &[usize],
         stiffness: &SparseMatrix,
     ) -> Result<(), SolveError> {
-        if !self.dense && idx.len() > self.limit {
+        if !self.shape.dense && idx.len() > self.pool.limit {
             // more than the one-step workspaces hold: the problem is solved matrix-free
             // and its products go through the factor (past the pool but within the
             // workspaces, the entries are needed: a pool error)
@@ -33,7 +33,7 @@ impl Delassus {
         }
         for &b in idx {
             self.request(b)?;
-            if self.pending.len() == SOLVE_BLOCK {
+            if self.scratch.pending.len() == SOLVE_BLOCK {
                 self.compute_pending(stiffness);
             }
         }
@@ -44,78 +44,83 @@ impl Delassus {
     /// Marks column `b` as used in this epoch; if absent, gives it a slot (evicting
     /// the column unused for longest) and queues it for computation.
     fn request(&mut self, b: usize) -> Result<(), SolveError> {
-        let s = self.slot[b];
+        let s = self.pool.slot[b];
         if s != NONE {
-            self.stamp[s] = self.epoch;
+            self.pool.stamp[s] = self.pool.epoch;
             return Ok(());
         }
-        let s = if self.used < self.cap {
-            self.used += 1;
-            self.used - 1
+        let s = if self.pool.used < self.pool.cap {
+            self.pool.used += 1;
+            self.pool.used - 1
         } else {
             let (s, &st) = self
+                .pool
                 .stamp
                 .iter()
                 .enumerate()
                 .min_by_key(|&(_, &st)| st)
                 .expect("pool has at least one slot");
-            if st >= self.epoch {
-                return Err(SolveError::Capacity { cap: self.cap });
+            if st >= self.pool.epoch {
+                return Err(SolveError::Capacity { cap: self.pool.cap });
             }
-            self.slot[self.owner[s]] = NONE;
+            self.pool.slot[self.pool.owner[s]] = NONE;
             s
         };
-        self.slot[b] = s;
-        self.owner[s] = b;
-        self.stamp[s] = self.epoch;
-        self.pending.push(b);
+        self.pool.slot[b] = s;
+        self.pool.owner[s] = b;
+        self.pool.stamp[s] = self.pool.epoch;
+        self.scratch.pending.push(b);
         Ok(())
     }
 
     /// Computes the queued columns: `W_{:,β} = GᵀÂ⁻¹G_β` and, with projection,
     /// `W_{D,:,β} = GᵀÂ⁻¹K N G_β`, by block solves.
     fn compute_pending(&mut self, stiffness: &SparseMatrix) {
-        let k = self.pending.len();
+        let k = self.scratch.pending.len();
         if k == 0 {
             return;
         }
-        let (n, m) = (self.n, self.m);
-        let blk = &mut self.blk[..n * k];
+        let (n, m) = (self.shape.n, self.shape.m);
+        let blk = &mut self.scratch.blk[..n * k];
         blk.iter_mut().for_each(|x| *x = 0.0);
-        for (c, &b) in self.pending.iter().enumerate() {
+        for (c, &b) in self.scratch.pending.iter().enumerate() {
             self.jac.axpy(b, 1.0, &mut blk[c * n..(c + 1) * n]);
         }
         // column by column: a column must not depend on the batch it was computed in,
         // or a resumed run (which recomputes its active columns at once) diverges
         self.factor.solve_columns_independently(blk, k);
-        for (c, &b) in self.pending.iter().enumerate() {
-            let s = self.slot[b];
-            self.jac
-                .transpose_mul(&blk[c * n..(c + 1) * n], &mut self.w[s * m..(s + 1) * m]);
+        for (c, &b) in self.scratch.pending.iter().enumerate() {
+            let s = self.pool.slot[b];
+            self.jac.transpose_mul(
+                &blk[c * n..(c + 1) * n],
+                &mut self.pool.w[s * m..(s + 1) * m],
+            );
         }
         self.column_solves += k;
-        if self.with_d && self.need_wd {
-            let blk2 = &mut self.blk2[..n * k];
-            for (c, &b) in self.pending.iter().enumerate() {
+        if self.shape.with_d && self.shape.need_wd {
+            let blk2 = &mut self.scratch.blk2[..n * k];
+            for (c, &b) in self.scratch.pending.iter().enumerate() {
                 let out = &mut blk2[c * n..(c + 1) * n];
-                match self.metric {
+                match self.shape.metric {
                     Metric::Mass => spmv(stiffness.as_ref(), &blk[c * n..(c + 1) * n], out),
                     Metric::Euclidean => {
-                        self.t1.iter_mut().for_each(|x| *x = 0.0);
-                        self.jac.axpy(b, 1.0, &mut self.t1);
-                        spmv(stiffness.as_ref(), &self.t1, out);
+                        self.scratch.t1.iter_mut().for_each(|x| *x = 0.0);
+                        self.jac.axpy(b, 1.0, &mut self.scratch.t1);
+                        spmv(stiffness.as_ref(), &self.scratch.t1, out);
                     }
                 }
             }
             self.factor.solve_columns_independently(blk2, k);
-            for (c, &b) in self.pending.iter().enumerate() {
-                let s = self.slot[b];
-                self.jac
-                    .transpose_mul(&blk2[c * n..(c + 1) * n], &mut self.wd[s * m..(s + 1) * m]);
+            for (c, &b) in self.scratch.pending.iter().enumerate() {
+                let s = self.pool.slot[b];
+                self.jac.transpose_mul(
+                    &blk2[c * n..(c + 1) * n],
+                    &mut self.pool.wd[s * m..(s + 1) * m],
+                );
             }
             self.column_solves += k;
         }
-        self.pending.clear();
+        self.scratch.pending.clear();
     }
 
     /// Ensures the columns of the support of `x` (its non-zero entries); none when the
@@ -126,7 +131,9 @@ impl Delassus {
         x: &[f64],
         stiffness: &SparseMatrix,
     ) -> Result<(), SolveError> {
-        if !self.dense && x.iter().filter(|&&v| v != 0.0).count() > self.cap.min(self.limit) {
+        if !self.shape.dense
+            && x.iter().filter(|&&v| v != 0.0).count() > self.pool.cap.min(self.pool.limit)
+        {
             // more than the pool or the one-step workspaces hold: the products go
             // through the factor
             return Ok(());
@@ -134,7 +141,7 @@ impl Delassus {
         for (b, &xb) in x.iter().enumerate() {
             if xb != 0.0 {
                 self.request(b)?;
-                if self.pending.len() == SOLVE_BLOCK {
+                if self.scratch.pending.len() == SOLVE_BLOCK {
                     self.compute_pending(stiffness);
                 }
             }
@@ -145,9 +152,9 @@ impl Delassus {
 
     /// Whether every column of the support of `x` is in store (always on the dense path).
     pub fn has_support(&self, x: &[f64]) -> bool {
-        self.dense
+        self.shape.dense
             || x.iter()
-                .zip(&self.slot)
+                .zip(&self.pool.slot)
                 .all(|(&xb, &s)| xb == 0.0 || s != NONE)
     }
 }

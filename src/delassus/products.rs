@@ -137,13 +137,13 @@ impl Delassus {
     /// through it would not be cheaper than a solve), or a factor that is not
     /// supernodal. Allocates: a set-up's work.
     pub fn condense_products(&mut self) -> bool {
-        if !self.g_constant || self.dense || self.zone.is_some() {
+        if !self.shape.g_constant || self.shape.dense || self.zone.is_some() {
             return false;
         }
         let zone = acting_dofs(&self.jac);
         let z = zone.len();
         let entries = self.factor.factor_entries().unwrap_or(0);
-        if !products_fit(self.kind, z, entries) || zone.iter().any(|&d| d >= self.n) {
+        if !products_fit(self.shape.kind, z, entries) || zone.iter().any(|&d| d >= self.shape.n) {
             return false;
         }
         let Some((f, _)) = self.factor.zone_flexibilities(&zone, None) else {
@@ -167,7 +167,7 @@ impl Delassus {
         x: &[f64],
         out: &mut [f64],
     ) -> bool {
-        if !matches!((op, self.metric), (Op::W, _) | (Op::Wn, Metric::Mass)) {
+        if !matches!((op, self.shape.metric), (Op::W, _) | (Op::Wn, Metric::Mass)) {
             return false;
         }
         // taken out while `gather_g` borrows `self` (a move, no allocation)
@@ -177,7 +177,7 @@ impl Delassus {
         // G x on the n dofs: non-zero on the zone alone
         self.gather_g(x);
         for (v, &d) in pf.zx.iter_mut().zip(&pf.dofs) {
-            *v = self.t1[d];
+            *v = self.scratch.t1[d];
         }
         pf.zy.iter_mut().for_each(|v| *v = 0.0);
         let z = pf.dofs.len();
@@ -199,11 +199,11 @@ impl Delassus {
         }
         // S F B x: the zone entries replaced, every other entry of t1 is zero
         for (&v, &d) in pf.zy.iter().zip(&pf.dofs) {
-            self.t1[d] = v;
+            self.scratch.t1[d] = v;
         }
         self.pflex = Some(pf);
         for (a, o) in out.iter_mut().enumerate() {
-            *o += s * self.jac.dot(a, &self.t1);
+            *o += s * self.jac.dot(a, &self.scratch.t1);
         }
         true
     }

@@ -356,33 +356,43 @@ impl Delassus {
         stiffness: &SparseMatrix,
         zone_iterates: bool,
     ) -> Option<ZoneStorage> {
-        let (n, z, m) = (self.n, zone.len(), self.m);
-        let per = if self.with_d && self.need_wd { 2 } else { 1 };
-        if (!self.dense && self.kind == DelassusKind::Columns)
-            || self.g_constant
+        let (n, z, m) = (self.shape.n, zone.len(), self.shape.m);
+        let per = if self.shape.with_d && self.shape.need_wd {
+            2
+        } else {
+            1
+        };
+        if (!self.shape.dense && self.shape.kind == DelassusKind::Columns)
+            || self.shape.g_constant
             || z == 0
             || zone.iter().any(|&d| d >= n)
         {
             return None;
         }
-        let storage = zone_storage(n, z, m, per, zone_preference(self.kind, zone_iterates))?;
-        if !self.dense {
+        let storage = zone_storage(
+            n,
+            z,
+            m,
+            per,
+            zone_preference(self.shape.kind, zone_iterates),
+        )?;
+        if !self.shape.dense {
             // the per-active-column choice becomes the dense one: m × m operators
-            self.dense = true;
-            self.cap = m;
-            self.w = vec![0.0; m * m];
-            self.wd = vec![0.0; if self.with_d { m * m } else { 0 }];
-            self.wn = vec![0.0; if self.with_d { m * m } else { 0 }];
-            self.owner = vec![NONE; m];
-            self.stamp = vec![0; m];
+            self.shape.dense = true;
+            self.pool.cap = m;
+            self.pool.w = vec![0.0; m * m];
+            self.pool.wd = vec![0.0; if self.shape.with_d { m * m } else { 0 }];
+            self.blocks.wn = vec![0.0; if self.shape.with_d { m * m } else { 0 }];
+            self.pool.owner = vec![NONE; m];
+            self.pool.stamp = vec![0; m];
         }
         // the flexibility zone corrects by solves of [G τ_used, G τ] (`blk`, 2 n)
         let nb = match storage {
             ZoneStorage::Full => 0,
             ZoneStorage::Flexibility => 2 * n,
         };
-        self.blk = vec![0.0; nb];
-        self.blk2 = Vec::new();
+        self.scratch.blk = vec![0.0; nb];
+        self.scratch.blk2 = Vec::new();
         if storage == ZoneStorage::Flexibility {
             self.factor.reserve_sparse_rhs(2);
         }
@@ -393,7 +403,7 @@ impl Delassus {
         // the flexibilities alone under the M̂⁻¹ metric (or without W_D): from the
         // factor and its tangent along K, on the zone's paths (`linalg::zone_flex`)
         let from_factor = (storage == ZoneStorage::Flexibility
-            && (per == 1 || self.metric == Metric::Mass))
+            && (per == 1 || self.shape.metric == Metric::Mass))
             .then(|| {
                 self.factor
                     .zone_flexibilities(zone, (per == 2).then(|| stiffness.as_ref()))
@@ -432,7 +442,7 @@ impl Delassus {
             restrict(zone, yb, n, &mut f[start * z..(start + w) * z]);
             if per == 2 {
                 let k = stiffness.as_ref();
-                match self.metric {
+                match self.shape.metric {
                     Metric::Mass => k_times_columns(k, yb, eb, n),
                     Metric::Euclidean => {
                         eb.iter_mut().for_each(|v| *v = 0.0);
@@ -458,8 +468,8 @@ impl Delassus {
             ZoneStorage::Flexibility => (Vec::new(), Vec::new()),
         };
         // the n × m blocks are never formed on this path
-        self.cg = Vec::new();
-        self.d = Vec::new();
+        self.blocks.cg = Vec::new();
+        self.blocks.d = Vec::new();
         self.zone = Some(Zone::new(
             pos,
             zone.to_vec(),
@@ -496,7 +506,7 @@ impl Delassus {
         v: &mut [f64],
         q: &mut [f64],
     ) {
-        let metric = self.metric;
+        let metric = self.shape.metric;
         let zone = self
             .zone
             .as_mut()
@@ -538,7 +548,7 @@ impl Delassus {
     /// Whether the `n`-space corrections are sparse solves (the per-active-column path
     /// and [`ZoneStorage::Flexibility`]) rather than combinations of stored columns.
     pub(super) fn corrects_by_solves(&self) -> bool {
-        !self.dense
+        !self.shape.dense
             || self
                 .zone
                 .as_ref()
