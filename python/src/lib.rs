@@ -11,8 +11,11 @@
 //! view would change under the caller's feet (and outlive its buffer if the simulation
 //! were dropped first). A copy costs one pass over `n` values, negligible next to a step.
 //!
-//! By role: `scene` (the scenes: `Kind`, `_Scene`), `tables` (a scene from a dict: its
-//! tables as TOML values and its arrays copied flat, no text), `simulation` (`_Simulation`: the
+//! By role: `scene` (the scenes: `Kind`, `_Scene`), `tables` (a scene from a dict, no
+//! text: its bodies' arrays set aside, measured against the memory limit and copied
+//! flat), `toml_values` (the dict's other values as TOML values, and the messages'
+//! words), `table_rows` (a table of numbers from an array or a list of rows, checked and
+//! copied in one pass), `simulation` (`_Simulation`: the
 //! session, its state, mesh, bodies and history), `sim_state` (what a `_Simulation` holds
 //! between calls), `convert` (the mesh, bodies and history as the arrays Python receives),
 //! `progress` (the Python callback,
@@ -96,7 +99,9 @@ mod progress;
 mod scene;
 mod sim_state;
 mod simulation;
+mod table_rows;
 mod tables;
+mod toml_values;
 
 use fclib::{fclib_read, fclib_solve_arrays, fclib_solve_file};
 use progress::{INTERRUPT_EVERY, PyProgress, interruptible};
