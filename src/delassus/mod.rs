@@ -214,9 +214,9 @@ pub enum Phase {
 }
 
 /// The factored step matrix with the Delassus data of one linearization of `G`: what
-/// it was sized for ([`Shape`]), the dense path's blocks ([`DenseBlocks`]), the
-/// per-active-column pool ([`ColumnPool`]) and the scratch of the solves
-/// ([`DelassusScratch`]), beside the zone's and the products' condensed data.
+/// it was sized for (`Shape`), the dense path's blocks (`DenseBlocks`), the
+/// per-active-column pool (`ColumnPool`) and the scratch of the solves
+/// (`DelassusScratch`), beside the zone's and the products' condensed data.
 #[derive(Debug)]
 pub struct Delassus {
     /// The factored step matrix `Â` (any backend of [`crate::linalg::solver`]).

@@ -205,9 +205,9 @@ macro_rules! delegate_to_core {
 pub(crate) use delegate_to_core;
 
 /// Shared θ-method data (see the module doc), in the parts a step treats differently:
-/// what the build fixed ([`ThetaConfig`]), the model and the sub-solvers (fields here),
-/// the state and what else the next step reads ([`StepCarry`]), and the scratch of one
-/// step ([`DofScratch`], [`RowScratch`], [`ZoneScratch`]), whose contents mean nothing
+/// what the build fixed (`ThetaConfig`), the model and the sub-solvers (fields here),
+/// the state and what else the next step reads (`StepCarry`), and the scratch of one
+/// step (`DofScratch`, `RowScratch`, `ZoneScratch`), whose contents mean nothing
 /// between steps.
 ///
 /// The stages of a step, each in its file: the free step and the structure's calls

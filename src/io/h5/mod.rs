@@ -23,7 +23,7 @@
 //! the history up to it. The file is written in place (HDF5 has no atomic rename of a
 //! growing file); a run that finishes renames nothing.
 //!
-//! Every file is created and opened **without HDF5's advisory lock** ([`options`]).
+//! Every file is created and opened **without HDF5's advisory lock** (`options`).
 //! HDF5 opens files without `O_CLOEXEC` and locks them with `flock`, whose lock
 //! belongs to the open file description: a child process that any thread of the same
 //! program spawns while a file is open (a test, a sweep driver, a Python kernel

@@ -102,7 +102,7 @@ impl EntryGaps {
     }
 }
 
-/// The starting-gap rule of a built scene, one [`EntryGaps`] per `[[contacts]]` entry,
+/// The starting-gap rule of a built scene, one `EntryGaps` per `[[contacts]]` entry,
 /// kept with the [`Model`] to check a state set after the build. Empty (no check) for
 /// the built-in bar and the examples, whose starts are their parameters' own checks.
 #[derive(Clone, Debug, Default)]
