@@ -333,3 +333,83 @@ fn the_friction_cone_holds_at_a_varying_step() {
     }
     assert!(closed > 1000, "{closed} closed contact-steps");
 }
+
+/// A run's measurements (the contact trace and its summary, the probes) are taken at the
+/// step it started with: an integrator whose step changes under a run that does not
+/// expect it stops the run (exit 1) naming both steps, never a force divided by the
+/// wrong `h`.
+#[test]
+fn a_run_refuses_a_step_changed_under_it() {
+    struct Switching(Box<dyn Integrator>);
+    impl Integrator for Switching {
+        fn kind(&self) -> SchemeKind {
+            self.0.kind()
+        }
+        fn step(&mut self) -> Result<signorini::integrators::StepStats, signorini::Error> {
+            if self.0.state().step == 10 {
+                self.0.set_dt(0.5 * self.0.dt())?;
+            }
+            self.0.step()
+        }
+        fn state(&self) -> &signorini::integrators::State {
+            self.0.state()
+        }
+        fn system(&self) -> &signorini::model::LinearSystem {
+            self.0.system()
+        }
+        fn shared_system(&self) -> std::sync::Arc<signorini::model::LinearSystem> {
+            self.0.shared_system()
+        }
+        fn dt(&self) -> f64 {
+            self.0.dt()
+        }
+        fn path(&self) -> String {
+            self.0.path()
+        }
+        fn jacobian(&self) -> &signorini::contact::ContactJacobian {
+            self.0.jacobian()
+        }
+        fn starting_gaps(&self, q: &[f64], gap: &mut [f64]) {
+            self.0.starting_gaps(q, gap)
+        }
+        fn save(&self) -> signorini::integrators::saved::IntegratorState {
+            self.0.save()
+        }
+        fn restore(
+            &mut self,
+            s: &signorini::integrators::saved::IntegratorState,
+        ) -> Result<(), signorini::Error> {
+            self.0.restore(s)
+        }
+    }
+    let bar = BarScene {
+        elements: 50,
+        ..BarScene::default()
+    };
+    let mut integ = Switching(
+        bar.build()
+            .unwrap()
+            .into_integrator(&bar.scheme, 4e-6)
+            .unwrap(),
+    );
+    let checks = signorini::run::RunChecks::new(&bar.scheme, 1.0);
+    let err = signorini::run::run(
+        &mut integ,
+        100,
+        50,
+        bar.scheme.theta,
+        &checks,
+        None,
+        serde_json::Value::Null,
+        None,
+        &mut signorini::run::Quiet,
+    )
+    .err()
+    .expect("a step changed under the run was accepted");
+    let msg = err.to_string();
+    assert_eq!(err.exit_code(), 1, "{msg}");
+    assert!(
+        msg.contains("at step 11") && msg.contains("h = 4e-6 s to 2e-6 s"),
+        "{msg}"
+    );
+}

@@ -262,6 +262,23 @@ impl EnergyCheck {
 
 impl Observer for RunObserver {
     fn observe(&mut self, integ: &dyn Integrator, st: &StepStats, last: bool) -> Result<(), Error> {
+        // the contact trace, its summary and the probes measure on the run's one step:
+        // a step changed under them (`Integrator::set_dt`) would be measured wrong
+        if integ.dt().to_bits() != self.h.to_bits() {
+            let s = integ.state();
+            return Err(Error::RunFailed {
+                step: s.step,
+                time: s.time,
+                contact: None,
+                detail: format!(
+                    "the step changed from h = {:e} s to {:e} s: a run's measurements \
+                     (contact trace and summary, probes) are taken at the step it started \
+                     with",
+                    self.h,
+                    integ.dt()
+                ),
+            });
+        }
         self.acc.add(st);
         if let Some(e) = self.energy.as_mut() {
             e.observe(integ, last, &mut self.acc.energy_excess)?;

@@ -2,7 +2,8 @@
 //! position-level trapezoidal rule.
 //!
 //! For `F(t, q, v) = f − C v − K q` the iteration matrix `M̂ = M + hθC + h²θ²K`
-//! (eq. 47) is constant: it is formed and factored once. Each step computes the free
+//! (eq. 47) is constant: it is formed and factored once per step size `h`
+//! (`step_size.rs`: [`ThetaCore::set_dt`]). Each step computes the free
 //! velocity (eq. 18 with `P = 0`)
 //!
 //! `M̂ (v_free − v_k) = h f(t_{k+θ}) − h C v_k − h K (q_k + hθ v_k)`,

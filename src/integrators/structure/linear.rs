@@ -1,5 +1,6 @@
 //! The linear structure, `F(t, q, v) = f(t) − C v − K q` (rods, linear-elastic solids):
-//! `M̂ = M + hθC + h²θ²K` (eq. 47) is constant, formed and factored once, and a step's
+//! `M̂ = M + hθC + h²θ²K` (eq. 47) is constant, formed and factored once per step size
+//! ([`crate::integrators::step_matrix`]), and a step's
 //! only structural work is the free velocity of eq. 18 with `P = 0`,
 //!
 //! `M̂ (v_free − v_k) = h f(t_{k+θ}) − h C v_k − h K (q_k + hθ v_k)`,

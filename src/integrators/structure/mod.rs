@@ -25,8 +25,14 @@
 //! The implementors: [`LinearStructure`] (rods and linear-elastic solids, `F = f − Cv −
 //! Kq`) and [`NonlinearStructure`] (a list of [`crate::model::system::NonlinearPart`]s on
 //! top of `M`, `K`, `C`: hyperelastic bodies and rigid multibody models, each a part with
-//! its own law). [`for_system`] is the one place that picks between them, from
-//! [`crate::model::LinearSystem::linearity`].
+//! its own law). [`for_system`] picks between them, from
+//! [`crate::model::LinearSystem::linearity`], for a problem that was given none; a caller
+//! hands any other implementor to [`crate::integrators::Problem::with_structure`], and
+//! the plan, the build and the driver take it as they take these two (issue 49).
+//!
+//! The step matrix: [`StructureModel::analyse`] states what `M̂(h)` will cost (the plan's
+//! figures), [`StructureModel::factor`] forms and factors it (at the build, and again at
+//! each new `h` of [`crate::integrators::Integrator::set_dt`] when it is constant).
 //!
 //! A method reads and writes the step through a [`StepData`], the core's borrowed
 //! buffers; the errors it returns are the caller's to attribute to the step.
