@@ -98,9 +98,14 @@ fn check_change(label: &str, make: &dyn Fn(f64) -> Box<dyn Integrator>, h1: f64,
 
 #[test]
 fn the_bar_changes_step_as_a_resumed_run_would() {
-    for kind in ["combined-projection", "moreau-jean", "direct-projection"] {
+    for (kind, elements) in [
+        ("combined-projection", 100),
+        ("moreau-jean", 100),
+        ("direct-projection", 100),
+        ("combined-projection", 100_000),
+    ] {
         let bar = BarScene {
-            elements: 100,
+            elements,
             ..BarScene::default()
         };
         let mut params = bar.scheme;
@@ -111,7 +116,7 @@ fn the_bar_changes_step_as_a_resumed_run_would() {
             model.into_integrator(&params, h).unwrap()
         };
         // the bar starts at its wall: it hits in the first steps
-        check_change(&format!("bar, {kind}"), &make, h1, 0.5 * h1);
+        check_change(&format!("bar, {kind}, N = {elements}"), &make, h1, 0.5 * h1);
     }
 }
 
@@ -130,6 +135,20 @@ fn a_neo_hookean_block_changes_step_as_a_resumed_run_would() {
     );
     let scene = Scene::from_text_with(&text, &[]).unwrap();
     check_change("neo-Hookean block", &|h| build(&scene, h), 1e-4, 2.5e-5);
+}
+
+/// A 2-D plane-strain block on a curved obstacle and the axisymmetric Hertz ball (the
+/// shipped scenes, at their own step and a quarter of it).
+#[test]
+fn plane_and_axisymmetric_bodies_change_step_as_a_resumed_run_would() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes");
+    for (file, h) in [
+        ("block_on_cylinder.toml", 1e-4),
+        ("hertz_ball.toml", 2.5e-8),
+    ] {
+        let scene = Scene::from_file_with(&dir.join(file), &[]).unwrap();
+        check_change(file, &|h| build(&scene, h), h, 0.25 * h);
+    }
 }
 
 #[test]
