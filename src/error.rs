@@ -70,6 +70,16 @@ pub enum Error {
         /// Its time (s).
         time: f64,
     },
+    /// A run in the accuracy mode (`time.accuracy`) could not reach the accuracy asked:
+    /// windows at the smallest step still missed it, or the estimated errors summed over
+    /// the run exceed it. Its outputs and summary are written (exit 1).
+    #[error("the run did not reach time.accuracy = {target:e}: {detail}")]
+    AccuracyNotMet {
+        /// The requested accuracy.
+        target: f64,
+        /// What was missed, with the estimates and the remedy.
+        detail: String,
+    },
     /// Writing an output file failed (disk full, permissions): the run fails (exit 1).
     #[error("cannot write {path}: {}", os_reason(source))]
     Write {
@@ -130,6 +140,7 @@ impl Error {
             | Error::NotConverged { .. }
             | Error::RunFailed { .. }
             | Error::Interrupted { .. }
+            | Error::AccuracyNotMet { .. }
             | Error::Write { .. } => 1,
         }
     }

@@ -278,10 +278,11 @@ fn main() -> ExitCode {
         }
         Some(Command::Sweep(a)) => sweep(&a),
         Some(Command::Resume { dir, quiet }) => app::resume(&dir, progress_sink(quiet).as_mut())
-            .map(|r| {
+            .and_then(|r| {
                 if !quiet {
                     print_summary(&r.summary, &dir);
                 }
+                accuracy_met(&r.summary)
             }),
         Some(Command::Plot { dir }) => signorini::plot::plot_run(&dir).map(|files| {
             for f in files {

@@ -135,7 +135,10 @@ impl Session {
             parameters,
             out.map(|o| (o, geometry)),
             ckpt,
-            crate::run::Monitors::default(),
+            crate::run::Monitors {
+                accuracy: scene.accuracy_spec(),
+                ..crate::run::Monitors::default()
+            },
         )?;
         Ok(Session {
             integ,
@@ -227,7 +230,11 @@ impl Session {
             parameters,
             out.map(|o| (o, geometry)),
             ckpt,
-            crate::run::Monitors { probes, rotations },
+            crate::run::Monitors {
+                probes,
+                rotations,
+                accuracy: scene.time.accuracy_spec(),
+            },
         )?;
         Ok(Session {
             integ,
@@ -320,8 +327,8 @@ impl Session {
     /// Advances to the last step and [`finish`](Session::finish)es; asked to stop, it
     /// closes the writers (the files so far readable) and returns the interrupt.
     pub fn run_to_end(mut self, progress: &mut dyn Progress) -> Result<RunResult, Error> {
-        progress.start(self.run.steps());
-        if let Err(e) = self.advance(self.run.steps(), progress) {
+        progress.start(self.run.progress_total());
+        if let Err(e) = self.advance(usize::MAX, progress) {
             if matches!(e, Error::Interrupted { .. }) {
                 self.run.close_writers()?;
             }

@@ -151,6 +151,11 @@ pub(crate) struct SceneArgs {
     /// --set 'bodies[0].material.model="svk"'.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub(crate) set: Vec<String>,
+    /// The accuracy mode: the relative accuracy asked of the run's observables (the
+    /// same as --set time.accuracy=TOL); the run chooses its steps and writes the error
+    /// it estimates (exit 1 when not met).
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    pub(crate) accuracy: Option<f64>,
     /// Output directory (default: the scene's output.dir, else out/<file stem>).
     #[arg(long)]
     pub(crate) out: Option<PathBuf>,
@@ -255,6 +260,14 @@ pub(crate) struct BarArgs {
     /// End time (s).
     #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
     pub(crate) t_end: f64,
+    /// The accuracy mode: the relative accuracy asked of the contact impulse history,
+    /// the energy and the gaps; the run chooses its steps (at most --dt, at least
+    /// --dt-min) and writes the error it estimates (exit 1 when not met).
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    pub(crate) accuracy: Option<f64>,
+    /// The accuracy mode's smallest step (s; default dt / 2^10).
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    pub(crate) dt_min: Option<f64>,
     /// θ of the θ-method, in [1/2, 1].
     #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
     pub(crate) theta: f64,
@@ -385,6 +398,8 @@ impl BarArgs {
             gap: self.gap,
             restitution: self.restitution,
             mass: self.mass,
+            accuracy: self.accuracy,
+            dt_min: self.dt_min,
             ..BarScene::default()
         };
         let p = &mut s.scheme;

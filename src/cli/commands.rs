@@ -86,7 +86,16 @@ pub(crate) fn run_bar(args: &BarArgs) -> Result<(), signorini::Error> {
     if !args.quiet {
         print_summary(&result.summary, &args.out);
     }
-    Ok(())
+    accuracy_met(&result.summary)
+}
+
+/// An accuracy run that did not reach its accuracy fails (exit 1) once its outputs and
+/// summary are written.
+pub(crate) fn accuracy_met(s: &run::Summary) -> Result<(), signorini::Error> {
+    match s.accuracy.as_ref().and_then(|a| a.failure()) {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
 }
 
 pub(crate) fn progress_sink(quiet: bool) -> Box<dyn Progress> {
@@ -120,7 +129,11 @@ pub(crate) fn scene_out(args: &SceneArgs, scene: &Scene) -> PathBuf {
 
 pub(crate) fn run_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     args.output.validate()?;
-    let scene = Scene::from_file_with(&args.scene, &args.set)?;
+    let mut set = args.set.clone();
+    if let Some(tol) = args.accuracy {
+        set.push(format!("time.accuracy={tol:e}"));
+    }
+    let scene = Scene::from_file_with(&args.scene, &set)?;
     let out = scene_out(args, &scene);
     if !args.quiet {
         err!(
@@ -142,7 +155,7 @@ pub(crate) fn run_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     if !args.quiet {
         print_summary(&result.summary, &out);
     }
-    Ok(())
+    accuracy_met(&result.summary)
 }
 
 pub(crate) fn run_example(

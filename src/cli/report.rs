@@ -22,6 +22,29 @@ pub(crate) fn print_summary(s: &run::Summary, out: &std::path::Path) {
             s.frame_wait_seconds
         );
     }
+    if let Some(a) = &s.accuracy {
+        out!(
+            "accuracy            asked {:.1e}: estimated impulse history {:.2e}, energy {:.2e}, gaps {:.2e}, state {:.2e} ({}); bounded by {}",
+            a.target,
+            a.estimated.impulse_history,
+            a.estimated.energy,
+            a.estimated.gaps,
+            a.estimated.state,
+            if a.met { "met" } else { "NOT met" },
+            a.bounded_by
+        );
+        out!(
+            "steps chosen        {} windows of two steps, {} rejected, {} steps taken in all; h from {:.3e} to {:.3e} s (ladder {:.3e} … {:.3e} s); {} window(s) at the floor",
+            a.windows,
+            a.rejected,
+            a.steps_taken,
+            a.dt_min_used,
+            a.dt_max_used,
+            a.ladder.first().copied().unwrap_or(f64::NAN),
+            a.ladder.last().copied().unwrap_or(f64::NAN),
+            a.floor_windows
+        );
+    }
     out!("max violation       {:.3e} m", s.max_violation);
     out!(
         "iterations          newton {:.3}/{}  projection {:.3}/{}  index-set {:.3}/{}  lcp {:.3}/{} (mean/max); caps hit {}",

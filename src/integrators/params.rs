@@ -67,6 +67,7 @@ impl SchemeKind {
             prescribed: theta,
             nonlinear: theta,
             theta_energy: theta,
+            variable_step: theta,
         }
     }
 }
@@ -86,6 +87,9 @@ pub struct Capabilities {
     /// The θ-method's discrete energy balance holds (Schatzman–Paoli's velocity is a
     /// central difference, whose energy is not the θ-method's).
     pub theta_energy: bool,
+    /// The step may change between steps ([`crate::integrators::Integrator::set_dt`]): a
+    /// one-step scheme; the accuracy mode needs it.
+    pub variable_step: bool,
 }
 
 /// Activation forecast `ḡ_{k+1}` for the velocity-level schemes (sec. 4.4).

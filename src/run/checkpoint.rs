@@ -85,6 +85,21 @@ pub struct RunState {
     pub energy_excess: Bits,
     /// The per-step force trace (empty beyond `FORCE_TRACE_MAX_STEPS`).
     pub trace: Option<Floats>,
+    /// The step of each trace sample, once the step varied (the accuracy mode).
+    #[serde(default)]
+    pub trace_dt: Option<Floats>,
+    /// The step of each sample of the first contact interval so far.
+    #[serde(default)]
+    pub contact_dt: Floats,
+    /// Start time of the first contact interval's first sample.
+    #[serde(default)]
+    pub first_contact_start: Bits,
+    /// `Σ (Σ P)` over the run.
+    #[serde(default)]
+    pub total_impulse: Bits,
+    /// The step varied during the run.
+    #[serde(default)]
+    pub varied: bool,
     /// First step with a positive impulse.
     pub first_contact: Option<usize>,
     /// Forces of the first contact interval so far.
@@ -113,6 +128,9 @@ pub struct RunState {
     /// The probes' values recorded so far (`run::probes::ProbeSet::save`).
     #[serde(default)]
     pub probes: Vec<Floats>,
+    /// The accuracy mode's controller after the checkpointed window.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub accuracy: Option<super::accuracy::ControllerState>,
 }
 
 /// A running SHA-256 of a history file's first `bytes` bytes: each checkpoint reads only

@@ -12,15 +12,17 @@ impl RunInProgress {
     /// that would only resume a finished run, and forms the [`Summary`].
     pub fn finish(self, integ: &mut dyn Integrator) -> Result<RunResult, Error> {
         let done = integ.state().step;
-        if done < self.steps {
+        if !self.is_done(integ) {
             return Err(Error::Numerical(format!(
-                "the run was finished at step {done} of {}",
-                self.steps
+                "the run was finished at step {done} of {} (t = {:e} s)",
+                self.steps,
+                integ.state().time
             )));
         }
         let RunInProgress {
             obs,
             steps,
+            control,
             elements,
             theta,
             reference,
@@ -31,8 +33,11 @@ impl RunInProgress {
             _lock,
             ..
         } = self;
-        let h = obs.h;
+        // an accuracy run's steps are those it took
+        let steps = if control.is_some() { done } else { steps };
+        let accuracy = control.as_ref().map(|c| c.summary(energy0));
         let t_fin = Instant::now();
+        let obs_h = obs.h;
         let RunObserver {
             acc,
             tracker,
@@ -86,12 +91,12 @@ impl RunInProgress {
         let s = integ.state();
         let sys = integ.system();
         let energy1 = sys.total_energy(s.time, &s.q, &s.v);
-        let contact = reference.map(|r| contact_summary(&tracker, h, sys, &s.v, r));
+        let contact = reference.map(|r| contact_summary(&tracker, sys, &s.v, r));
         let summary = Summary {
             scheme: integ.name().to_string(),
             elements,
             dofs: s.q.len(),
-            dt: h,
+            dt: obs_h,
             theta,
             steps,
             t_end: s.time,
@@ -142,9 +147,14 @@ impl RunInProgress {
             model_seconds: 0.0,
             integrator_seconds: 0.0,
             parameters,
+            accuracy,
         };
         Ok(RunResult {
             summary,
+            dt: match (&tracker.trace, tracker.trace_dt) {
+                (Some(_), Some(d)) => d,
+                _ => Vec::new(),
+            },
             force: tracker.trace.unwrap_or_default(),
             state: integ.state().clone(),
         })

@@ -14,6 +14,7 @@
 //! first contact interval only (and the per-step force up to
 //! [`FORCE_TRACE_MAX_STEPS`], reserved once).
 
+pub mod accuracy;
 pub mod checkpoint;
 mod close;
 pub use close::finish;
@@ -114,6 +115,10 @@ pub struct Monitors {
     pub probes: probes::ProbeSet,
     /// The rotation check (`None`: no linear solid or plane body, or `max_rotation = inf`).
     pub rotations: Option<rotations::RotationCheck>,
+    /// The accuracy mode's request (`time.accuracy`; `None`: every step at the
+    /// integrator's `h`): the run then takes its steps window by window
+    /// ([`accuracy::Controller`]), `steps` being the count at the largest step.
+    pub accuracy: Option<accuracy::AccuracySpec>,
 }
 
 /// [`run`], writing checkpoints when `out.options.checkpoint_every > 0` (then `ckpt`
@@ -137,8 +142,8 @@ pub fn run_checkpointed(
     let mut run = RunInProgress::start(
         integ, steps, elements, theta, checks, reference, parameters, out, ckpt, monitors,
     )?;
-    progress.start(steps);
-    if let Err(e) = run.advance(integ, steps, checks, progress) {
+    progress.start(run.progress_total());
+    if let Err(e) = run.advance(integ, usize::MAX, checks, progress) {
         if matches!(e, Error::Interrupted { .. }) {
             // asked to stop: leave the history and the frames (with their .pvd) readable
             run.close_writers()?;
@@ -168,6 +173,8 @@ pub struct RunInProgress {
     stepping_seconds: f64,
     /// The last step's statistics.
     last: Option<crate::integrators::StepStats>,
+    /// The accuracy mode's controller.
+    control: Option<accuracy::Controller>,
     /// `history.csv` of a run that writes files.
     history_path: Option<std::path::PathBuf>,
     /// Held until the run ends: a second run into the same directory is refused.
@@ -193,7 +200,20 @@ impl RunInProgress {
         let Monitors {
             mut probes,
             rotations,
+            accuracy,
         } = monitors;
+        if let Some(a) = &accuracy
+            && !integ.kind().capabilities().variable_step
+        {
+            return Err(Error::invalid(
+                "time.accuracy",
+                a.tol,
+                &format!(
+                    "{} steps at one h: the accuracy mode needs a one-step scheme",
+                    integ.name()
+                ),
+            ));
+        }
         let h = integ.dt();
         let m = integ.state().gap.len();
         let resume = ckpt.as_ref().and_then(|c| c.resume);
@@ -342,7 +362,18 @@ impl RunInProgress {
         let output_seconds = t0.elapsed().as_secs_f64();
         let mut obs = RunObserver {
             acc: Acc::default(),
-            tracker: ContactTracker::new(steps, plan.is_none(), reference.is_some()),
+            tracker: ContactTracker::new(
+                // an accuracy run takes at least `steps` steps (every step ≤ `dt_max`)
+                if accuracy.is_some() {
+                    steps.saturating_mul(2)
+                } else {
+                    steps
+                },
+                plan.is_none(),
+                reference.is_some(),
+                h,
+            ),
+            windowed: accuracy.is_some(),
             writers,
             h,
             plan,
@@ -381,7 +412,16 @@ impl RunInProgress {
                     .restore(c.run.energy_audit.map(|b| b.0), &integ.state().q);
             }
         }
+        let control = accuracy.map(|spec| {
+            accuracy::Controller::new(
+                spec,
+                integ,
+                checks,
+                resume.and_then(|c| c.run.accuracy.clone()),
+            )
+        });
         Ok(RunInProgress {
+            control,
             obs,
             steps,
             elements,
@@ -397,9 +437,29 @@ impl RunInProgress {
         })
     }
 
-    /// The steps of the whole run.
+    /// The steps of the whole run (of an accuracy run, its steps at the largest step:
+    /// it takes at least these).
     pub fn steps(&self) -> usize {
         self.steps
+    }
+
+    /// What progress counts to: the steps, or (an accuracy run, whose steps are not known
+    /// before) thousandths of the span.
+    pub fn progress_total(&self) -> usize {
+        if self.control.is_some() {
+            1000
+        } else {
+            self.steps
+        }
+    }
+
+    /// Whether `integ` has reached the run's end: its last step, or (an accuracy run) its
+    /// end time.
+    pub fn is_done(&self, integ: &dyn Integrator) -> bool {
+        match &self.control {
+            Some(c) => c.done(integ.state().time),
+            None => integ.state().step >= self.steps,
+        }
     }
 
     /// Steps `integ` through [`drive_to`] up to step `until` (at most the run's last),
@@ -413,6 +473,11 @@ impl RunInProgress {
         progress: &mut dyn Progress,
     ) -> Result<(), Error> {
         let start = Instant::now();
+        if self.control.is_some() {
+            let r = self.advance_windows(integ, until, checks, progress);
+            self.stepping_seconds += start.elapsed().as_secs_f64();
+            return r;
+        }
         let last = &mut self.last;
         let mut keep = |_: &dyn Integrator, st: &crate::integrators::StepStats, _: bool| {
             *last = Some(*st);
@@ -428,6 +493,63 @@ impl RunInProgress {
         );
         self.stepping_seconds += start.elapsed().as_secs_f64();
         r
+    }
+
+    /// [`RunInProgress::advance`] of an accuracy run: window by window
+    /// ([`accuracy::Controller::window_step`]) until step `until` is passed or the run's
+    /// end reached; a checkpoint after a window that passed a multiple of the checkpoint
+    /// stride (never inside a window: a resumed run starts its next window where the
+    /// uninterrupted one does); progress in thousandths of the span.
+    fn advance_windows(
+        &mut self,
+        integ: &mut dyn Integrator,
+        until: usize,
+        checks: &RunChecks,
+        progress: &mut dyn Progress,
+    ) -> Result<(), Error> {
+        let Some(ctrl) = self.control.as_mut() else {
+            return Ok(());
+        };
+        let t_end = ctrl.spec().t_end;
+        let mut reported = ((integ.state().time / t_end) * 1000.0) as usize;
+        while integ.state().step < until && !ctrl.done(integ.state().time) {
+            let before = integ.state().step;
+            let last = &mut self.last;
+            let mut keep = |_: &dyn Integrator, st: &crate::integrators::StepStats, _: bool| {
+                *last = Some(*st);
+                Ok(())
+            };
+            let (_, st) = ctrl.window_step(integ, checks, &mut [&mut self.obs, &mut keep])?;
+            let s = integ.state();
+            if let Some((every, abort_after)) =
+                self.obs.plan.as_ref().map(|p| (p.every, p.abort_after))
+            {
+                let done = ctrl.done(s.time);
+                if !done && s.step / every > before / every {
+                    let t0 = Instant::now();
+                    self.obs.checkpoint(integ, Some(ctrl.save()))?;
+                    self.obs.writers.seconds += t0.elapsed().as_secs_f64();
+                }
+                if abort_after.is_some_and(|a| before < a && a <= s.step) {
+                    if let Some(h) = self.obs.writers.history.as_mut() {
+                        h.sync()?;
+                    }
+                    std::process::abort();
+                }
+            }
+            let permille = ((s.time / t_end) * 1000.0).clamp(0.0, 1000.0) as usize;
+            if permille > reported || ctrl.done(s.time) {
+                reported = permille;
+                progress.update_with(permille, 1000, s.time, &st);
+            }
+            if progress.cancelled() {
+                return Err(Error::Interrupted {
+                    step: s.step,
+                    time: s.time,
+                });
+            }
+        }
+        Ok(())
     }
 
     /// The statistics of the last step taken (`None` before the first).

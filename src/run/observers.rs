@@ -188,6 +188,9 @@ pub(super) struct RunObserver {
     pub(super) rotations: Option<super::rotations::RotationCheck>,
     /// The cell that turned most at the last check.
     pub(super) last_rotation: Option<super::rotations::Turned>,
+    /// An accuracy run: its windows write the checkpoints
+    /// ([`super::RunInProgress::advance`]), never a step inside one.
+    pub(super) windowed: bool,
 }
 
 /// Steps between two checks of the energy balance (each costs the two quadratic forms
@@ -262,23 +265,6 @@ impl EnergyCheck {
 
 impl Observer for RunObserver {
     fn observe(&mut self, integ: &dyn Integrator, st: &StepStats, last: bool) -> Result<(), Error> {
-        // the contact trace, its summary and the probes measure on the run's one step:
-        // a step changed under them (`Integrator::set_dt`) would be measured wrong
-        if integ.dt().to_bits() != self.h.to_bits() {
-            let s = integ.state();
-            return Err(Error::RunFailed {
-                step: s.step,
-                time: s.time,
-                contact: None,
-                detail: format!(
-                    "the step changed from h = {:e} s to {:e} s: a run's measurements \
-                     (contact trace and summary, probes) are taken at the step it started \
-                     with",
-                    self.h,
-                    integ.dt()
-                ),
-            });
-        }
         self.acc.add(st);
         if let Some(e) = self.energy.as_mut() {
             e.observe(integ, last, &mut self.acc.energy_excess)?;
@@ -289,15 +275,22 @@ impl Observer for RunObserver {
         {
             self.last_rotation = r.check(s.step, s.time, &s.q)?;
         }
-        let f = s.impulse.iter().sum::<f64>() / self.h;
+        // each step measured over its own h (the accuracy mode varies it)
+        let h = integ.dt();
+        let f = s.impulse.iter().sum::<f64>() / h;
         let g = s.gap.iter().copied().fold(f64::INFINITY, f64::min);
-        self.tracker.push(s.step - 1, f, g);
-        self.probes.observe(s.time, self.h, &s.q, last);
+        self.tracker.push(s.step - 1, f, g, s.time, h);
+        self.probes.observe(s.time, h, &s.q, last);
         self.writers.observe(integ, st, last)?;
-        if let Some((every, abort_after)) = self.plan.as_ref().map(|p| (p.every, p.abort_after)) {
+        if let Some((every, abort_after)) = self
+            .plan
+            .as_ref()
+            .filter(|_| !self.windowed)
+            .map(|p| (p.every, p.abort_after))
+        {
             if !last && s.step.is_multiple_of(every) {
                 let t0 = Instant::now();
-                self.checkpoint(integ)?;
+                self.checkpoint(integ, None)?;
                 self.writers.seconds += t0.elapsed().as_secs_f64();
             }
             if abort_after == Some(s.step) {
@@ -313,7 +306,11 @@ impl Observer for RunObserver {
 
 impl RunObserver {
     /// Flushes the history, waits for the queued frames and writes the checkpoint.
-    pub(super) fn checkpoint(&mut self, integ: &dyn Integrator) -> Result<(), Error> {
+    pub(super) fn checkpoint(
+        &mut self,
+        integ: &dyn Integrator,
+        accuracy: Option<super::accuracy::ControllerState>,
+    ) -> Result<(), Error> {
         let Some(p) = &mut self.plan else {
             return Ok(());
         };
@@ -356,6 +353,11 @@ impl RunObserver {
                 .map(Bits),
             energy_excess: Bits(a.energy_excess),
             trace: t.trace.clone().map(Floats),
+            trace_dt: t.trace_dt.clone().map(Floats),
+            contact_dt: Floats(t.dt.clone()),
+            first_contact_start: Bits(t.first_time),
+            total_impulse: Bits(t.total_impulse),
+            varied: t.varied,
             first_contact: t.first,
             contact_force: Floats(t.force.clone()),
             contact_min_gap: Floats(t.min_gap.clone()),
@@ -368,6 +370,7 @@ impl RunObserver {
             frames: self.writers.frame_count,
             closed_before: self.writers.closed_before,
             probes: self.probes.save().into_iter().map(Floats).collect(),
+            accuracy,
         };
         Checkpoint {
             format: checkpoint::FORMAT.to_string(),
@@ -408,6 +411,11 @@ impl RunObserver {
         a.energy_excess = r.energy_excess.0;
         let t = &mut self.tracker;
         t.trace = r.trace.as_ref().map(|f| f.0.clone());
+        t.trace_dt = r.trace_dt.as_ref().map(|f| f.0.clone());
+        t.dt = r.contact_dt.0.clone();
+        t.first_time = r.first_contact_start.0;
+        t.total_impulse = r.total_impulse.0;
+        t.varied = r.varied;
         t.first = r.first_contact;
         t.force = r.contact_force.0.clone();
         t.min_gap = r.contact_min_gap.0.clone();

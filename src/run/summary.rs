@@ -255,6 +255,10 @@ pub struct Summary {
     pub integrator_seconds: f64,
     /// The scene parameters as run.
     pub parameters: serde_json::Value,
+    /// The accuracy mode (`time.accuracy`): what was asked, what the run estimates, the
+    /// steps it chose ([`super::accuracy`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub accuracy: Option<super::accuracy::AccuracySummary>,
 }
 
 /// What [`run_bar`](crate::app::run_bar) returns: the summary and the per-step contact force.
@@ -265,6 +269,9 @@ pub struct RunResult {
     /// checkpoints (a checkpoint does not grow with the run) and beyond
     /// [`FORCE_TRACE_MAX_STEPS`](super::FORCE_TRACE_MAX_STEPS).
     pub force: Vec<f64>,
+    /// The step of each entry of `force` (s) when the step varied during the run (the
+    /// accuracy mode); empty when every step was the summary's `dt`.
+    pub dt: Vec<f64>,
     /// The state after the last step (one copy, made once at the end: the Python
     /// package's `sim.q`, `sim.v`, … after `run()`).
     pub state: crate::integrators::State,

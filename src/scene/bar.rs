@@ -46,6 +46,13 @@ pub struct BarScene {
     pub mass: MassKind,
     /// Scheme and its parameters (default Algorithm 2, θ = 1/2, `M̂⁻¹` metric).
     pub scheme: SchemeParams,
+    /// The accuracy mode ([`crate::run::accuracy`]): the relative accuracy asked
+    /// (`--accuracy`); `dt` is then the largest step. `None`: every step is `dt`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub accuracy: Option<f64>,
+    /// The accuracy mode's smallest step (s, `--dt-min`; default `dt / 2¹⁰`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dt_min: Option<f64>,
 }
 
 impl Default for BarScene {
@@ -63,6 +70,8 @@ impl Default for BarScene {
             restitution: 0.0,
             mass: MassKind::Consistent,
             scheme: SchemeParams::default(),
+            accuracy: None,
+            dt_min: None,
         }
     }
 }
@@ -80,7 +89,17 @@ impl BarScene {
         }
     }
 
-    /// Number of steps `round(t_end / dt)`.
+    /// The accuracy mode's request, when `accuracy` is set.
+    pub fn accuracy_spec(&self) -> Option<crate::run::accuracy::AccuracySpec> {
+        crate::scene::file::TimeSpec {
+            accuracy: self.accuracy,
+            dt_min: self.dt_min,
+            ..crate::scene::file::TimeSpec::fixed(self.dt, self.t_end)
+        }
+        .accuracy_spec()
+    }
+
+    /// Number of steps `round(t_end / dt)` (of an accuracy run: at the largest step).
     pub fn steps(&self) -> usize {
         crate::limits::step_count(self.t_end, self.dt, "t-end", "dt").unwrap_or(0)
     }
@@ -112,6 +131,22 @@ impl BarScene {
         check_restitution("restitution", self.restitution)?;
         self.scheme.validate()?;
         crate::limits::step_count(self.t_end, self.dt, "t-end", "dt")?;
+        if let Some(a) = self.accuracy_spec() {
+            a.validate(["accuracy", "dt", "dt-min"])?;
+            if !self.scheme.kind.capabilities().variable_step {
+                return Err(Error::invalid(
+                    "accuracy",
+                    a.tol,
+                    "schatzman-paoli steps at one h: the accuracy mode needs a one-step scheme",
+                ));
+            }
+        } else if let Some(d) = self.dt_min {
+            return Err(Error::invalid(
+                "dt-min",
+                d,
+                "it sets the accuracy mode's smallest step: give --accuracy too",
+            ));
+        }
         self.memory().check("elements", self.elements)?;
         Ok(())
     }

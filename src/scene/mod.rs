@@ -121,7 +121,7 @@ pub fn builtin_scene(name: &str) -> Result<file::Scene, Error> {
         example::ExampleSpec::SliderCrank { .. } => (1e-4, 0.2),
     };
     let scene = file::Scene {
-        time: file::TimeSpec { dt, t_end },
+        time: file::TimeSpec::fixed(dt, t_end),
         scheme: SchemeParams::default(),
         bodies: Vec::new(),
         example: Some(spec),

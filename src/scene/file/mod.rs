@@ -58,6 +58,7 @@ mod mesh_spec;
 mod meshes;
 mod obstacle;
 mod parse;
+mod time;
 mod validate;
 
 pub use arrays::{Rows, arrays_memory};
@@ -152,10 +153,24 @@ pub struct Reference {
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TimeSpec {
-    /// Time step (s).
+    /// Time step (s); in the accuracy mode the first and, unless `dt_max` says otherwise,
+    /// the largest step.
     pub dt: f64,
     /// End time (s).
     pub t_end: f64,
+    /// The accuracy mode ([`crate::run::accuracy`]): the relative accuracy asked of the
+    /// run's observables (contact impulse history, energy, gaps); the run chooses its
+    /// steps on the ladder `dt_max · 2⁻ᵏ` and writes the error it estimates. `None`:
+    /// every step is `dt`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub accuracy: Option<f64>,
+    /// The accuracy mode's largest step (s; default `dt`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt_max: Option<f64>,
+    /// The accuracy mode's smallest step (s; default `dt_max / 2¹⁰`): a window that
+    /// misses the accuracy at it is kept and the run reports it (exit 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt_min: Option<f64>,
 }
 
 /// `[[bodies]]`.

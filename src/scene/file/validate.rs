@@ -6,9 +6,55 @@
 use super::*;
 
 impl Scene {
+    /// The accuracy mode's keys: `time.accuracy` in (0, 1), `0 < time.dt_min ≤
+    /// time.dt_max ≤ time.t_end`, a scheme that can vary its step; `dt_max` and `dt_min`
+    /// only beside `accuracy`.
+    fn validate_accuracy(&self) -> Result<(), Error> {
+        let t = &self.time;
+        let Some(spec) = t.accuracy_spec() else {
+            for (key, v) in [("time.dt_max", t.dt_max), ("time.dt_min", t.dt_min)] {
+                if let Some(v) = v {
+                    return Err(Error::invalid(
+                        key,
+                        v,
+                        "it sets the accuracy mode's ladder: set time.accuracy too",
+                    ));
+                }
+            }
+            return Ok(());
+        };
+        let keys = if t.dt_max.is_some() {
+            ["time.accuracy", "time.dt_max", "time.dt_min"]
+        } else {
+            ["time.accuracy", "time.dt", "time.dt_min"]
+        };
+        spec.validate(keys)?;
+        if spec.dt_max > t.t_end {
+            return Err(Error::invalid(
+                keys[1],
+                spec.dt_max,
+                &format!("expected at most time.t_end = {:e} s", t.t_end),
+            ));
+        }
+        if !self.scheme.kind.capabilities().variable_step {
+            return Err(Error::invalid(
+                "time.accuracy",
+                spec.tol,
+                &format!(
+                    "scheme.kind = \"{}\" is a two-step scheme that steps at one h: the \
+                     accuracy mode needs a one-step scheme (moreau_jean, \
+                     combined_projection, direct_projection, trapezoid)",
+                    self.scheme.kind.name()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// Range checks that serde cannot express.
     pub fn validate(&self) -> Result<(), Error> {
         crate::limits::step_count(self.time.t_end, self.time.dt, "time.t_end", "time.dt")?;
+        self.validate_accuracy()?;
         self.scheme.validate().map_err(|e| prefix("scheme", e))?;
         self.output.validate().map_err(|e| prefix("output", e))?;
         if self.example.is_some() {

@@ -1,0 +1,178 @@
+//! The accuracy mode (issue 50, `src/run/accuracy.rs`) against closed forms: the run
+//! asked for a relative accuracy TOL chooses its steps and its observables meet TOL
+//! against the analytic answer (the bouncing ball's impact times, the impacting bar's
+//! plateau, duration and release velocity, whose space discretization error at N = 1000
+//! is below 0.3 %, far under the TOL asked); what it cannot reach it says, with exit
+//! code 1; bad requests are refused with exit code 2.
+
+use std::process::Command;
+
+use signorini::app::{run_bar, run_scene};
+use signorini::run::Quiet;
+use signorini::scene::bar::BarScene;
+use signorini::scene::file::Scene;
+
+fn cli(args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .args(args)
+        .output()
+        .expect("the binary runs");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The bouncing ball of eq. 7 (f = −2, e = ½, q₀ = 1): impacts at t = 1, 2, 2.5, 2.75,
+/// 2.875. At TOL = 1e-2 and 1e-3 every impact time is within TOL of the closed form
+/// (relative), the run reports `met`, and its largest step stays the scene's 1e-3 s.
+#[test]
+fn bouncing_ball_impact_times_meet_the_accuracy_asked() {
+    let exact = [1.0, 2.0, 2.5, 2.75, 2.875];
+    for tol in [1e-2, 1e-3] {
+        let mut s = Scene::from_file_with(
+            std::path::Path::new("meshes/bouncing_ball.toml"),
+            &[format!("time.accuracy={tol:e}"), "time.t_end=2.9".into()],
+        )
+        .unwrap();
+        s.output.plots = false;
+        let r = run_scene(&s, None, &mut Quiet).unwrap();
+        let a = r.summary.accuracy.as_ref().expect("an accuracy summary");
+        assert!(a.met, "tol {tol}: {a:?}");
+        assert!(a.dt_max_used <= 1e-3 * (1.0 + 1e-12));
+        assert_eq!(r.dt.len(), r.force.len(), "the trace carries its steps");
+        // impact = first step of a run of positive forces, timed at its end
+        let mut t = 0.0;
+        let mut hits = Vec::new();
+        let mut closed = false;
+        for (&f, &h) in r.force.iter().zip(&r.dt) {
+            t += h;
+            if f > 0.0 && !closed {
+                hits.push(t);
+            }
+            closed = f > 0.0;
+        }
+        assert!(hits.len() >= exact.len(), "tol {tol}: impacts {hits:?}");
+        for (k, (&got, &want)) in hits.iter().zip(&exact).enumerate() {
+            assert!(
+                (got - want).abs() <= tol * want,
+                "tol {tol}: impact {k} at {got}, exact {want}"
+            );
+        }
+    }
+}
+
+/// The impacting bar (N = 1000) started at the largest step dt = 1e-5 s (50× the
+/// reference run's): at TOL = 1e-1 and 1e-2 the plateau, the duration and the release
+/// velocity are within TOL of E S |v0| / c0, 2L/c0 and |v0|, while the same bar at a
+/// fixed 1e-5 s misses the release velocity by 5 % (the check that the mode did
+/// something).
+#[test]
+fn impacting_bar_meets_the_accuracy_asked_from_a_coarse_step() {
+    let fixed = run_bar(
+        &BarScene {
+            dt: 1e-5,
+            ..BarScene::default()
+        },
+        None,
+        &mut Quiet,
+    )
+    .unwrap();
+    let c = fixed.summary.contact.unwrap();
+    let release = (c.release_velocity / c.analytic_release_velocity - 1.0).abs();
+    assert!(release > 0.04, "fixed 1e-5 s: release error {release}");
+    for tol in [1e-1, 1e-2] {
+        let scene = BarScene {
+            dt: 1e-5,
+            accuracy: Some(tol),
+            ..BarScene::default()
+        };
+        let r = run_bar(&scene, None, &mut Quiet).unwrap();
+        let a = r.summary.accuracy.as_ref().unwrap();
+        assert!(a.met, "tol {tol}: {a:?}");
+        let c = r.summary.contact.unwrap();
+        for (name, got, want) in [
+            ("plateau", c.plateau_force, c.analytic_force),
+            ("duration", c.duration, c.analytic_duration),
+            (
+                "release velocity",
+                c.release_velocity,
+                c.analytic_release_velocity,
+            ),
+            ("total impulse", c.total_impulse, c.analytic_total_impulse),
+        ] {
+            assert!(
+                (got / want - 1.0).abs() <= tol,
+                "tol {tol}: {name} {got} against {want}"
+            );
+        }
+        // the steps vary over the ladder (small at the onset and the release)
+        assert!(a.dt_max_used >= 4.0 * a.dt_min_used, "{a:?}");
+    }
+}
+
+/// A ladder of one rung (dt_min = dt) cannot refine: the bar at dt = 1e-5 s asked for
+/// 1e-3 reports that it did not reach it and exits 1, with its summary written.
+#[test]
+fn a_step_floor_too_high_fails_with_exit_code_1() {
+    let out = std::env::temp_dir().join(format!("signorini-acc-floor-{}", std::process::id()));
+    let (code, err) = cli(&[
+        "bar",
+        "--dt",
+        "1e-5",
+        "--accuracy",
+        "1e-3",
+        "--dt-min",
+        "1e-5",
+        "--no-fields",
+        "--no-plots",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("did not reach time.accuracy"), "{err}");
+    assert!(err.contains("dt_min"), "{err}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["accuracy"]["met"], false);
+    assert!(s["accuracy"]["floor_windows"].as_u64().unwrap() > 0);
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// Bad requests: an accuracy outside (0, 1), a floor above the largest step, a floor
+/// without the mode, the two-step Schatzman–Paoli scheme: exit code 2, the key named.
+#[test]
+fn bad_accuracy_requests_are_refused_with_exit_code_2() {
+    let dir = std::env::temp_dir().join(format!("signorini-acc-bad-{}", std::process::id()));
+    let out = dir.to_str().unwrap().to_string();
+    for (args, key) in [
+        (vec!["--accuracy", "0"], "accuracy"),
+        (vec!["--accuracy", "1.5"], "accuracy"),
+        (vec!["--accuracy", "NaN"], "accuracy"),
+        (vec!["--accuracy", "1e-2", "--dt-min", "1e-3"], "dt-min"),
+        (vec!["--dt-min", "1e-9"], "dt-min"),
+        (
+            vec!["--accuracy", "1e-2", "--scheme", "schatzman-paoli"],
+            "accuracy",
+        ),
+    ] {
+        let mut a = vec!["bar", "--quiet", "--out", &out];
+        a.extend(args.iter().copied());
+        let (code, err) = cli(&a);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(err.contains(key), "{args:?}: {err}");
+    }
+    let (code, err) = cli(&[
+        "run",
+        "meshes/bouncing_ball.toml",
+        "--quiet",
+        "--out",
+        &out,
+        "--set",
+        "time.dt_min=1e-6",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("time.dt_min"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
