@@ -601,3 +601,47 @@ fn steps_after_a_change_of_step_do_not_allocate() {
         }
     }
 }
+
+/// Issue 50: the accuracy mode's windows (a step of 2h and two of h from one snapshot,
+/// the snapshots restored for the observers) allocate nothing once the snapshots hold a
+/// state and the ladder's steps are factored: the bar on a one-rung ladder (steps h and
+/// 2h), three schemes, dense and column Delassus data.
+#[test]
+fn accuracy_windows_do_not_allocate() {
+    use signorini::run::accuracy::{AccuracySpec, Controller};
+    for kind in [
+        SchemeKind::MoreauJean,
+        SchemeKind::DirectProjection,
+        SchemeKind::CombinedProjection,
+    ] {
+        for delassus in [DelassusKind::Dense, DelassusKind::Columns] {
+            let mut s = BarScene {
+                elements: 100,
+                dt: 2e-6,
+                ..BarScene::default()
+            };
+            s.scheme.kind = kind;
+            s.scheme.delassus = delassus;
+            let m = s.build().unwrap();
+            let checks = signorini::run::RunChecks::new(&s.scheme, 1.0);
+            let mut integ = m.into_integrator(&s.scheme, s.dt).unwrap();
+            let spec = AccuracySpec {
+                tol: 1e-2,
+                dt_max: 2e-6,
+                dt_min: 2e-6,
+                t_end: 1e-3,
+            };
+            let mut ctrl = Controller::new(spec, integ.as_ref(), &checks, 0.5, None);
+            let label = format!("{} {delassus:?}", kind.name());
+            for _ in 0..3 {
+                ctrl.window_step(integ.as_mut(), &checks, &mut []).unwrap();
+            }
+            let before = ALLOCS.with(|c| c.get());
+            for _ in 0..100 {
+                ctrl.window_step(integ.as_mut(), &checks, &mut []).unwrap();
+            }
+            let n = ALLOCS.with(|c| c.get()) - before;
+            assert_eq!(n, 0, "{label}: 100 windows allocated {n} times");
+        }
+    }
+}

@@ -218,7 +218,9 @@ impl RunInProgress {
         let m = integ.state().gap.len();
         let resume = ckpt.as_ref().and_then(|c| c.resume);
         if let Some(c) = resume {
-            if c.steps != steps || c.integrator.step >= steps {
+            // an accuracy run's count is at its largest step: it takes more
+            let past = accuracy.is_none() && c.integrator.step >= steps;
+            if c.steps != steps || past || c.run.accuracy.is_some() != accuracy.is_some() {
                 return Err(Error::invalid(
                     "checkpoint steps",
                     format!("{} (at step {})", c.steps, c.integrator.step),
@@ -417,6 +419,7 @@ impl RunInProgress {
                 spec,
                 integ,
                 checks,
+                theta,
                 resume.and_then(|c| c.run.accuracy.clone()),
             )
         });

@@ -120,6 +120,9 @@ pub struct Controller {
     q_a: Vec<f64>,
     diff: Vec<f64>,
     scratch: Vec<f64>,
+    /// The local order `p` of smooth windows: 2 at θ = ½ (the trapezoidal rule), 1
+    /// otherwise.
+    order: u32,
     /// Floor of the energy scale (J), of the gap scale (m) and of the displacement
     /// scale (m·√kg).
     floors: [f64; 3],
@@ -128,12 +131,25 @@ pub struct Controller {
 /// Statistics of the two kept steps of a window.
 type Kept = (StepStats, StepStats);
 
+/// One window's comparison ([`Controller::compare`]).
+struct Window {
+    /// Ratios of the estimates to their allowances, in [`OBSERVABLES`] order.
+    ratios: [f64; 4],
+    /// The estimates of `B`'s error, in the same order.
+    d: [f64; 4],
+    /// No contact opened or closed in it.
+    smooth: bool,
+    /// `|P_B|`, `|E_B|`, the largest gap change, `‖q_B − q₀‖_M`: the scales' new values.
+    values: [f64; 4],
+}
+
 impl Controller {
     /// A controller for `spec` starting at rung 0 (`dt_max`), or at `resume`'s state.
     pub fn new(
         spec: AccuracySpec,
         integ: &dyn Integrator,
         checks: &RunChecks,
+        theta: f64,
         resume: Option<ControllerState>,
     ) -> Self {
         use crate::integrators::saved::Bits;
@@ -161,6 +177,7 @@ impl Controller {
             q_a: vec![0.0; s.q.len()],
             diff: vec![0.0; s.q.len()],
             scratch: vec![0.0; 2 * sys.prescribed_dofs()],
+            order: if theta == 0.5 { 2 } else { 1 },
             floors: [
                 checks.energy_floor.joules(sys),
                 1e-9 * size,
@@ -269,29 +286,41 @@ impl Controller {
                     continue;
                 }
             };
-            let ratios = if a_ok {
-                self.ratios(integ, big, (p_a, e_a), e0)
+            let w = if a_ok {
+                Some(self.compare(integ, big, (p_a, e_a), e0))
             } else {
-                [f64::INFINITY, 0.0, 0.0, 0.0]
+                None
             };
+            let ratios = w
+                .as_ref()
+                .map_or([f64::INFINITY, 0.0, 0.0, 0.0], |w| w.ratios);
             let (worst, eps) = ratios
                 .iter()
                 .copied()
                 .enumerate()
                 .fold((0, 0.0f64), |m, (i, r)| if r > m.1 { (i, r) } else { m });
-            let smooth = self.smooth(integ.state());
+            let smooth = w.as_ref().is_some_and(|w| w.smooth);
             if eps > 1.0 && !at_floor {
                 self.st.bounded[worst] += 1;
-                self.reject(eps.powf(if smooth { 0.5 } else { 1.0 }));
+                self.reject(eps.powf(if smooth { 1.0 / self.order as f64 } else { 1.0 }));
                 integ.restore(&self.s0)?;
                 continue;
             }
             // accepted: the sums of the estimates, the scales, the next rung
-            self.accept(integ, (p_a, e_a), smooth);
+            match &w {
+                Some(w) => self.accept(w),
+                None => self.accept_scales(integ),
+            }
             if eps > 1.0 {
                 self.st.counts[3] += 1;
             }
-            let grow = eps <= if smooth { 0.125 } else { 0.25 };
+            // the doubled window's ratio is 2^p times this one's
+            let grow = eps
+                <= if smooth {
+                    0.5f64.powi(self.order as i32 + 1)
+                } else {
+                    0.25
+                };
             if grow {
                 self.st.calm += 1;
             } else {
@@ -374,19 +403,40 @@ impl Controller {
         (change, diff)
     }
 
-    /// The ratios of the three observables' differences to their allowances.
-    fn ratios(
+    /// The window's differences `|A − B|` (each divided by `2ᵖ − 1` in a smooth
+    /// window, Richardson's estimate of `B`'s error; as they are where a contact opened
+    /// or closed) and their ratios to the allowances (module doc).
+    fn compare(
         &mut self,
         integ: &dyn Integrator,
         big: f64,
         (p_a, e_a): (f64, f64),
         e0: f64,
-    ) -> [f64; 4] {
+    ) -> Window {
         let tol = self.spec.tol;
         let share = big / self.spec.t_end;
         let s = integ.state();
+        let smooth = self.smooth(s);
+        let rf = if smooth {
+            ((1u32 << self.order) - 1) as f64
+        } else {
+            1.0
+        };
         let p_b = self.impulse_b(s);
-        let cumulative = self.st.scales[0].0 + p_b.abs();
+        let e_b = {
+            let (k, v) = integ
+                .system()
+                .energies(s.time, &s.q, &s.v, &mut self.scratch);
+            k + v
+        };
+        let (change, d_g) = self.gaps(s);
+        let (d_x, u) = self.state_difference(integ);
+        let d = [
+            (p_a - p_b).abs() / rf,
+            (e_a - e_b).abs() / rf,
+            d_g / rf,
+            d_x / rf,
+        ];
         let ratio = |d: f64, allow: f64| {
             if d == 0.0 {
                 0.0
@@ -396,34 +446,26 @@ impl Controller {
                 f64::INFINITY
             }
         };
-        let r_p = ratio(
-            (p_a - p_b).abs(),
-            tol * (0.5 * p_b.abs() + 0.5 * cumulative * share),
-        );
-        let e_b = {
-            let (k, v) = integ
-                .system()
-                .energies(s.time, &s.q, &s.v, &mut self.scratch);
-            k + v
-        };
+        let cumulative = self.st.scales[0].0 + p_b.abs();
         let e_scale = self.st.scales[1]
             .0
             .max(e0.abs())
             .max(e_b.abs())
             .max(self.floors[0]);
-        let r_e = ratio(
-            (e_a - e_b).abs(),
-            tol * (0.5 * (e_b - e0).abs() + 0.5 * e_scale * share),
-        );
-        let (change, diff) = self.gaps(s);
         let ell = self.st.scales[2].0.max(change).max(self.floors[1]);
-        let smooth = self.smooth(s);
-        let local = if smooth { share } else { 1.0 };
-        let r_g = ratio(diff, tol * ell * local);
-        let (d_x, u) = self.state_difference(integ);
         let u_scale = self.st.scales[3].0.max(u).max(self.floors[2]);
-        let r_x = ratio(d_x, tol * u_scale * local);
-        [r_p, r_e, r_g, r_x]
+        let local = if smooth { share } else { 1.0 };
+        Window {
+            ratios: [
+                ratio(d[0], tol * (0.5 * p_b.abs() + 0.5 * cumulative * share)),
+                ratio(d[1], tol * (0.5 * (e_b - e0).abs() + 0.5 * e_scale * share)),
+                ratio(d[2], tol * ell * local),
+                ratio(d[3], tol * u_scale * local),
+            ],
+            d,
+            smooth,
+            values: [p_b.abs(), e_b.abs(), change, u],
+        }
     }
 
     /// `‖q_A − q_B‖_M = √(e_qᵀ M e_q)`, and the same norm of the displacement from the
@@ -434,15 +476,43 @@ impl Controller {
             *d = a - b;
         }
         let e = crate::linalg::quadratic_form(sys.mass.as_ref(), &self.diff);
+        let u = self.displacement(integ);
+        (e.max(0.0).sqrt(), u)
+    }
+
+    /// `‖q − q₀‖_M` of the state.
+    fn displacement(&mut self, integ: &dyn Integrator) -> f64 {
+        let (s, sys) = (integ.state(), integ.system());
         for (d, (a, b)) in self.diff.iter_mut().zip(self.st.q0.0.iter().zip(&s.q)) {
             *d = b - a;
         }
-        let u = crate::linalg::quadratic_form(sys.mass.as_ref(), &self.diff);
-        (e.max(0.0).sqrt(), u.max(0.0).sqrt())
+        crate::linalg::quadratic_form(sys.mass.as_ref(), &self.diff)
+            .max(0.0)
+            .sqrt()
     }
 
     /// Adds an accepted window's differences to the sums and its values to the scales.
-    fn accept(&mut self, integ: &dyn Integrator, (p_a, e_a): (f64, f64), smooth: bool) {
+    fn accept(&mut self, w: &Window) {
+        use crate::integrators::saved::Bits;
+        let sums = &mut self.st.sums;
+        sums[0] = Bits(sums[0].0 + w.d[0]);
+        sums[1] = Bits(sums[1].0 + w.d[1]);
+        if w.smooth {
+            sums[2] = Bits(sums[2].0 + w.d[2]);
+        } else {
+            sums[3] = Bits(sums[3].0.max(w.d[2]));
+        }
+        sums[4] = Bits(sums[4].0 + w.d[3]);
+        let sc = &mut self.st.scales;
+        sc[0] = Bits(sc[0].0 + w.values[0]);
+        sc[1] = Bits(sc[1].0.max(w.values[1]));
+        sc[2] = Bits(sc[2].0.max(w.values[2]));
+        sc[3] = Bits(sc[3].0.max(w.values[3]));
+    }
+
+    /// The scales of a window accepted at the floor without its comparison (the step
+    /// `A` failed): its own values, no difference.
+    fn accept_scales(&mut self, integ: &dyn Integrator) {
         use crate::integrators::saved::Bits;
         let s = integ.state();
         let p_b = self.impulse_b(s);
@@ -452,20 +522,8 @@ impl Controller {
                 .energies(s.time, &s.q, &s.v, &mut self.scratch);
             k + v
         };
-        let (change, diff) = self.gaps(s);
-        let (d_x, u) = self.state_difference(integ);
-        let d_x = if p_a.is_finite() { d_x } else { 0.0 };
-        let sums = &mut self.st.sums;
-        if p_a.is_finite() {
-            sums[4] = Bits(sums[4].0 + d_x);
-            sums[0] = Bits(sums[0].0 + (p_a - p_b).abs());
-            sums[1] = Bits(sums[1].0 + (e_a - e_b).abs());
-            if smooth {
-                sums[2] = Bits(sums[2].0 + diff);
-            } else {
-                sums[3] = Bits(sums[3].0.max(diff));
-            }
-        }
+        let (change, _) = self.gaps(s);
+        let u = self.displacement(integ);
         let sc = &mut self.st.scales;
         sc[0] = Bits(sc[0].0 + p_b.abs());
         sc[1] = Bits(sc[1].0.max(e_b.abs()));
