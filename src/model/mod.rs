@@ -84,6 +84,14 @@ pub struct EnergyForms {
     unloaded: bool,
 }
 
+impl EnergyForms {
+    /// `xᵀ M x` of `sys` (the system these forms were read from) on the fast path of its
+    /// pattern. Does not allocate.
+    pub fn mass_form(&self, sys: &LinearSystem, x: &[f64]) -> f64 {
+        self.mass.eval(sys.mass.as_ref(), x)
+    }
+}
+
 /// A linear structural model `M v̇ + C v + K q = f + G λ` (eq. 1c).
 #[derive(Clone, Debug)]
 pub struct LinearSystem {

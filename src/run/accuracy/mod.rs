@@ -120,6 +120,10 @@ pub struct Controller {
     q_a: Vec<f64>,
     diff: Vec<f64>,
     scratch: Vec<f64>,
+    /// The layouts of `M` and `K` read once (the energies and the mass norms).
+    forms: crate::model::EnergyForms,
+    /// The energy at the state the next window starts from (the last window's `B₂`).
+    e_next: Option<f64>,
     /// The local order `p` of smooth windows: 2 at θ = ½ (the trapezoidal rule), 1
     /// otherwise.
     order: u32,
@@ -141,6 +145,8 @@ struct Window {
     smooth: bool,
     /// `|P_B|`, `|E_B|`, the largest gap change, `‖q_B − q₀‖_M`: the scales' new values.
     values: [f64; 4],
+    /// `E_B`, where the next window starts.
+    energy: f64,
 }
 
 impl Controller {
@@ -177,6 +183,8 @@ impl Controller {
             q_a: vec![0.0; s.q.len()],
             diff: vec![0.0; s.q.len()],
             scratch: vec![0.0; 2 * sys.prescribed_dofs()],
+            forms: sys.energy_forms(),
+            e_next: None,
             order: if theta == 0.5 { 2 } else { 1 },
             floors: [
                 checks.energy_floor.joules(sys),
@@ -206,7 +214,7 @@ impl Controller {
         let s = integ.state();
         let (k, v) = integ
             .system()
-            .energies(s.time, &s.q, &s.v, &mut self.scratch);
+            .energies_with(&self.forms, s.time, &s.q, &s.v, &mut self.scratch);
         k + v
     }
 
@@ -234,7 +242,10 @@ impl Controller {
         use crate::integrators::saved::Bits;
         integ.save_into(&mut self.s0);
         let t0 = integ.state().time;
-        let e0 = self.energy(integ);
+        let e0 = match self.e_next.take() {
+            Some(e) => e,
+            None => self.energy(integ),
+        };
         loop {
             let (big, k) = self.window(t0);
             // a window shortened to end the run starts the rungs below it
@@ -423,12 +434,8 @@ impl Controller {
             1.0
         };
         let p_b = self.impulse_b(s);
-        let e_b = {
-            let (k, v) = integ
-                .system()
-                .energies(s.time, &s.q, &s.v, &mut self.scratch);
-            k + v
-        };
+        let e_b = self.energy(integ);
+        let s = integ.state();
         let (change, d_g) = self.gaps(s);
         let (d_x, u) = self.state_difference(integ);
         let d = [
@@ -465,6 +472,7 @@ impl Controller {
             d,
             smooth,
             values: [p_b.abs(), e_b.abs(), change, u],
+            energy: e_b,
         }
     }
 
@@ -475,7 +483,7 @@ impl Controller {
         for (d, (a, b)) in self.diff.iter_mut().zip(self.q_a.iter().zip(&s.q)) {
             *d = a - b;
         }
-        let e = crate::linalg::quadratic_form(sys.mass.as_ref(), &self.diff);
+        let e = self.forms.mass_form(sys, &self.diff);
         let u = self.displacement(integ);
         (e.max(0.0).sqrt(), u)
     }
@@ -486,14 +494,13 @@ impl Controller {
         for (d, (a, b)) in self.diff.iter_mut().zip(self.st.q0.0.iter().zip(&s.q)) {
             *d = b - a;
         }
-        crate::linalg::quadratic_form(sys.mass.as_ref(), &self.diff)
-            .max(0.0)
-            .sqrt()
+        self.forms.mass_form(sys, &self.diff).max(0.0).sqrt()
     }
 
     /// Adds an accepted window's differences to the sums and its values to the scales.
     fn accept(&mut self, w: &Window) {
         use crate::integrators::saved::Bits;
+        self.e_next = Some(w.energy);
         let sums = &mut self.st.sums;
         sums[0] = Bits(sums[0].0 + w.d[0]);
         sums[1] = Bits(sums[1].0 + w.d[1]);
@@ -516,12 +523,9 @@ impl Controller {
         use crate::integrators::saved::Bits;
         let s = integ.state();
         let p_b = self.impulse_b(s);
-        let e_b = {
-            let (k, v) = integ
-                .system()
-                .energies(s.time, &s.q, &s.v, &mut self.scratch);
-            k + v
-        };
+        let e_b = self.energy(integ);
+        self.e_next = Some(e_b);
+        let s = integ.state();
         let (change, _) = self.gaps(s);
         let u = self.displacement(integ);
         let sc = &mut self.st.scales;
