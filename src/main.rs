@@ -120,6 +120,9 @@ enum Command {
         /// With a scene: only this scheme (repeatable; default every scheme).
         #[arg(long = "scheme", value_enum)]
         schemes: Vec<SchemeKind>,
+        /// `accuracy` only: an accuracy to ask (repeatable; default 1e-1, 1e-2, 1e-3).
+        #[arg(long = "tol", allow_hyphen_values = true)]
+        tols: Vec<f64>,
     },
     /// Measure the speed–accuracy trade of a scene (a file, or `bar` for the reference
     /// bar) over a grid of schemes, time steps, mesh refinements, θ, metrics, friction
@@ -237,6 +240,7 @@ fn main() -> ExitCode {
             out,
             set,
             schemes,
+            tols,
         }) => {
             let dir = out.unwrap_or_else(|| match &scene {
                 Some(p) => PathBuf::from(format!(
@@ -248,7 +252,7 @@ fn main() -> ExitCode {
             });
             let _flush = signorini::linalg::FlushGuard::for_run();
             let result = match &scene {
-                Some(p) => signorini::study::run_on_scene(&name, p, &set, &schemes, &dir),
+                Some(p) => signorini::study::run_on_scene(&name, p, &set, &schemes, &tols, &dir),
                 None if !schemes.is_empty() => Err(signorini::Error::invalid(
                     "--scheme",
                     schemes[0].name(),

@@ -72,6 +72,7 @@ fn scene_extremes_of_the_default_scheme_are_stable_on_the_bar_scene() {
         &scene_path("bar.toml"),
         &[],
         &[SchemeKind::CombinedProjection],
+        &[],
         &dir,
     )
     .unwrap();

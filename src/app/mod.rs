@@ -117,7 +117,7 @@ impl Session {
             (resume.is_some() || out.is_some_and(|o| o.options.checkpoint_every > 0)).then(|| {
                 Checkpointing {
                     source: RunSource::Bar {
-                        scene: scene.clone(),
+                        scene: Box::new(scene.clone()),
                     }
                     .to_value(),
                     // the bar reads no file

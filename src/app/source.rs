@@ -15,8 +15,9 @@ use crate::run::checkpoint::InputFile;
 pub enum RunSource {
     /// The impacting bar (`signorini bar`), with its parameters.
     Bar {
-        /// The bar scene as run.
-        scene: crate::scene::bar::BarScene,
+        /// The bar scene as run (boxed: a bar scene is several times a scene file's
+        /// path and text).
+        scene: Box<crate::scene::bar::BarScene>,
     },
     /// A scene file: its text as run (a later edit of the file does not change the
     /// resumed run) and the directory its relative mesh paths start from.

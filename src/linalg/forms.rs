@@ -23,6 +23,50 @@ pub fn quadratic_form(a: SparseColMatRef<'_, usize, f64>, x: &[f64]) -> f64 {
     parts.iter().sum()
 }
 
+/// `[x₀ᵀ A y₀, x₁ᵀ A y₁, …]` in one walk over a CSC matrix: the matrix is read once for
+/// all `K` pairs (the accuracy mode's comparison of two states reads `M` and `K` once
+/// each instead of once per form). Serial below [`PAR_QUADRATIC_NNZ`] entries, else in
+/// [`QUADRATIC_PARTS`] fixed column ranges added in order (the result does not depend on
+/// the threads). Does not allocate.
+pub fn bilinear_forms<const K: usize>(
+    a: SparseColMatRef<'_, usize, f64>,
+    pairs: [(&[f64], &[f64]); K],
+) -> [f64; K] {
+    let n = a.ncols();
+    let walk = |cols: std::ops::Range<usize>| -> [f64; K] {
+        let (col_ptr, row_idx, val) = (a.col_ptr(), a.row_idx(), a.val());
+        let mut s = [0.0; K];
+        for j in cols {
+            let r = col_ptr[j]..col_ptr[j + 1];
+            let mut c = [0.0; K];
+            for (&i, &v) in row_idx[r.clone()].iter().zip(&val[r]) {
+                for k in 0..K {
+                    c[k] += v * pairs[k].1[i];
+                }
+            }
+            for k in 0..K {
+                s[k] += c[k] * pairs[k].0[j];
+            }
+        }
+        s
+    };
+    if a.compute_nnz() <= PAR_QUADRATIC_NNZ {
+        return walk(0..n);
+    }
+    use rayon::prelude::*;
+    let mut parts = [[0.0; K]; QUADRATIC_PARTS];
+    parts.par_iter_mut().enumerate().for_each(|(p, out)| {
+        *out = walk(p * n / QUADRATIC_PARTS..(p + 1) * n / QUADRATIC_PARTS);
+    });
+    let mut s = [0.0; K];
+    for p in &parts {
+        for k in 0..K {
+            s[k] += p[k];
+        }
+    }
+    s
+}
+
 /// `Σ_jk |x_j| |a_jk| |x_k|`: the sum of the absolute terms of `xᵀ A x`, which bounds its
 /// rounding error (`xᵀ A x` is known to about `n ε` of it). Serial, allocation-free.
 pub fn abs_quadratic_form(a: SparseColMatRef<'_, usize, f64>, x: &[f64]) -> f64 {

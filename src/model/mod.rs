@@ -90,6 +90,12 @@ impl EnergyForms {
     pub fn mass_form(&self, sys: &LinearSystem, x: &[f64]) -> f64 {
         self.mass.eval(sys.mass.as_ref(), x)
     }
+
+    /// Whether `M` and `K` both take the general column walk (no rod's three diagonals).
+    pub fn general(&self) -> bool {
+        matches!(self.mass, QuadraticForm::General)
+            && matches!(self.stiffness, QuadraticForm::General)
+    }
 }
 
 /// A linear structural model `M v̇ + C v + K q = f + G λ` (eq. 1c).

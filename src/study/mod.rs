@@ -32,6 +32,7 @@
 //! ([`costs`]) measures a step, a set-up and the memory per size (bars of 10³ … 10⁶
 //! elements, hex8 cubes of 4³ … 16³ cells), in contact and in flight.
 
+pub mod accuracy;
 pub mod bar;
 pub mod costs;
 pub mod extremes;
@@ -60,7 +61,7 @@ use crate::model::point_mass::{oscillator, point_mass, rigid_block};
 use crate::plot::{Curve, lines};
 
 /// The studies `signorini study` knows.
-pub const NAMES: [&str; 8] = [
+pub const NAMES: [&str; 9] = [
     "convergence",
     "projection-multiplier",
     "chattering",
@@ -69,6 +70,7 @@ pub const NAMES: [&str; 8] = [
     "extremes",
     "slider-crank",
     "costs",
+    "accuracy",
 ];
 
 /// A run of the ball: per step the time at the end of the step, height, velocity,
@@ -229,6 +231,13 @@ pub fn run(name: &str, dir: &Path) -> Result<Vec<String>, Error> {
         "extremes" => bar::extremes(dir)?,
         "slider-crank" => slider_crank::study(dir)?,
         "costs" => costs::costs(dir)?,
+        "accuracy" => {
+            return Err(Error::invalid(
+                "study",
+                name,
+                "needs a scene file (`signorini study accuracy meshes/bar.toml`)",
+            ));
+        }
         other => {
             return Err(Error::invalid(
                 "study",
@@ -251,15 +260,39 @@ pub fn run_on_scene(
     scene: &Path,
     overrides: &[String],
     schemes: &[SchemeKind],
+    tols: &[f64],
     dir: &Path,
 ) -> Result<Vec<String>, Error> {
     known(name)?;
+    if name == "accuracy" {
+        let s = crate::scene::file::Scene::from_file_with(scene, overrides)?;
+        let tols: Vec<f64> = if tols.is_empty() {
+            accuracy::DEFAULT_TOLS.to_vec()
+        } else {
+            tols.to_vec()
+        };
+        for &t in &tols {
+            if !(t > 0.0 && t < 1.0) {
+                return Err(Error::invalid(
+                    "--tol",
+                    t,
+                    "expected a relative accuracy in (0, 1)",
+                ));
+            }
+        }
+        let verdicts = accuracy::study(&s, &tols, 3, dir)?;
+        write_atomic(
+            &dir.join("verdict.txt"),
+            (verdicts.join("\n") + "\n").as_bytes(),
+        )?;
+        return Ok(verdicts);
+    }
     if name != "extremes" {
         return Err(Error::invalid(
             "study",
             name,
-            "takes no scene file; only `extremes` runs on a scene (`signorini study extremes \
-             SCENE`)",
+            "takes no scene file; only `extremes` and `accuracy` run on a scene \
+             (`signorini study extremes SCENE`)",
         ));
     }
     let verdicts = extremes::scene_extremes(scene, overrides, schemes, dir)?;

@@ -1,9 +1,9 @@
 //! The accuracy mode (issue 50): the run chooses its steps to meet a requested accuracy
 //! `TOL` on its observables and reports the error it estimates.
 //!
-//! **The ladder.** Accepted steps are `h_k = dt_max · 2⁻ᵏ`, `k = 0 … K`, down to the
-//! floor `dt_min` (by default `dt_max / 2¹⁰`): a structure whose `M̂` is constant keeps
-//! the factor and Delassus data of the few steps in use
+//! **The ladder.** Kept steps are `h_k = dt_max · 2⁻ᵏ`, `k = 0 … K`, down to the floor
+//! `dt_min` (by default `dt_max / 2¹⁰`): a structure whose `M̂` is constant keeps the
+//! factor and Delassus data of the few steps in use
 //! ([`crate::integrators::Integrator::set_dt`], cached within
 //! [`crate::integrators::core::STEP_CACHE_BYTES`]); a nonlinear one refactors as it does
 //! at every step anyway.
@@ -12,51 +12,54 @@
 //! Moreau's scheme, Studer, Leine & Glocker, IJNME 76, 2008). A window of length `H`
 //! from the state `S₀` is taken once at `H` (state `A`) and, from `S₀` again, as two
 //! steps at `H/2` (`B₁`, `B₂`); `B₁` and `B₂` are what the run keeps (the observers see
-//! them, in order, as the steps they are), `A` serves only the comparison. The θ-method
-//! (eq. 18, 42–48) has a local error `O(H^{p+1})` in smooth phases (`p = 2` at θ = ½,
-//! `p = 1` otherwise and across impacts), so `|A − B|` bounds the error of `B` from
-//! above for every `p ≥ 1` (it is `(2^p − 1)` times that error asymptotically): the
-//! estimate written is `|A − B|`, never divided down.
+//! them, in order, each restored from its snapshot as a resumed run would be), `A`
+//! serves only the comparison. The θ-method (eq. 18, 42–48) has a local error
+//! `O(H^{p+1})`, `p = 2` at θ = ½ where no contact opens or closes, `p = 1` otherwise:
+//! in such a smooth window `|A − B| / (2^p − 1)` estimates `B`'s error; in a window
+//! where a contact opens or closes `|A − B|` itself is taken (no asymptotics across an
+//! impact).
 //!
-//! **What is compared**, each against an allowance of `TOL` (the sweep's measures,
-//! [`crate::study::sweep`], so that what the run promises is what a sweep checks):
-//! - the **contact impulse over the window** `Σ_c P_c` (the normal impulses of every
-//!   contact; impulses are compared over the window, never per step, so an impact
-//!   placed in either half of it is the same impulse): allowance
-//!   `TOL (½ |P_B| + ½ S · H/T)`, with `P_B` the window's impulse, `S` the run's
-//!   cumulative impulse so far and `T` the run's span. Summed over the run the
-//!   allowances come to at most `TOL` times the total impulse, so the estimated error of
-//!   the cumulative impulse history (the sweep's `impulse_history_error`) stays within
-//!   `TOL`;
+//! **What is compared**, each against an allowance of `TOL`, relative to a scale that
+//! is the run's running maximum (so a window is never allowed more than the run's own
+//! scale at its end would allow), widened by a **pilot pass** ([`Controller::pilot`]:
+//! the whole run at `dt_max`, no observers, the state restored after) which tells the
+//! early windows the scale the run will have:
+//! - the **contact impulse over the window** `Σ_c P_c` (normal impulses; compared over
+//!   the window, never per step, so an impact placed in either half of it is the same
+//!   impulse): allowance `TOL (½ |P_B| + ½ S · H/T)`, `S` the cumulative impulse, `T` the
+//!   run's span; summed over the run they come to `TOL` times the total impulse (the
+//!   sweep's `impulse_history_error`, [`crate::study::sweep`]);
 //! - the **energy** `E = K + V` at the window's end: allowance
-//!   `TOL (½ |E_B − E_{S₀}| + ½ E_s · H/T)`, `E_s` the largest energy met (floored by the
-//!   energy check's scale, [`crate::model::energy::EnergyFloor`]): within `TOL E_s` over
-//!   a run whose energy varies by at most `E_s` (the sweep's `energy_error`);
-//! - the **gaps** of every contact at the window's end, which place the next impacts
-//!   and releases (event location: a window whose `B` locates a closing or an opening
-//!   that `A` misplaces differs by the distance travelled in between): allowance
-//!   `TOL ℓ · H/T` in smooth windows (error per unit step: the position error summed
-//!   over the run stays within `TOL ℓ`) and `TOL ℓ` in windows where a contact opens or
-//!   closes, `ℓ` the largest gap change met so far (floored at 10⁻⁹ of the model's
-//!   size);
+//!   `TOL (½ |E_B − E_{S₀}| + ½ E_s · H/T)`, `E_s` the largest energy met, floored by the
+//!   energy check's scale ([`crate::model::energy::EnergyFloor`]). A linear structure at
+//!   θ = ½ without damping, time-dependent loads or prescribed motion conserves its
+//!   energy exactly in a smooth window (the trapezoidal rule): it is compared only
+//!   where a contact opens or closes;
+//! - **event location**: the gaps of the contacts that open or close in the window,
+//!   which place the impacts and releases (`B` locates one `A` misplaces by the
+//!   distance travelled in between): allowance `TOL ℓ`, `ℓ` the largest gap change;
 //! - the **displacement field** in the mass norm `‖q_A − q_B‖_M`: allowance
-//!   `TOL U · H/T` (smooth windows; `TOL U` where a contact opens or closes), `U` the
-//!   largest `‖q − q₀‖_M` met. The contact's observables meet an error made inside a
-//!   body only when its wave comes back to the contact (the bar at a fixed 1e-5 s
-//!   smears its wave and leaves at 0.095 m/s for 0.1, with window impulses that agree
-//!   at 1e-5 and 5e-6 s); this norm sees it where it is made. It weights a mode by its
-//!   displacement, so the highest modes of a mesh, whose phase no affordable step
-//!   resolves (the energy norm of the same difference does not converge on the bar
-//!   above h = 10⁻⁹ s), count as little as they move.
+//!   `TOL U · H/T` in smooth windows (error per unit step: the sum over the run stays
+//!   within `TOL U`; the trapezoidal rule propagates a linear structure's errors
+//!   without growth), `TOL U` where a contact opens or closes, `U` the largest
+//!   `‖q − q₀‖_M`. The contact's observables meet an error made inside a body only when
+//!   its wave comes back to the contact: the bar at a fixed 1e-5 s smears its wave and
+//!   leaves at 0.095 m/s for 0.1, while its window impulses at 1e-5 and 5e-6 s agree.
+//!   This norm sees the error where it is made, and weights a mode by its displacement,
+//!   so the highest modes of a mesh, whose phase no affordable step resolves (the
+//!   energy norm of the same difference does not converge on the bar above
+//!   h = 10⁻⁹ s), count as little as they move.
 //!
 //! The window's error ratio `ε` is the largest of the four ratios. `ε ≤ 1` accepts it;
-//! the step then grows one rung after two windows with `ε` below `2^{-(p+1)}` (so that
-//! the doubled step would still pass), and stays otherwise. `ε > 1` rejects it and goes
+//! the step then grows one rung after two windows with `ε` below `2^{-(p+1)}` (the
+//! doubled window would still pass), and stays otherwise. `ε > 1` rejects it and goes
 //! down `⌈log₂ ε / p⌉` rungs (at least one). A window at the floor rung is accepted
-//! whatever `ε` (the run continues, its outputs whole) and counted: a run that met the
-//! floor, or whose summed estimate exceeds `TOL`, reports that it could not reach the
-//! accuracy and fails with exit code 1 ([`Error::AccuracyNotMet`]) after writing its
-//! outputs and summary — never a silent exit 0.
+//! whatever `ε` (the run continues, its outputs whole) and counted. The estimates
+//! written are the sums of the kept windows' estimates relative to the run's own
+//! maxima at its end; a run whose estimate exceeds `TOL` (the floor reached, a pilot
+//! that saw larger scales than the run) fails with exit code 1
+//! ([`Error::AccuracyNotMet`]) after writing its outputs and summary — never a silent
+//! exit 0.
 //!
 //! Why hand-written: no crate offers an error controller for a nonsmooth one-step scheme
 //! (the ODE crates control smooth local errors of their own Runge–Kutta steps).
@@ -71,6 +74,7 @@ use super::driver::{Observer, RunChecks};
 
 mod spec;
 pub use spec::*;
+mod window;
 
 /// Rungs below `dt_max` when `time.dt_min` is not given: `dt_min = dt_max / 2¹⁰`.
 pub const DEFAULT_RUNGS: u32 = 10;
@@ -95,7 +99,7 @@ pub struct ControllerState {
     /// Estimates summed so far (impulse, energy, smooth gaps, nonsmooth gaps max,
     /// state).
     pub sums: [crate::integrators::saved::Bits; 5],
-    /// Scales: cumulative impulse, largest energy, largest gap change, largest
+    /// Maxima met: cumulative impulse, largest energy, largest gap change, largest
     /// displacement from the start (mass norm).
     pub scales: [crate::integrators::saved::Bits; 4],
     /// Windows, rejected, steps taken, floor windows, trial factorizations.
@@ -104,6 +108,9 @@ pub struct ControllerState {
     pub bounded: [usize; 4],
     /// Smallest and largest step kept.
     pub used: [crate::integrators::saved::Bits; 2],
+    /// The pilot pass's total impulse, largest gap change and displacement
+    /// ([`Controller::pilot`]).
+    pub pilot: [crate::integrators::saved::Bits; 3],
 }
 
 /// The error controller of an accuracy run (module doc): the ladder, the snapshots it
@@ -118,6 +125,18 @@ pub struct Controller {
     gap_a: Vec<f64>,
     impulse_a: Vec<f64>,
     q_a: Vec<f64>,
+    v_a: Vec<f64>,
+    /// `q − q₀` of the state measured.
+    disp: Vec<f64>,
+    /// A linear structure without prescribed motion whose `M` and `K` take the general
+    /// column walk: its energies and norms are read in one walk over `M` and one over
+    /// `K` ([`crate::linalg::bilinear_forms`]; a rod's three diagonals are faster one
+    /// form at a time).
+    fused: bool,
+    /// θ = ½ on a linear structure without damping, time-dependent loads or prescribed
+    /// motion: the trapezoidal rule conserves its energy exactly where no contact
+    /// opens or closes.
+    conservative: bool,
     diff: Vec<f64>,
     scratch: Vec<f64>,
     /// The layouts of `M` and `K` read once (the energies and the mass norms).
@@ -134,20 +153,6 @@ pub struct Controller {
 
 /// Statistics of the two kept steps of a window.
 type Kept = (StepStats, StepStats);
-
-/// One window's comparison ([`Controller::compare`]).
-struct Window {
-    /// Ratios of the estimates to their allowances, in [`OBSERVABLES`] order.
-    ratios: [f64; 4],
-    /// The estimates of `B`'s error, in the same order.
-    d: [f64; 4],
-    /// No contact opened or closed in it.
-    smooth: bool,
-    /// `|P_B|`, `|E_B|`, the largest gap change, `‖q_B − q₀‖_M`: the scales' new values.
-    values: [f64; 4],
-    /// `E_B`, where the next window starts.
-    energy: f64,
-}
 
 impl Controller {
     /// A controller for `spec` starting at rung 0 (`dt_max`), or at `resume`'s state.
@@ -181,6 +186,16 @@ impl Controller {
             gap_a: vec![0.0; s.gap.len()],
             impulse_a: vec![0.0; s.impulse.len()],
             q_a: vec![0.0; s.q.len()],
+            v_a: vec![0.0; s.q.len()],
+            disp: vec![0.0; s.q.len()],
+            conservative: theta == 0.5
+                && sys.nonlinear.is_empty()
+                && sys.prescribed.is_none()
+                && sys.damping.is_none()
+                && sys.loads.is_empty(),
+            fused: sys.nonlinear.is_empty()
+                && sys.prescribed.is_none()
+                && sys.energy_forms().general(),
             diff: vec![0.0; s.q.len()],
             scratch: vec![0.0; 2 * sys.prescribed_dofs()],
             forms: sys.energy_forms(),
@@ -211,11 +226,52 @@ impl Controller {
     }
 
     fn energy(&mut self, integ: &dyn Integrator) -> f64 {
-        let s = integ.state();
-        let (k, v) = integ
-            .system()
-            .energies_with(&self.forms, s.time, &s.q, &s.v, &mut self.scratch);
-        k + v
+        self.measure(integ, false, true).total
+    }
+
+    /// The pilot pass: the run from its start to its end at the largest step, without
+    /// observers, for the scales of the allowances (the total impulse, the largest gap
+    /// change and displacement, the largest energy), then the start restored. A run's
+    /// early windows are otherwise held to the scales met so far, which are small
+    /// before the motion has developed (the bar at its first contact: no impulse yet),
+    /// and the steps there far smaller than the run needs. The pilot's figures only
+    /// widen the allowances to the size the run will have; the estimates written are
+    /// relative to the run's own maxima, so a pilot that saw more than the run shows
+    /// as an estimate above TOL, not as a silent miss. A pilot that fails (its step
+    /// too large for the scene) keeps what it met before.
+    pub fn pilot(&mut self, integ: &mut dyn Integrator, checks: &RunChecks) -> Result<(), Error> {
+        use crate::integrators::saved::Bits;
+        integ.save_into(&mut self.s0);
+        let mut p = [0.0f64; 3];
+        let mut e_max = 0.0f64;
+        let h = self.spec.dt_max;
+        let steps = (self.spec.t_end / h).round().max(1.0) as usize;
+        // the scales at about 256 of the pilot's steps (and every impulse): a scale, not
+        // a measurement, and each reading costs a pass over `M` and `K`
+        let every = (steps / 256).max(1);
+        if integ.set_dt(h).is_ok() {
+            for k in 0..steps {
+                let ok = integ
+                    .prepare()
+                    .and_then(|_| integ.step())
+                    .is_ok_and(|st| checks.check(integ, &st).is_ok());
+                if !ok {
+                    break;
+                }
+                let s = integ.state();
+                p[0] += s.impulse.iter().sum::<f64>().abs();
+                p[1] = p[1].max(self.gaps(s).0);
+                if k % every == 0 || k + 1 == steps {
+                    let m = self.measure(integ, false, true);
+                    p[2] = p[2].max(m.displacement);
+                    e_max = e_max.max(m.total.abs());
+                }
+            }
+        }
+        integ.restore(&self.s0)?;
+        self.st.pilot = p.map(Bits);
+        self.st.scales[1] = Bits(self.st.scales[1].0.max(e_max));
+        Ok(())
     }
 
     /// The window's length from time `t` at the current rung: `2 h_k`, shortened to a
@@ -264,14 +320,16 @@ impl Controller {
                 }
                 Err(_) => false,
             };
-            let (p_a, e_a) = if a_ok {
+            let p_a = if a_ok {
                 let s = integ.state();
                 self.gap_a.copy_from_slice(&s.gap);
                 self.impulse_a.copy_from_slice(&s.impulse);
                 self.q_a.copy_from_slice(&s.q);
-                (s.impulse.iter().sum::<f64>(), self.energy(integ))
+                self.v_a.copy_from_slice(&s.v);
+                // A's energy is read beside B's ([`Controller::measure`])
+                s.impulse.iter().sum::<f64>()
             } else {
-                (f64::NAN, f64::NAN)
+                f64::NAN
             };
             // B: two steps of half the window, from S₀ again
             integ.restore(&self.s0)?;
@@ -298,7 +356,7 @@ impl Controller {
                 }
             };
             let w = if a_ok {
-                Some(self.compare(integ, big, (p_a, e_a), e0))
+                Some(self.compare(integ, big, p_a, e0))
             } else {
                 None
             };
@@ -378,174 +436,18 @@ impl Controller {
         self.st.rung = (self.st.rung + down).min(self.spec.rungs());
     }
 
-    /// Whether no contact opened or closed in the window (impulse signs of `S₀`, `A`,
-    /// `B₁`, `B₂` alike).
-    fn smooth(&self, b2: &crate::integrators::State) -> bool {
-        let (Some(p0), Some(p1)) = (
-            self.s0.vectors.get("impulse"),
-            self.b1.vectors.get("impulse"),
-        ) else {
-            return false;
-        };
-        (0..b2.impulse.len()).all(|c| {
-            let on = b2.impulse[c] > 0.0;
-            (p0.0[c] > 0.0) == on && (p1.0[c] > 0.0) == on && (self.impulse_a[c] > 0.0) == on
-        })
-    }
-
-    /// The window's window impulse of `B` (`Σ P` of both steps).
-    fn impulse_b(&self, b2: &crate::integrators::State) -> f64 {
-        let p1: f64 = self
-            .b1
-            .vectors
-            .get("impulse")
-            .map_or(0.0, |f| f.0.iter().sum());
-        p1 + b2.impulse.iter().sum::<f64>()
-    }
-
-    /// The largest change of a gap from the start, and the gaps' difference `|g_A − g_B|`.
-    fn gaps(&self, b2: &crate::integrators::State) -> (f64, f64) {
-        let mut change = 0.0f64;
-        let mut diff = 0.0f64;
-        for c in 0..b2.gap.len() {
-            change = change.max((b2.gap[c] - self.st.gap0.0[c]).abs());
-            diff = diff.max((b2.gap[c] - self.gap_a[c]).abs());
-        }
-        (change, diff)
-    }
-
-    /// The window's differences `|A − B|` (each divided by `2ᵖ − 1` in a smooth
-    /// window, Richardson's estimate of `B`'s error; as they are where a contact opened
-    /// or closed) and their ratios to the allowances (module doc).
-    fn compare(
-        &mut self,
-        integ: &dyn Integrator,
-        big: f64,
-        (p_a, e_a): (f64, f64),
-        e0: f64,
-    ) -> Window {
-        let tol = self.spec.tol;
-        let share = big / self.spec.t_end;
-        let s = integ.state();
-        let smooth = self.smooth(s);
-        let rf = if smooth {
-            ((1u32 << self.order) - 1) as f64
-        } else {
-            1.0
-        };
-        let p_b = self.impulse_b(s);
-        let e_b = self.energy(integ);
-        let s = integ.state();
-        let (change, d_g) = self.gaps(s);
-        let (d_x, u) = self.state_difference(integ);
-        let d = [
-            (p_a - p_b).abs() / rf,
-            (e_a - e_b).abs() / rf,
-            d_g / rf,
-            d_x / rf,
-        ];
-        let ratio = |d: f64, allow: f64| {
-            if d == 0.0 {
-                0.0
-            } else if allow > 0.0 {
-                d / allow
-            } else {
-                f64::INFINITY
-            }
-        };
-        let cumulative = self.st.scales[0].0 + p_b.abs();
-        let e_scale = self.st.scales[1]
-            .0
-            .max(e0.abs())
-            .max(e_b.abs())
-            .max(self.floors[0]);
-        let ell = self.st.scales[2].0.max(change).max(self.floors[1]);
-        let u_scale = self.st.scales[3].0.max(u).max(self.floors[2]);
-        let local = if smooth { share } else { 1.0 };
-        Window {
-            ratios: [
-                ratio(d[0], tol * (0.5 * p_b.abs() + 0.5 * cumulative * share)),
-                ratio(d[1], tol * (0.5 * (e_b - e0).abs() + 0.5 * e_scale * share)),
-                ratio(d[2], tol * ell * local),
-                ratio(d[3], tol * u_scale * local),
-            ],
-            d,
-            smooth,
-            values: [p_b.abs(), e_b.abs(), change, u],
-            energy: e_b,
-        }
-    }
-
-    /// `‖q_A − q_B‖_M = √(e_qᵀ M e_q)`, and the same norm of the displacement from the
-    /// start `‖q_B − q₀‖_M` (the scale).
-    fn state_difference(&mut self, integ: &dyn Integrator) -> (f64, f64) {
-        let (s, sys) = (integ.state(), integ.system());
-        for (d, (a, b)) in self.diff.iter_mut().zip(self.q_a.iter().zip(&s.q)) {
-            *d = a - b;
-        }
-        let e = self.forms.mass_form(sys, &self.diff);
-        let u = self.displacement(integ);
-        (e.max(0.0).sqrt(), u)
-    }
-
-    /// `‖q − q₀‖_M` of the state.
-    fn displacement(&mut self, integ: &dyn Integrator) -> f64 {
-        let (s, sys) = (integ.state(), integ.system());
-        for (d, (a, b)) in self.diff.iter_mut().zip(self.st.q0.0.iter().zip(&s.q)) {
-            *d = b - a;
-        }
-        self.forms.mass_form(sys, &self.diff).max(0.0).sqrt()
-    }
-
-    /// Adds an accepted window's differences to the sums and its values to the scales.
-    fn accept(&mut self, w: &Window) {
-        use crate::integrators::saved::Bits;
-        self.e_next = Some(w.energy);
-        let sums = &mut self.st.sums;
-        sums[0] = Bits(sums[0].0 + w.d[0]);
-        sums[1] = Bits(sums[1].0 + w.d[1]);
-        if w.smooth {
-            sums[2] = Bits(sums[2].0 + w.d[2]);
-        } else {
-            sums[3] = Bits(sums[3].0.max(w.d[2]));
-        }
-        sums[4] = Bits(sums[4].0 + w.d[3]);
-        let sc = &mut self.st.scales;
-        sc[0] = Bits(sc[0].0 + w.values[0]);
-        sc[1] = Bits(sc[1].0.max(w.values[1]));
-        sc[2] = Bits(sc[2].0.max(w.values[2]));
-        sc[3] = Bits(sc[3].0.max(w.values[3]));
-    }
-
-    /// The scales of a window accepted at the floor without its comparison (the step
-    /// `A` failed): its own values, no difference.
-    fn accept_scales(&mut self, integ: &dyn Integrator) {
-        use crate::integrators::saved::Bits;
-        let s = integ.state();
-        let p_b = self.impulse_b(s);
-        let e_b = self.energy(integ);
-        self.e_next = Some(e_b);
-        let s = integ.state();
-        let (change, _) = self.gaps(s);
-        let u = self.displacement(integ);
-        let sc = &mut self.st.scales;
-        sc[0] = Bits(sc[0].0 + p_b.abs());
-        sc[1] = Bits(sc[1].0.max(e_b.abs()));
-        sc[2] = Bits(sc[2].0.max(change));
-        sc[3] = Bits(sc[3].0.max(u));
-    }
-
     /// The summary at the end of the run.
     pub fn summary(&self, e_start: f64) -> AccuracySummary {
         let st = &self.st;
         let rel = |d: f64, scale: f64| if d == 0.0 { 0.0 } else { d / scale };
         let e_scale = st.scales[1].0.max(e_start.abs()).max(self.floors[0]);
-        let ell = st.scales[2].0.max(self.floors[1]);
+        let [_, ell, u_scale] = self.scales(st.scales.map(|b| b.0));
         let estimated = AccuracyEstimates {
+            // relative to the total impulse, as a sweep measures it
             impulse_history: rel(st.sums[0].0, st.scales[0].0),
             energy: rel(st.sums[1].0, e_scale),
             gaps: rel(st.sums[2].0 + st.sums[3].0, ell),
-            state: rel(st.sums[4].0, st.scales[3].0.max(self.floors[2])),
+            state: rel(st.sums[4].0, u_scale),
         };
         let tol = self.spec.tol;
         let met = estimated.impulse_history <= tol

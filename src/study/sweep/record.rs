@@ -225,8 +225,11 @@ pub fn run_point(
     let rel = |a: f64, b: f64| a / b - 1.0;
     let first = r.force.iter().position(|&f| f > 0.0);
     let last_closed = r.force.iter().rposition(|&f| f > 0.0);
+    // each step over its own h (an accuracy run's steps vary: `RunResult::dt`)
+    let step = |k: usize| r.dt.get(k).copied().unwrap_or(h);
     let contact_duration = match (first, last_closed) {
-        (Some(a), Some(b)) => (b + 1 - a) as f64 * h,
+        (Some(a), Some(b)) if r.dt.is_empty() => (b + 1 - a) as f64 * h,
+        (Some(a), Some(b)) => (a..=b).map(step).sum(),
         _ => 0.0,
     };
     Ok(RunRecord {
@@ -260,7 +263,11 @@ pub fn run_point(
         }),
         peak_force: r.force.iter().copied().fold(0.0, f64::max),
         contact_duration,
-        impulse: impulse_trace(&r.force, h, s.t_end),
+        impulse: if r.dt.is_empty() {
+            impulse_trace(&r.force, h, s.t_end)
+        } else {
+            impulse_samples(&r.force, &r.dt, h, s.t_end)
+        },
         worker: 0,
         probes: s
             .probes
@@ -294,6 +301,29 @@ pub fn impulse_trace(force: &[f64], h: f64, t_end: f64) -> Vec<f64> {
         }
         let part = if k < force.len() {
             ((t - k as f64 * h) / h).clamp(0.0, 1.0) * force[k] * h
+        } else {
+            0.0
+        };
+        out.push(acc + part);
+    }
+    out
+}
+
+/// The cumulative impulse at `TRACE_SAMPLES` times over `[0, t_end]` of a force trace
+/// whose steps are `dt` (or all `h` when `dt` is empty), linear within a step.
+pub fn impulse_samples(force: &[f64], dt: &[f64], h: f64, t_end: f64) -> Vec<f64> {
+    let step = |k: usize| if dt.is_empty() { h } else { dt[k] };
+    let mut out = Vec::with_capacity(TRACE_SAMPLES);
+    let (mut k, mut t0, mut acc) = (0usize, 0.0f64, 0.0f64);
+    for i in 0..TRACE_SAMPLES {
+        let t = t_end * (i + 1) as f64 / TRACE_SAMPLES as f64;
+        while k < force.len() && t0 + step(k) <= t * (1.0 + 1e-12) {
+            acc += force[k] * step(k);
+            t0 += step(k);
+            k += 1;
+        }
+        let part = if k < force.len() {
+            ((t - t0) / step(k)).clamp(0.0, 1.0) * force[k] * step(k)
         } else {
             0.0
         };
