@@ -222,8 +222,8 @@ impl PySimulation {
             (Some(_), None) => unreachable!("a session has a directory"),
         }
         let session = g.session.as_mut().expect("opened above");
-        let total = session.progress().1;
-        let result = py.detach(|| session.advance(total, &mut prog));
+        // to the run's end (an accuracy run's step count is not known before)
+        let result = py.detach(|| session.advance(usize::MAX, &mut prog));
         if let Err(e) = result {
             // the files so far readable; the state kept for step() or run() to go on
             let synced = session.sync();
@@ -320,7 +320,8 @@ impl PySimulation {
         } = &mut *g;
         let session = session.as_mut().expect("opened above");
         let (done, total) = session.progress();
-        if n > total - done.min(total) {
+        // an accuracy run (`time.accuracy`) takes steps until its end time
+        if n > total - done.min(total) && !session.chooses_steps() {
             return Err(BadInput::new_err(format!(
                 "step({n}): the scene makes {total} steps and {done} are done"
             )));
@@ -370,9 +371,12 @@ impl PySimulation {
             }
             taken += chunk;
             py.check_signals()?;
+            if session.is_done() {
+                break;
+            }
         }
-        let (done, total) = session.progress();
-        if done == total {
+        let done = session.progress().0;
+        if session.is_done() {
             g.finish().map_err(py_err)?;
         }
         Ok(done)

@@ -942,3 +942,29 @@ def test_set_state_cannot_push_one_body_deep_inside_another():
     sim.step(1)
     with pytest.raises(signorini.BadInput, match="inside body \"target\""):
         sim.set_state(q=sim.q + m.dofs(push))
+
+
+def test_the_accuracy_mode_runs_and_steps_to_its_end():
+    # issue 50: a run that chooses its steps (`time.accuracy`) ends at t_end under
+    # run() and under step(n) alike, its summary says what it estimates, and the
+    # bouncing ball's first impact (t = 1, eq. 7) comes within the accuracy asked
+    scene = signorini.Scene.example("bouncing-ball")
+    sim = scene.simulation(t_end=2.2, set={"time.accuracy": 1e-2, "time.dt": 1e-2})
+    sim.run()
+    a = sim.summary["accuracy"]
+    assert a["met"] and a["target"] == 1e-2
+    t = sim.history["time"]
+    assert t[-1] == pytest.approx(2.2, rel=1e-9)
+    dt = np.diff(np.concatenate([[0.0], t]))
+    assert dt.max() <= 1e-2 * (1 + 1e-12) and dt.min() < 1e-3
+    p = sim.history["impulse_0"]
+    first = t[np.argmax(p > 0)]
+    assert abs(first - 1.0) <= 1e-2
+    stepped = scene.simulation(t_end=2.2, set={"time.accuracy": 1e-2, "time.dt": 1e-2})
+    for _ in range(10_000):
+        try:
+            stepped.summary
+            break
+        except RuntimeError:
+            stepped.step(50)
+    assert np.array_equal(stepped.history["time"], t)

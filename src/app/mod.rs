@@ -259,9 +259,22 @@ impl Session {
         self.integ.as_mut()
     }
 
-    /// Steps taken so far, and the run's total.
+    /// Steps taken so far, and the run's total (of an accuracy run, its count at the
+    /// largest step: it takes at least these; [`Session::is_done`] says when it ends).
     pub fn progress(&self) -> (usize, usize) {
         (self.integ.state().step, self.run.steps())
+    }
+
+    /// Whether the run has reached its end (its last step, or an accuracy run's end
+    /// time).
+    pub fn is_done(&self) -> bool {
+        self.run.is_done(self.integ.as_ref())
+    }
+
+    /// Whether the run chooses its steps (`time.accuracy`): its step count is not known
+    /// before it ends.
+    pub fn chooses_steps(&self) -> bool {
+        self.run.chooses_steps()
     }
 
     /// Steps up to step `until` (at most the last) with the run's checks and observers;

@@ -458,6 +458,11 @@ impl RunInProgress {
         self.steps
     }
 
+    /// Whether the run chooses its steps (the accuracy mode).
+    pub fn chooses_steps(&self) -> bool {
+        self.control.is_some()
+    }
+
     /// What progress counts to: the steps, or (an accuracy run, whose steps are not known
     /// before) thousandths of the span.
     pub fn progress_total(&self) -> usize {
