@@ -16,7 +16,7 @@ impl TimeSpec {
     }
 
     /// The accuracy mode's request, when `accuracy` is set (checked by
-    /// [`Scene::validate`]).
+    /// [`super::Scene::validate`]).
     pub fn accuracy_spec(&self) -> Option<crate::run::accuracy::AccuracySpec> {
         let tol = self.accuracy?;
         let dt_max = self.dt_max.unwrap_or(self.dt);
