@@ -273,7 +273,7 @@ fn accuracy_runs_resume_mid_ladder() {
     let a = &s["accuracy"];
     assert_eq!(a["met"], true, "{a}");
     assert!(
-        a["dt_max_used"].as_f64().unwrap() > 4.0 * a["dt_min_used"].as_f64().unwrap(),
+        a["dt_max_used"].as_f64().unwrap() >= 4.0 * a["dt_min_used"].as_f64().unwrap(),
         "the step varied: {a}"
     );
     assert!(s["steps"].as_u64().unwrap() > 333, "{s}");

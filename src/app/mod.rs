@@ -184,6 +184,9 @@ impl Session {
         if let Some(o) = out {
             plan.add_history(report.dofs, m, (rows - m) / m.max(1), o.options.hdf5());
         }
+        if scene.time.accuracy.is_some() {
+            plan.add_accuracy(report.linear_structure, report.dofs, rows);
+        }
         plan.ledger.check(
             "scene",
             format!("{} dofs, {m} contacts ({rows} rows)", report.dofs),

@@ -55,6 +55,28 @@ impl Plan {
         )
     }
 
+    /// Adds what the accuracy mode ([`crate::run::accuracy`]) holds beside a run at one
+    /// step: the factors and Delassus data of up to
+    /// [`super::core::STEP_CACHE_ENTRIES`] other steps of its ladder, within
+    /// [`super::core::STEP_CACHE_BYTES`] (a structure whose `M̂` is constant;
+    /// `step_constant`), and its three snapshots and four `n`-vectors of the comparison
+    /// (`n` dofs, `rows` contact rows).
+    pub fn add_accuracy(&mut self, step_constant: bool, n: usize, rows: usize) {
+        if step_constant {
+            let per_step = self.factor.entries.saturating_mul(8) + self.delassus.bytes;
+            let cache = per_step
+                .saturating_mul(super::core::STEP_CACHE_ENTRIES as u64)
+                .min(super::core::STEP_CACHE_BYTES);
+            self.ledger
+                .add("accuracy mode: other steps' factors and Delassus data", 1, cache);
+        }
+        self.ledger.add(
+            "accuracy mode: snapshots and comparison vectors",
+            (n + rows) as u64,
+            (3 * 2 + 4) * 8,
+        );
+    }
+
     /// Adds the history's buffers: the CSV's 64 KiB, the energies' forms of `n` dofs,
     /// and with HDF5 4096 rows of every column (`m` contacts with `tangent_dim`
     /// tangents).

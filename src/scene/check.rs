@@ -55,6 +55,10 @@ pub struct CheckReport {
     pub steps: usize,
     /// Time step (s).
     pub dt: f64,
+    /// The accuracy mode's ladder of steps, largest first (s; empty: every step `dt`).
+    pub ladder: Vec<f64>,
+    /// The accuracy asked (`time.accuracy`).
+    pub accuracy: Option<f64>,
     /// The scheme's name.
     pub scheme: String,
     /// θ of the θ-method.
@@ -92,8 +96,7 @@ impl Scene {
             &report,
             self.bodies.len(),
             &self.scheme,
-            self.time.dt,
-            self.steps(),
+            (self.time.dt, self.steps(), self.time.accuracy_spec()),
             self.output.hdf5(),
         )
     }
@@ -121,8 +124,7 @@ impl BarScene {
             &report,
             1,
             &self.scheme,
-            self.dt,
-            self.steps(),
+            (self.dt, self.steps(), self.accuracy_spec()),
             false,
         )
     }
@@ -130,19 +132,22 @@ impl BarScene {
 
 impl CheckReport {
     /// The report of a built `model` (its build `report`) run with `params` at `dt` for
-    /// `steps` steps; `hdf5`: whether the history is also written to HDF5 (the ledger).
+    /// `steps` steps, in the accuracy mode when `accuracy` is given; `hdf5`: whether the
+    /// history is also written to HDF5 (the ledger).
     fn new(
         model: &mut Model,
         report: &ModelReport,
         bodies: usize,
         params: &SchemeParams,
-        dt: f64,
-        steps: usize,
+        (dt, steps, accuracy): (f64, usize, Option<crate::run::accuracy::AccuracySpec>),
         hdf5: bool,
     ) -> Result<CheckReport, Error> {
         let mut plan = model.plan_only(params, dt)?;
         let (m, rows) = (model.problem.contacts.len(), model.problem.contacts.rows());
         plan.add_history(report.dofs, m, (rows - m) / m.max(1), hdf5);
+        if accuracy.is_some() {
+            plan.add_accuracy(report.linear_structure, report.dofs, rows);
+        }
         let newton = match (report.linear_structure, report.linear_contacts) {
             (true, true) => {
                 "not needed for the dynamics (linear structure, constant G): factor once, never refactor"
@@ -194,6 +199,8 @@ impl CheckReport {
                 .collect(),
             steps,
             dt,
+            ladder: accuracy.map_or_else(Vec::new, |a| a.ladder()),
+            accuracy: accuracy.map(|a| a.tol),
             scheme: params.kind.name().to_string(),
             theta: params.theta,
             linear_structure: report.linear_structure,

@@ -14,10 +14,11 @@
 //! steps at `H/2` (`B₁`, `B₂`); `B₁` and `B₂` are what the run keeps (the observers see
 //! them, in order, each restored from its snapshot as a resumed run would be), `A`
 //! serves only the comparison. The θ-method (eq. 18, 42–48) has a local error
-//! `O(H^{p+1})`, `p = 2` at θ = ½ where no contact opens or closes, `p = 1` otherwise:
-//! in such a smooth window `|A − B| / (2^p − 1)` estimates `B`'s error; in a window
-//! where a contact opens or closes `|A − B|` itself is taken (no asymptotics across an
-//! impact).
+//! `O(H^{p+1})`, `p = 2` at θ = ½ where no contact opens or closes, `p = 1` otherwise,
+//! so `|A − B|` is `2ᵖ − 1` times `B`'s error asymptotically; it is taken undivided: the
+//! events (impacts, releases) that the positions of smooth windows place are placed to
+//! first order, and the divided estimate fell 2–4 times below the error reached on the
+//! academic examples (`signorini study accuracy`).
 //!
 //! **What is compared**, each against an allowance of `TOL`, relative to a scale that
 //! is the run's running maximum (so a window is never allowed more than the run's own

@@ -195,9 +195,8 @@ impl Controller {
         (change, diff)
     }
 
-    /// The window's differences `|A − B|` (each divided by `2ᵖ − 1` in a smooth
-    /// window, Richardson's estimate of `B`'s error; as they are where a contact opened
-    /// or closed) and their ratios to the allowances (module doc).
+    /// The window's differences `|A − B|` (the estimates of `B`'s error, undivided:
+    /// module doc) and their ratios to the allowances.
     pub(super) fn compare(
         &mut self,
         integ: &dyn Integrator,
@@ -209,11 +208,6 @@ impl Controller {
         let share = big / self.spec.t_end;
         let s = integ.state();
         let smooth = self.smooth(s);
-        let rf = if smooth {
-            ((1u32 << self.order) - 1) as f64
-        } else {
-            1.0
-        };
         let p_b = self.impulse_b(s);
         // a conservative structure's smooth windows keep the energy in both A and B
         // (the trapezoidal rule conserves it exactly): nothing to compare there
@@ -226,10 +220,10 @@ impl Controller {
         let s = integ.state();
         let (change, d_g) = self.gaps(s);
         let d = [
-            (p_a - p_b).abs() / rf,
-            (e_a - e_b).abs() / rf,
-            d_g / rf,
-            d_x / rf,
+            (p_a - p_b).abs(),
+            (e_a - e_b).abs(),
+            d_g,
+            d_x,
         ];
         let ratio = |d: f64, allow: f64| {
             if d == 0.0 {
