@@ -176,3 +176,35 @@ fn bad_accuracy_requests_are_refused_with_exit_code_2() {
     assert!(err.contains("time.dt_min"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A sweep over `time.accuracy` compares its runs with the tightest accuracy (the finest
+/// run among runs that choose their steps), not with the first point of the axis.
+#[test]
+fn a_sweep_over_the_accuracy_takes_the_tightest_as_its_reference() {
+    let out = std::env::temp_dir().join(format!("signorini-acc-sweep-{}", std::process::id()));
+    let (code, err) = cli(&[
+        "sweep",
+        "meshes/bouncing_ball.toml",
+        "--set",
+        "time.t_end=2.2",
+        "--set",
+        "time.dt=1e-2",
+        "--axis",
+        "time.accuracy=[1e-1, 1e-2, 1e-3]",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (acc, reference) = (col("time.accuracy"), col("reference"));
+    let refs: Vec<String> = lines
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|f| f[reference].starts_with("itself"))
+        .map(|f| f[acc].to_string())
+        .collect();
+    assert_eq!(refs, ["0.001"], "{csv}");
+    std::fs::remove_dir_all(&out).ok();
+}

@@ -306,9 +306,7 @@ pub(crate) fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
         c.scheme,
         c.theta
     );
-    if let (Some(tol), Some(first), Some(last)) =
-        (c.accuracy, c.ladder.first(), c.ladder.last())
-    {
+    if let (Some(tol), Some(first), Some(last)) = (c.accuracy, c.ladder.first(), c.ladder.last()) {
         out!(
             "accuracy            {tol:e} asked: the run chooses its steps among {} from {first:e} to {last:e} s (each halving the last), at least {} steps",
             c.ladder.len(),

@@ -67,8 +67,11 @@ impl Plan {
             let cache = per_step
                 .saturating_mul(super::core::STEP_CACHE_ENTRIES as u64)
                 .min(super::core::STEP_CACHE_BYTES);
-            self.ledger
-                .add("accuracy mode: other steps' factors and Delassus data", 1, cache);
+            self.ledger.add(
+                "accuracy mode: other steps' factors and Delassus data",
+                1,
+                cache,
+            );
         }
         self.ledger.add(
             "accuracy mode: snapshots and comparison vectors",

@@ -219,12 +219,7 @@ impl Controller {
         };
         let s = integ.state();
         let (change, d_g) = self.gaps(s);
-        let d = [
-            (p_a - p_b).abs(),
-            (e_a - e_b).abs(),
-            d_g,
-            d_x,
-        ];
+        let d = [(p_a - p_b).abs(), (e_a - e_b).abs(), d_g, d_x];
         let ratio = |d: f64, allow: f64| {
             if d == 0.0 {
                 0.0

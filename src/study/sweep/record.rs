@@ -22,8 +22,11 @@ pub struct RunRecord {
     pub steps: usize,
     /// Degrees of freedom.
     pub dofs: usize,
-    /// Time step (s).
+    /// Time step (s; of an accuracy run, its largest).
     pub dt: f64,
+    /// The accuracy asked of a run that chose its steps (`time.accuracy`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub accuracy: Option<f64>,
     /// End time (s).
     pub t_end: f64,
     /// Median wall time of the step loop over the repeats (s).
@@ -192,6 +195,7 @@ pub fn run_point(
                     steps: scene.steps(),
                     dofs: 0,
                     dt: scene.time.dt,
+                    accuracy: scene.time.accuracy,
                     t_end: scene.time.t_end,
                     wall_seconds: f64::NAN,
                     walls,
@@ -239,6 +243,7 @@ pub fn run_point(
         steps: s.steps,
         dofs: s.dofs,
         dt: h,
+        accuracy: s.accuracy.as_ref().map(|a| a.target),
         t_end: s.t_end,
         wall_seconds: sorted[sorted.len() / 2],
         walls,
@@ -348,18 +353,23 @@ pub(super) fn trace_at(trace: &[f64], t_end: f64, t: f64) -> f64 {
     a + (trace[i] - a) * (x - i as f64)
 }
 
-/// The finest run: most refined, then smallest step, then the lowest index (the first
-/// value of every other axis); failed runs are never the reference.
+/// The finest run: most refined, then a run at fixed steps before one that chose its
+/// steps (`time.accuracy`), then smallest step, then the tightest accuracy, then the
+/// lowest index (the first value of every other axis); failed runs are never the
+/// reference.
 pub(super) fn reference_run(records: &[RunRecord]) -> Option<usize> {
     records
         .iter()
         .enumerate()
         .filter(|(_, r)| r.status == "ok")
         .min_by(|(_, a), (_, b)| {
+            let tol = |r: &RunRecord| r.accuracy.unwrap_or(0.0);
             b.point
                 .refine
                 .cmp(&a.point.refine)
+                .then(a.accuracy.is_some().cmp(&b.accuracy.is_some()))
                 .then(a.dt.total_cmp(&b.dt))
+                .then(tol(a).total_cmp(&tol(b)))
                 .then(a.point.id.cmp(&b.point.id))
         })
         .map(|(i, _)| i)
