@@ -137,6 +137,17 @@ fn a_step_floor_too_high_fails_with_exit_code_1() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(s["accuracy"]["met"], false);
     assert!(s["accuracy"]["floor_windows"].as_u64().unwrap() > 0);
+    // the history's `dt` column: each row's step, summing to its time
+    let h = std::fs::read_to_string(out.join("history.csv")).unwrap();
+    let mut lines = h.lines();
+    assert!(lines.next().unwrap().starts_with("step,time,dt,"));
+    let mut t = 0.0;
+    for l in lines {
+        let f: Vec<f64> = l.split(',').take(3).map(|x| x.parse().unwrap()).collect();
+        t += f[2];
+        assert!((t - f[1]).abs() <= 1e-12, "row {l}");
+    }
+    assert!((t - 1e-3).abs() <= 1e-12, "{t}");
     std::fs::remove_dir_all(&out).ok();
 }
 

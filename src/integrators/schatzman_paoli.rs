@@ -153,7 +153,10 @@ impl Integrator for SchatzmanPaoli {
     }
 
     fn step(&mut self) -> Result<StepStats, Error> {
-        let mut st = StepStats::default();
+        let mut st = StepStats {
+            dt: self.h,
+            ..StepStats::default()
+        };
         self.contacts
             .update(&self.state.q)
             .map_err(|e| super::core::step_error(&self.state, self.h, e))?;

@@ -196,6 +196,8 @@ pub struct StepStats {
     pub newton_residual: f64,
     /// Largest penetration `max(0, −g(q_{k+1}))` over the contacts (m).
     pub max_violation: f64,
+    /// The step `h` this step was taken at (s): the accuracy mode varies it.
+    pub dt: f64,
     /// Number of iteration caps hit in this step (Newton, activation, growth).
     pub caps_hit: usize,
     /// Friction problems solved in the step (0 in a frictionless scene).

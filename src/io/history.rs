@@ -108,6 +108,8 @@ pub struct HistoryWriter {
     pub(super) rows: u64,
     /// One group of columns per contact; false: the sums ([`ContactColumns`]).
     pub(super) per_contact: bool,
+    /// A `dt` column after `time` (a run whose step varies).
+    pub(super) dt_column: bool,
     /// Solid scenes: each body's centre, momentum and angular momentum per row.
     pub(super) bodies: Option<BodyColumns>,
 }
@@ -197,13 +199,29 @@ impl HistoryWriter {
         per_contact: bool,
         bodies: Option<crate::model::BodyMeasures>,
     ) -> Result<Self, Error> {
+        Self::create_with_steps(path, m, tangent_dim, per_contact, bodies, false)
+    }
+
+    /// [`HistoryWriter::create`], with a `dt` column after `time` (each row's step, s)
+    /// when `dt_column`: a run whose step varies (the accuracy mode).
+    pub fn create_with_steps(
+        path: &Path,
+        m: usize,
+        tangent_dim: usize,
+        per_contact: bool,
+        bodies: Option<crate::model::BodyMeasures>,
+        dt_column: bool,
+    ) -> Result<Self, Error> {
         let tmp = part_path(path);
         let f = File::create(&tmp).map_err(|e| Error::write(&tmp, e))?;
         let mut out = BufWriter::with_capacity(1 << 16, Counting { f, n: 0 });
-        let mut header = String::from(
+        let mut header = String::from(if dt_column {
+            "step,time,dt,kinetic_energy,potential_energy,max_violation,newton_iterations,\
+             projection_iterations,index_set_iterations"
+        } else {
             "step,time,kinetic_energy,potential_energy,max_violation,newton_iterations,\
-             projection_iterations,index_set_iterations",
-        );
+             projection_iterations,index_set_iterations"
+        });
         if !per_contact {
             header.push_str(",closed_contacts,total_impulse,min_gap,total_projection");
             for t in 0..tangent_dim {
@@ -242,6 +260,7 @@ impl HistoryWriter {
             rows_since_flush: 0,
             rows: 0,
             per_contact,
+            dt_column,
             bodies: bodies.map(BodyColumns::new),
         })
     }
@@ -319,8 +338,15 @@ impl HistoryWriter {
             rows_since_flush: 0,
             rows,
             per_contact,
+            dt_column: false,
             bodies: bodies.map(BodyColumns::new),
         })
+    }
+
+    /// A resumed history with the `dt` column of [`HistoryWriter::create_with_steps`].
+    pub fn with_dt_column(mut self, on: bool) -> Self {
+        self.dt_column = on;
+        self
     }
 
     /// The bodies measured in each row (0 without per-body columns).
@@ -366,7 +392,13 @@ impl HistoryWriter {
         let mut buf = ryu::Buffer::new();
         let r = (|| -> std::io::Result<()> {
             write!(o, "{}", state.step)?;
-            for x in [state.time, kinetic, potential, stats.max_violation] {
+            o.write_all(b",")?;
+            o.write_all(fmt_f64(&mut buf, state.time))?;
+            if self.dt_column {
+                o.write_all(b",")?;
+                o.write_all(fmt_f64(&mut buf, stats.dt))?;
+            }
+            for x in [kinetic, potential, stats.max_violation] {
                 o.write_all(b",")?;
                 o.write_all(fmt_f64(&mut buf, x))?;
             }

@@ -274,15 +274,17 @@ impl RunInProgress {
                     c.run.history_rows,
                     o.options.contact_columns.per_contact(m),
                     bodies,
-                )?,
+                )?
+                .with_dt_column(accuracy.is_some()),
                 None => {
                     crate::io::prepare_run_dir(o.dir)?;
-                    HistoryWriter::create(
+                    HistoryWriter::create_with_steps(
                         &hist_path,
                         m,
                         integ.state().tangent_dim,
                         o.options.contact_columns.per_contact(m),
                         bodies,
+                        accuracy.is_some(),
                     )?
                 }
             };

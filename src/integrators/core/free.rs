@@ -33,6 +33,7 @@ impl ThetaCore {
     /// nonlinear structure, at its first Newton iterate: [`super::super::structure`]).
     pub fn begin_step(&mut self, stats: &mut StepStats) -> Result<(), Error> {
         stats.factorizations += std::mem::take(&mut self.carry.pending_factorizations);
+        stats.dt = self.h;
         self.update_contacts()?;
         let (structure, mut cx) = self.structure_step();
         let refactored = structure
