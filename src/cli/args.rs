@@ -152,8 +152,9 @@ pub(crate) struct SceneArgs {
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub(crate) set: Vec<String>,
     /// The accuracy mode: the relative accuracy asked of the run's observables (the
-    /// same as --set time.accuracy=TOL); the run chooses its steps and writes the error
-    /// it estimates (exit 1 when over TOL). Experimental (issue 50): on scenes with many
+    /// same as --set time.accuracy=TOL); the run chooses its steps (at most time.dt, or
+    /// time.dt_max; a pilot pass runs the whole span at it first) and writes the error it
+    /// estimates (exit 1 when over TOL). Experimental (issue 50): on scenes with many
     /// impacts the estimate can fall below the error reached (`signorini study accuracy
     /// SCENE` measures both).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
@@ -264,8 +265,9 @@ pub(crate) struct BarArgs {
     pub(crate) t_end: f64,
     /// The accuracy mode: the relative accuracy asked of the contact impulse history,
     /// the energy, the impact locations and the displacement field; the run chooses its
-    /// steps (at most --dt, at least --dt-min) and writes the error it estimates (exit 1
-    /// when over TOL). Experimental (issue 50): on scenes with many impacts the estimate
+    /// steps (at most --dt, at least --dt-min; a pilot pass runs the whole span at --dt
+    /// first, so give a --dt well above the step needed) and writes the error it
+    /// estimates (exit 1 when over TOL). Experimental (issue 50): on scenes with many impacts the estimate
     /// can fall below the error reached (`signorini study accuracy` measures both).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub(crate) accuracy: Option<f64>,
