@@ -178,6 +178,8 @@ impl Controller {
             used: [Bits(f64::INFINITY), Bits(0.0)],
             ..ControllerState::default()
         });
+        // the layouts of M and K, read once (the energies and mass norms of every window)
+        let forms = sys.energy_forms();
         Controller {
             spec,
             st,
@@ -194,12 +196,10 @@ impl Controller {
                 && sys.prescribed.is_none()
                 && sys.damping.is_none()
                 && sys.loads.is_empty(),
-            fused: sys.nonlinear.is_empty()
-                && sys.prescribed.is_none()
-                && sys.energy_forms().general(),
+            fused: sys.nonlinear.is_empty() && sys.prescribed.is_none() && forms.general(),
             diff: vec![0.0; s.q.len()],
             scratch: vec![0.0; 2 * sys.prescribed_dofs()],
-            forms: sys.energy_forms(),
+            forms,
             e_next: None,
             order: if theta == 0.5 { 2 } else { 1 },
             floors: [
@@ -275,9 +275,8 @@ impl Controller {
         Ok(())
     }
 
-    /// The window's length from time `t` at the current rung: `2 h_k`, shortened to a
-    /// smaller rung (or to what is left) near the end.
-    /// Returns the window and its rung.
+    /// The window's length from time `t` at the current rung, `2 h_k`, and its rung:
+    /// shortened to a smaller rung (or to what is left) near the end.
     fn window(&self, t: f64) -> (f64, u32) {
         let left = self.spec.t_end - t;
         let mut k = self.st.rung;
