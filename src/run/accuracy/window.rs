@@ -205,8 +205,11 @@ impl Controller {
         e0: f64,
     ) -> Window {
         let tol = self.spec.tol;
-        let share = big / self.spec.t_end;
+        let span = self.spec.t_end;
+        let share = big / span;
         let s = integ.state();
+        // the part of the span the window ends at: the budgets are spent in proportion
+        let elapsed = (s.time / span).min(1.0);
         let smooth = self.smooth(s);
         let p_b = self.impulse_b(s);
         // a conservative structure's smooth windows keep the energy in both A and B
@@ -234,13 +237,24 @@ impl Controller {
         let [impulse, ell, u_scale] =
             self.scales([sc[0] + values[0], 0.0, sc[2].max(change), sc[3].max(u)]);
         let e_scale = sc[1].max(e0.abs()).max(e_b.abs()).max(self.floors[0]);
-        let local = if smooth { share } else { 1.0 };
+        // a budget: what the span so far allows less what the kept windows spent, and
+        // never below a quarter of the window's own share (a run that overspent at
+        // its floor goes on at sane steps; its estimate then says it missed)
+        let spent = self.st.sums.map(|b| b.0);
+        let budget = |total: f64, spent: f64| (total * elapsed - spent).max(0.25 * total * share);
         Window {
             ratios: [
-                ratio(d[0], tol * (0.5 * p_b.abs() + 0.5 * impulse * share)),
-                ratio(d[1], tol * (0.5 * (e_b - e0).abs() + 0.5 * e_scale * share)),
-                ratio(d[2], tol * ell * local),
-                ratio(d[3], tol * u_scale * local),
+                ratio(d[0], budget(tol * impulse, spent[0])),
+                ratio(d[1], budget(tol * e_scale, spent[1])),
+                ratio(d[2], tol * ell * if smooth { share } else { 1.0 }),
+                ratio(
+                    d[3],
+                    if smooth {
+                        tol * u_scale * share
+                    } else {
+                        budget(tol * u_scale, spent[4])
+                    },
+                ),
             ],
             d,
             smooth,

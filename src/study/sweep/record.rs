@@ -337,6 +337,101 @@ pub fn impulse_samples(force: &[f64], dt: &[f64], h: f64, t_end: f64) -> Vec<f64
     out
 }
 
+/// A force trace over its steps: the total normal contact force of each step and the
+/// steps (`dt`, or all `h` when `dt` is empty).
+#[derive(Clone, Copy, Debug)]
+pub struct ForceTrace<'a> {
+    /// The total normal contact force of each step (N).
+    pub force: &'a [f64],
+    /// Each step's length (s), or empty for steps all `h`.
+    pub dt: &'a [f64],
+    /// The step when `dt` is empty (s).
+    pub h: f64,
+}
+
+impl ForceTrace<'_> {
+    fn step(&self, k: usize) -> f64 {
+        if self.dt.is_empty() {
+            self.h
+        } else {
+            self.dt[k]
+        }
+    }
+}
+
+/// `∫₀^T |P_a(t) − P_b(t)| dt` (N·s²) of two cumulative impulses `P(t) = ∫₀ᵗ f`, each
+/// linear within its own steps, integrated exactly over the union of their step ends
+/// up to `t_end`. Divided by `P_b(T) · T` it is the impulse history's error *in time*:
+/// an impulse `P` placed `δt` off counts `P δt`, where the largest difference at sample
+/// times ([`impulse_samples`]) counts it whole once a sample falls within `δt`. It is
+/// the Wasserstein distance of the two impulse measures when their totals agree.
+pub fn impulse_difference_in_time(a: ForceTrace<'_>, b: ForceTrace<'_>, t_end: f64) -> f64 {
+    // each trace's position: steps consumed, their end time, the impulse at that end
+    struct Walk {
+        k: usize,
+        t: f64,
+        p: f64,
+    }
+    let at = |w: &Walk, tr: &ForceTrace<'_>, t: f64| -> f64 {
+        if w.k < tr.force.len() {
+            w.p + tr.force[w.k] * (t - w.t).max(0.0)
+        } else {
+            w.p
+        }
+    };
+    let next = |w: &Walk, tr: &ForceTrace<'_>| -> f64 {
+        if w.k < tr.force.len() {
+            w.t + tr.step(w.k)
+        } else {
+            f64::INFINITY
+        }
+    };
+    let advance = |w: &mut Walk, tr: &ForceTrace<'_>, t: f64| {
+        while w.k < tr.force.len() && w.t + tr.step(w.k) <= t {
+            w.p += tr.force[w.k] * tr.step(w.k);
+            w.t += tr.step(w.k);
+            w.k += 1;
+        }
+    };
+    let (mut wa, mut wb) = (
+        Walk {
+            k: 0,
+            t: 0.0,
+            p: 0.0,
+        },
+        Walk {
+            k: 0,
+            t: 0.0,
+            p: 0.0,
+        },
+    );
+    let (mut t0, mut d0, mut sum) = (0.0f64, 0.0f64, 0.0f64);
+    while t0 < t_end {
+        let t1 = next(&wa, &a).min(next(&wb, &b)).min(t_end);
+        if t1 <= t0 {
+            // a zero-length step: consume it
+            advance(&mut wa, &a, t0);
+            advance(&mut wb, &b, t0);
+            if next(&wa, &a).min(next(&wb, &b)) <= t0 {
+                break;
+            }
+            continue;
+        }
+        let d1 = at(&wa, &a, t1) - at(&wb, &b, t1);
+        let dt = t1 - t0;
+        // |d| is linear on the segment, or two triangles where it changes sign
+        sum += if d0 * d1 >= 0.0 {
+            0.5 * (d0.abs() + d1.abs()) * dt
+        } else {
+            0.5 * (d0 * d0 + d1 * d1) / (d0.abs() + d1.abs()) * dt
+        };
+        advance(&mut wa, &a, t1);
+        advance(&mut wb, &b, t1);
+        (t0, d0) = (t1, d1);
+    }
+    sum
+}
+
 /// A cumulative impulse trace (samples at `t_end (i + 1) / n`, 0 at t = 0) at time `t`,
 /// linear between samples (the last sample beyond `t_end`).
 pub(super) fn trace_at(trace: &[f64], t_end: f64, t: f64) -> f64 {
