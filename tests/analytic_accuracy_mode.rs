@@ -226,3 +226,42 @@ fn a_sweep_over_the_accuracy_takes_the_tightest_as_its_reference() {
     assert_eq!(refs, ["0.001"], "{csv}");
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// Space against time (issue 50 §6): the run's estimate covers its step only. A 20-element
+/// bar asked 1e-2 stays several times off the closed form E S |v0| / c0, 2L/c0, |v0| (its
+/// mesh's dispersion) while estimating its time error within 1e-2: the sweep's verdict
+/// says the mesh dominates; the 1000-element bar asked 1e-1 is within its own estimate
+/// of the closed form: the step dominates. (Measured: 3.9e-2 against 2.5e-3, and
+/// 1.2e-2 against 1.6e-2; the factor 2 of `SPACE_DOMINATES` separates them.)
+#[test]
+fn a_sweep_says_whether_the_mesh_or_the_step_dominates() {
+    for (elements, tol, want) in [
+        (20, "1e-2", "the mesh's error dominates"),
+        (1000, "1e-1", "the step's error dominates"),
+    ] {
+        let out = std::env::temp_dir().join(format!(
+            "signorini-space-time-{elements}-{}",
+            std::process::id()
+        ));
+        let (code, err) = cli(&[
+            "sweep",
+            "meshes/bar.toml",
+            "--set",
+            &format!("bodies[0].mesh.elements={elements}"),
+            "--set",
+            "time.dt=1e-5",
+            "--axis",
+            &format!("time.accuracy=[{tol}]"),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let verdict = std::fs::read_to_string(out.join("verdict.txt")).unwrap();
+        let line = verdict
+            .lines()
+            .find(|l| l.starts_with("space against time"))
+            .unwrap_or_else(|| panic!("no space/time verdict: {verdict}"));
+        assert!(line.contains(want), "{elements} elements at {tol}: {line}");
+        std::fs::remove_dir_all(&out).ok();
+    }
+}

@@ -24,7 +24,7 @@ pub(crate) fn print_summary(s: &run::Summary, out: &std::path::Path) {
     }
     if let Some(a) = &s.accuracy {
         out!(
-            "accuracy            asked {:.1e}: estimated impulse history {:.2e}, energy {:.2e}, gaps {:.2e}, state {:.2e} ({}); bounded by {}",
+            "accuracy            asked {:.1e}: estimated impulse history {:.2e}, energy {:.2e}, gaps {:.2e}, state {:.2e} ({}; the step's error: the mesh's is not estimated); bounded by {}",
             a.target,
             a.estimated.impulse_history,
             a.estimated.energy,

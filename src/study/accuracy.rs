@@ -324,14 +324,7 @@ pub fn study(scene: &Scene, tols: &[f64], repeat: usize, dir: &Path) -> Result<V
     }
     for (tol, r, m) in &acc {
         let a = r.summary.accuracy.as_ref().expect("an accuracy run");
-        let est = [
-            a.estimated.impulse_history,
-            a.estimated.energy,
-            a.estimated.gaps,
-            a.estimated.state,
-        ]
-        .into_iter()
-        .fold(0.0, f64::max);
+        let est = a.estimated.largest();
         row(
             &mut csv,
             "accuracy",

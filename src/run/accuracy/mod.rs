@@ -473,6 +473,7 @@ impl Controller {
             target: tol,
             met,
             estimated,
+            scope: SCOPE.to_string(),
             bounded_by: if st.bounded[most] == 0 {
                 "none (every window at the largest step)".to_string()
             } else {

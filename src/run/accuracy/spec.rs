@@ -75,6 +75,20 @@ impl AccuracySpec {
     }
 }
 
+/// What an accuracy run's estimates cover ([`AccuracySummary::scope`]).
+pub const SCOPE: &str = "time: the step's error on this mesh; the mesh's (space) error is not \
+                         estimated (`sweep --refine` with a time.accuracy axis says which dominates)";
+
+impl AccuracyEstimates {
+    /// The largest estimate.
+    pub fn largest(&self) -> f64 {
+        self.impulse_history
+            .max(self.energy)
+            .max(self.gaps)
+            .max(self.state)
+    }
+}
+
 /// The observables the controller compares (in [`AccuracySummary`] order).
 pub const OBSERVABLES: [&str; 4] = ["impulse_history", "energy", "gaps", "state"];
 
@@ -82,7 +96,9 @@ pub const OBSERVABLES: [&str; 4] = ["impulse_history", "energy", "gaps", "state"
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct AccuracyEstimates {
     /// The cumulative contact impulse: `Σ |P_A − P_B|` over the windows, relative to the
-    /// total impulse (the sweep's `impulse_history_error`).
+    /// total impulse. It bounds the cumulative impulse's error at the end and its error
+    /// in time, `∫|P − P_ref| dt / (P_ref(T) T)` (`signorini study accuracy`'s
+    /// `impulse_in_time`; [`super`] says why not the sweep's sampled measure).
     pub impulse_history: f64,
     /// The energy: `Σ |E_A − E_B|`, relative to the largest energy met.
     pub energy: f64,
@@ -107,6 +123,9 @@ pub struct AccuracySummary {
     pub met: bool,
     /// Estimated error per observable.
     pub estimated: AccuracyEstimates,
+    /// What the estimates cover: the time discretisation's error on the mesh the run
+    /// has ([`SCOPE`]); the mesh's own error is not estimated.
+    pub scope: String,
     /// The observable that limited the step most often (its ratio was the largest in a
     /// window that was rejected or could not grow).
     pub bounded_by: String,

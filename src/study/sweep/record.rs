@@ -27,6 +27,10 @@ pub struct RunRecord {
     /// The accuracy asked of a run that chose its steps (`time.accuracy`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub accuracy: Option<f64>,
+    /// That run's own estimate of its time error (the largest of `summary.json`'s
+    /// `accuracy.estimated`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub accuracy_estimated: Option<f64>,
     /// End time (s).
     pub t_end: f64,
     /// Median wall time of the step loop over the repeats (s).
@@ -78,7 +82,7 @@ pub struct RunRecord {
 }
 
 /// The measures of the table: (column, what it is).
-pub const MEASURES: [(&str, &str); 9] = [
+pub const MEASURES: [(&str, &str); 10] = [
     (
         "accuracy",
         "worst analytic error (the probes' too where they have one), else worst of impulse \
@@ -110,6 +114,11 @@ pub const MEASURES: [(&str, &str); 9] = [
         "probe_error",
         "displacement at the probes against the analytic value, else the finest run",
     ),
+    (
+        "impulse_in_time_error",
+        "cumulative impulse against the finest run, integrated over time (what the accuracy \
+         mode promises)",
+    ),
 ];
 
 /// A row of the table: the record and its errors.
@@ -118,9 +127,9 @@ pub struct Row {
     /// The run.
     pub record: RunRecord,
     /// Values of [`MEASURES`] (NaN where not measured).
-    pub errors: [f64; 9],
+    pub errors: [f64; 10],
     /// On the Pareto front (wall time against the error) per measure.
-    pub front: [bool; 9],
+    pub front: [bool; 10],
     /// The finest run, which the others are compared with.
     pub is_reference: bool,
 }
@@ -196,6 +205,7 @@ pub fn run_point(
                     dofs: 0,
                     dt: scene.time.dt,
                     accuracy: scene.time.accuracy,
+                    accuracy_estimated: None,
                     t_end: scene.time.t_end,
                     wall_seconds: f64::NAN,
                     walls,
@@ -244,6 +254,7 @@ pub fn run_point(
         dofs: s.dofs,
         dt: h,
         accuracy: s.accuracy.as_ref().map(|a| a.target),
+        accuracy_estimated: s.accuracy.as_ref().map(|a| a.estimated.largest()),
         t_end: s.t_end,
         wall_seconds: sorted[sorted.len() / 2],
         walls,

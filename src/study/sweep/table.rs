@@ -12,7 +12,7 @@ pub fn table(mut records: Vec<RunRecord>) -> Vec<Row> {
         .into_iter()
         .enumerate()
         .map(|(i, r)| {
-            let mut e = [f64::NAN; 9];
+            let mut e = [f64::NAN; 10];
             // max |u − u_ref| / max |u_ref| over every probe, time and component
             let probe_error = |u: &[f64], v: &[f64]| {
                 let scale = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -67,6 +67,7 @@ pub fn table(mut records: Vec<RunRecord>) -> Vec<Row> {
                             .map(|(a, b)| (a - b).abs())
                             .fold(0.0, f64::max)
                             / total;
+                        e[9] = impulse_in_time(&r.impulse, &f.impulse) / total;
                     }
                     if f.peak_force > 0.0 {
                         e[5] = (r.peak_force / f.peak_force - 1.0).abs();
@@ -98,7 +99,7 @@ pub fn table(mut records: Vec<RunRecord>) -> Vec<Row> {
             Row {
                 record: r,
                 errors: e,
-                front: [false; 9],
+                front: [false; 10],
                 is_reference: Some(i) == reference,
             }
         })
@@ -123,6 +124,25 @@ pub fn table(mut records: Vec<RunRecord>) -> Vec<Row> {
         }
     }
     rows
+}
+
+/// `∫₀ᵀ |P − P_ref| dt / T` of two cumulative impulse traces sampled at the same
+/// `T (i + 1) / n` (0 at t = 0), by the trapezoidal rule over the samples: the sweep's
+/// reading of the error in time that `signorini study accuracy` integrates exactly over
+/// the steps ([`impulse_difference_in_time`]); a shift below the sampling interval
+/// counts by its share of it.
+pub(super) fn impulse_in_time(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    if n == 0 {
+        return f64::NAN;
+    }
+    let (mut prev, mut sum) = (0.0f64, 0.0f64);
+    for (x, y) in a.iter().zip(b) {
+        let d = (x - y).abs();
+        sum += 0.5 * (prev + d);
+        prev = d;
+    }
+    sum / n as f64
 }
 
 /// The scheme of a row (its `scheme` axis value, else `scene`).
@@ -202,6 +222,7 @@ pub fn verdicts(rows: &[Row], levels: &[f64]) -> Vec<String> {
             None => out.push(format!("sweep {s}: no measured run")),
         }
     }
+    out.extend(space_against_time(rows, &against));
     for &l in levels {
         let mut by: Vec<(&Row, f64)> = Vec::new();
         for s in &schemes {
@@ -229,11 +250,70 @@ pub fn verdicts(rows: &[Row], levels: &[f64]) -> Vec<String> {
     out
 }
 
+/// How far above its own time estimate a run's error must be for the mesh to dominate.
+pub const SPACE_DOMINATES: f64 = 2.0;
+
+/// One line per run that chose its steps (`time.accuracy`), where its error can hold a
+/// mesh error (against an analytic reference, or a finer mesh of a `refine` axis): the
+/// error measured beside the run's own estimate of its time error. The estimate covers
+/// the step on the run's mesh only (`run::accuracy::SCOPE`): an error more than
+/// [`SPACE_DOMINATES`] times above it is the mesh's, one within it the step's, and
+/// between the two both count (the reference's own error is in the difference too).
+pub fn space_against_time(rows: &[Row], against: &str) -> Vec<String> {
+    let analytic = rows.iter().any(|r| r.record.analytic.is_some());
+    let mut levels: Vec<usize> = rows.iter().map(|r| r.record.point.refine).collect();
+    levels.sort_unstable();
+    levels.dedup();
+    if !analytic && levels.len() < 2 {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    for r in rows
+        .iter()
+        .filter(|r| (analytic || !r.is_reference) && !r.errors[0].is_nan())
+    {
+        let (Some(tol), Some(est)) = (r.record.accuracy, r.record.accuracy_estimated) else {
+            continue;
+        };
+        let e = r.errors[0];
+        let verdict = if e > SPACE_DOMINATES * est.max(1e-300) {
+            "the mesh's error dominates: refine the mesh, a tighter TOL will not help"
+        } else if e <= est {
+            "the step's error dominates: the mesh is fine enough for this TOL"
+        } else {
+            "both count"
+        };
+        out.push(format!(
+            "space against time: refine={} TOL {tol:.0e}: error {} against {against}, its own \
+             time estimate {}: {verdict}",
+            r.record.point.refine,
+            pct(e),
+            pct(est)
+        ));
+    }
+    out
+}
+
 /// A relative error or level as `3.06e-4` (`n/a` when not measured).
 pub(super) fn pct(x: f64) -> String {
     if x.is_nan() {
         "n/a".to_string()
     } else {
         format!("{x:.2e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// A unit impulse sampled ten intervals late differs in time by ten sampling
+    /// intervals (of 512 over the span): 10/512 of the span.
+    #[test]
+    fn the_sampled_impulse_in_time_counts_a_shift_by_its_length() {
+        let n = 512;
+        let a: Vec<f64> = (0..n).map(|i| if i >= 100 { 1.0 } else { 0.0 }).collect();
+        let b: Vec<f64> = (0..n).map(|i| if i >= 110 { 1.0 } else { 0.0 }).collect();
+        let d = super::impulse_in_time(&a, &b);
+        assert!((d - 10.0 / n as f64).abs() <= 1e-15, "{d}");
+        assert_eq!(super::impulse_in_time(&a, &a), 0.0);
     }
 }
