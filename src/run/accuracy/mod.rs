@@ -100,6 +100,9 @@ pub const MAX_RUNGS: u32 = 40;
 /// Windows with a small error before the step grows one rung.
 const CALM_WINDOWS: u32 = 2;
 
+/// Most calm windows added to [`CALM_WINDOWS`] after growths that did not hold.
+const MAX_BACKOFF: u32 = 64;
+
 /// What a checkpoint keeps of the controller.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ControllerState {
@@ -111,6 +114,13 @@ pub struct ControllerState {
     pub rung: u32,
     /// Calm windows in a row.
     pub calm: u32,
+    /// Calm windows asked beyond [`CALM_WINDOWS`] before the next growth: raised when a
+    /// window at a rung just grown to is rejected, lowered when a growth holds.
+    #[serde(default)]
+    pub backoff: u32,
+    /// The step grew one rung and no window at it has been decided yet.
+    #[serde(default)]
+    pub grown: bool,
     /// Estimates summed so far (impulse, energy, smooth gaps, nonsmooth gaps max,
     /// state).
     pub sums: [crate::integrators::saved::Bits; 5],
@@ -397,10 +407,11 @@ impl Controller {
             if eps > 1.0 {
                 self.st.counts[3] += 1;
             }
-            // the doubled window's ratio is 2^p times this one's
+            // the doubled window's ratio is 2^p times this one's: grow where it would
+            // pass (a growth that fails costs one window and makes the next wait longer)
             let grow = eps
                 <= if smooth {
-                    0.5f64.powi(self.order as i32 + 1)
+                    0.5f64.powi(self.order as i32)
                 } else {
                     0.25
                 };
@@ -412,12 +423,18 @@ impl Controller {
                     self.st.bounded[worst] += 1;
                 }
             }
-            if self.st.calm >= CALM_WINDOWS
+            if self.st.grown {
+                // the growth held
+                self.st.grown = false;
+                self.st.backoff /= 2;
+            }
+            if self.st.calm >= CALM_WINDOWS + self.st.backoff
                 && self.st.rung > 0
                 && big >= 2.0 * self.spec.step(self.st.rung) * (1.0 - 1e-9)
             {
                 self.st.rung -= 1;
                 self.st.calm = 0;
+                self.st.grown = true;
             }
             let h = 0.5 * big;
             self.st.used[0] = Bits(self.st.used[0].0.min(h));
@@ -442,6 +459,11 @@ impl Controller {
     fn reject(&mut self, r: f64) {
         self.st.counts[1] += 1;
         self.st.calm = 0;
+        if self.st.grown {
+            // a growth that did not hold: wait longer before the next
+            self.st.grown = false;
+            self.st.backoff = (2 * self.st.backoff + MAX_BACKOFF / 8).min(MAX_BACKOFF);
+        }
         let down = if r.is_finite() {
             r.log2().ceil().max(1.0) as u32
         } else {
