@@ -106,6 +106,10 @@ fn vtkhdf_and_history_hold_what_the_vtu_and_csv_hold() {
     }
     let dt: f64 = hist.attr("dt").unwrap().read_scalar().unwrap();
     assert_eq!(dt, scene.dt);
+    // each row's own step (constant here; the accuracy mode's vary)
+    let steps: Vec<f64> = hist.dataset("dt").unwrap().read_raw().unwrap();
+    assert_eq!(steps.len(), rows.len());
+    assert!(steps.iter().all(|&h| h == scene.dt), "{steps:?}");
     let params: hdf5::types::VarLenUnicode =
         hist.attr("parameters").unwrap().read_scalar().unwrap();
     let p: serde_json::Value = serde_json::from_str(params.as_str()).unwrap();

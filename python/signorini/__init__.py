@@ -389,6 +389,7 @@ class Mesh:
 _UNITS = {
     "step": "",
     "time": "s",
+    "dt": "s",
     "kinetic_energy": "J",
     "potential_energy": "J",
     "max_violation": "m",

@@ -958,6 +958,7 @@ def test_the_accuracy_mode_runs_and_steps_to_its_end():
     dt = np.diff(np.concatenate([[0.0], t]))
     # the largest step is dt (to the rounding of the summed times), smaller at the impacts
     assert dt.max() <= 1e-2 * (1 + 1e-9) and dt.min() < 5e-3
+    assert sim.history.unit("dt") == "s"
     p = sim.history["impulse_0"]
     first = t[np.argmax(p > 0)]
     assert abs(first - 1.0) <= 1e-2

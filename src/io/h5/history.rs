@@ -40,7 +40,12 @@ pub(super) struct FrictionHistory {
     pub(super) rows_f: Vec<(i64, f64)>,
 }
 
-pub(super) const FLOAT_COLUMNS: [&str; 3] = ["time", "kinetic_energy", "potential_energy"];
+/// The float columns after `step`, before `max_violation`: `dt` is each row's own step
+/// (constant but for a run that chooses its steps, `time.accuracy`).
+pub(super) const FLOAT_COLUMNS: [&str; 4] = ["time", "dt", "kinetic_energy", "potential_energy"];
+
+/// Floats buffered per row: [`FLOAT_COLUMNS`] and `max_violation`.
+const FLOATS: usize = FLOAT_COLUMNS.len() + 1;
 
 pub(super) const INT_COLUMNS: [&str; 3] = [
     "newton_iterations",
@@ -141,7 +146,7 @@ impl History {
                 m,
                 friction,
                 bodies,
-                rows_s: Vec::with_capacity(5 * Self::BLOCK),
+                rows_s: Vec::with_capacity(FLOATS * Self::BLOCK),
                 rows_i: Vec::with_capacity(4 * Self::BLOCK),
                 rows_c: Vec::with_capacity(4 * m * Self::BLOCK),
                 buffered: 0,
@@ -177,7 +182,8 @@ impl History {
             st.projection_iterations as i64,
             st.index_set_iterations as i64,
         ]);
-        self.rows_s.extend([s.time, ke, pe, st.max_violation]);
+        self.rows_s
+            .extend([s.time, st.dt, ke, pe, st.max_violation]);
         for q in [&s.gap, &s.local_velocity, &s.impulse, &s.projection] {
             self.rows_c.extend_from_slice(q);
         }
@@ -220,7 +226,7 @@ impl History {
                     }
                 } else {
                     for (r, c) in col_f.iter_mut().enumerate() {
-                        *c = self.rows_s[4 * r + fi];
+                        *c = self.rows_s[FLOATS * r + fi];
                     }
                     ds.append(&col_f)?;
                     fi += 1;
