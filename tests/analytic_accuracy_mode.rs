@@ -265,3 +265,88 @@ fn a_sweep_says_whether_the_mesh_or_the_step_dominates() {
         std::fs::remove_dir_all(&out).ok();
     }
 }
+
+/// The impact times of a force trace: the end of the first step of each run of positive
+/// forces (the steps `dt`, or all `h` when the run kept one step).
+fn impact_times(force: &[f64], dt: &[f64], h: f64) -> Vec<f64> {
+    let mut t = 0.0;
+    let mut hits = Vec::new();
+    let mut closed = false;
+    for (k, &f) in force.iter().enumerate() {
+        t += if dt.is_empty() { h } else { dt[k] };
+        if f > 0.0 && !closed {
+            hits.push(t);
+        }
+        closed = f > 0.0;
+    }
+    hits
+}
+
+/// The impacting oscillator of eq. 8 (m = 1, k = 4π², c = 0.2, e = ½, released from
+/// q₀ = 1 at rest) has closed-form impacts ([`signorini::analytic::oscillator`]: the
+/// damped flight from the stop returns to it after π/ω_d, whatever its speed). Asked
+/// TOL = 1e-2 and 1e-3 from a largest step of 1.6e-2 s (16× the scene's), every impact
+/// up to t = 3 s comes within TOL of its closed-form time (relative) and the final
+/// energy within TOL of the closed form's, relative to the initial energy k q₀²/2.
+#[test]
+fn impacting_oscillator_meets_the_accuracy_asked() {
+    let exact = signorini::analytic::oscillator::Oscillator::example();
+    let want = exact.impact_times(3.0, 100);
+    assert!(want.len() >= 5, "{want:?}");
+    let (q, v) = exact.state(3.0);
+    let k = 4.0 * std::f64::consts::PI.powi(2);
+    let e_end = 0.5 * v * v + 0.5 * k * q * q;
+    let e0 = 0.5 * k;
+    for tol in [1e-2, 1e-3] {
+        let s = Scene::from_file_with(
+            std::path::Path::new("meshes/oscillator.toml"),
+            &[format!("time.accuracy={tol:e}"), "time.dt=1.6e-2".into()],
+        )
+        .unwrap();
+        let r = run_scene(&s, None, &mut Quiet).unwrap();
+        let a = r.summary.accuracy.as_ref().expect("an accuracy summary");
+        assert!(a.met, "tol {tol}: {a:?}");
+        let got = impact_times(&r.force, &r.dt, r.summary.dt);
+        assert_eq!(got.len(), want.len(), "tol {tol}: {got:?} against {want:?}");
+        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+            assert!(
+                (g - w).abs() <= tol * w,
+                "tol {tol}: impact {i} at {g}, exact {w}"
+            );
+        }
+        let e = (r.summary.energy[1] - e_end).abs() / e0;
+        assert!(
+            e <= tol,
+            "tol {tol}: final energy off by {e} of the initial"
+        );
+    }
+}
+
+/// Two equal bars (`meshes/two_bars.toml`: N = 1000 each, the striker at 0.1 m/s onto
+/// the target at rest, e = 0): the striker stops and the target leaves at 0.1 m/s after
+/// 2L/c₀ (the wave crosses both). Asked TOL = 1e-1 and 1e-2 from a largest step of
+/// 3.2e-6 s (16× the scene's), the final momenta are within TOL of (0, m v₀), relative
+/// to m v₀ (the mesh's own error at N = 1000 is below 0.3 %, as the bar's).
+#[test]
+fn two_bars_exchange_their_momenta_to_the_accuracy_asked() {
+    let m_v0 = 7800.0 * 3.14159265358979e-4 * 1.0 * 0.1;
+    for tol in [1e-1, 1e-2] {
+        let s = Scene::from_file_with(
+            std::path::Path::new("meshes/two_bars.toml"),
+            &[format!("time.accuracy={tol:e}"), "time.dt=3.2e-6".into()],
+        )
+        .unwrap();
+        let r = run_scene(&s, None, &mut Quiet).unwrap();
+        let a = r.summary.accuracy.as_ref().expect("an accuracy summary");
+        assert!(a.met, "tol {tol}: {a:?}");
+        let b = &r.summary.bodies;
+        assert_eq!(b.len(), 2);
+        let striker = b[0].last.momentum[0];
+        let target = b[1].last.momentum[0];
+        assert!(striker.abs() <= tol * m_v0, "tol {tol}: striker {striker}");
+        assert!(
+            (target - m_v0).abs() <= tol * m_v0,
+            "tol {tol}: target {target} against {m_v0}"
+        );
+    }
+}
