@@ -114,7 +114,7 @@ pub struct ControllerState {
     pub rung: u32,
     /// Calm windows in a row.
     pub calm: u32,
-    /// Calm windows asked beyond [`CALM_WINDOWS`] before the next growth: raised when a
+    /// Calm windows asked beyond the usual two before the next growth: raised when a
     /// window at a rung just grown to is rejected, lowered when a growth holds.
     #[serde(default)]
     pub backoff: u32,
