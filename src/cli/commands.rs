@@ -308,7 +308,7 @@ pub(crate) fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     );
     if let (Some(tol), Some(first), Some(last)) = (c.accuracy, c.ladder.first(), c.ladder.last()) {
         out!(
-            "accuracy            {tol:e} asked: the run chooses its steps among {} from {first:e} to {last:e} s (each halving the last), at least {} steps",
+            "accuracy            {tol:e} asked: the run chooses its steps among {} from {first:e} to {last:e} s (each halving the last), at least {} steps; it estimates the step's error on this mesh, not the mesh's",
             c.ladder.len(),
             c.steps
         );

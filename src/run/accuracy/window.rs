@@ -187,8 +187,12 @@ impl Controller {
         let signs = self.signs();
         for c in 0..b2.gap.len() {
             change = change.max((b2.gap[c] - self.st.gap0.0[c]).abs());
-            // event location: the gaps of the contacts that opened or closed
-            if Self::switched(signs, &self.impulse_a, b2, c) {
+            // event location: the gaps of the contacts that opened or closed with an open
+            // gap at either end (an impact or a release; module doc)
+            let open = [self.gap_s0[c], self.gap_a[c], b2.gap[c]]
+                .iter()
+                .any(|&g| g > self.floors[1]);
+            if open && Self::switched(signs, &self.impulse_a, b2, c) {
                 diff = diff.max((b2.gap[c] - self.gap_a[c]).abs());
             }
         }
