@@ -743,7 +743,9 @@ class Simulation:
 
     @property
     def steps_total(self) -> int:
-        """Steps of the whole run."""
+        """Steps of the whole run; of a run that chooses its steps (``time.accuracy``),
+        the steps at its largest step: the fewest it can take (it ends at ``t_end``,
+        which :attr:`time` tells)."""
         return self._inner.steps_total
 
     @property

@@ -540,7 +540,8 @@ impl PySimulation {
     fn steps_done(&self) -> PyResult<usize> {
         Ok(self.lock()?.state().map_or(0, |s| s.step))
     }
-    /// Steps of the whole run.
+    /// Steps of the whole run (of a run that chooses its steps, those at its largest
+    /// step: the fewest it can take).
     #[getter]
     fn steps_total(&self) -> usize {
         self.kind.steps()
