@@ -155,9 +155,9 @@ pub(crate) struct SceneArgs {
     /// same as --set time.accuracy=TOL); the run chooses its steps (at most time.dt, or
     /// time.dt_max; a pilot pass runs the whole span at it first) and writes the error it
     /// estimates (exit 1 when over TOL): the step's error on this mesh, not the mesh's.
-    /// Experimental (issue 50): it meets TOL on the committed scenes but costs more than
-    /// the cheapest fixed step that does (`signorini study accuracy SCENE` measures
-    /// both).
+    /// Experimental (issue 50): it meets TOL on the committed scenes but the Hertz ball
+    /// (a silent miss) and costs more than the cheapest fixed step that does (`signorini
+    /// study accuracy SCENE` measures both).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub(crate) accuracy: Option<f64>,
     /// Output directory (default: the scene's output.dir, else out/<file stem>).
@@ -268,9 +268,9 @@ pub(crate) struct BarArgs {
     /// the energy, the impact locations and the displacement field; the run chooses its
     /// steps (at most --dt, at least --dt-min; a pilot pass runs the whole span at --dt
     /// first, so give a --dt well above the step needed) and writes the error it
-    /// estimates (exit 1 when over TOL). Experimental (issue 50): it meets TOL but
-    /// costs more than the cheapest fixed step that does (`signorini study accuracy`
-    /// measures both).
+    /// estimates (exit 1 when over TOL). Experimental (issue 50): it meets TOL on the
+    /// bar but costs more than the cheapest fixed step that does (`signorini study
+    /// accuracy` measures both).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub(crate) accuracy: Option<f64>,
     /// The accuracy mode's smallest step (s; default dt / 2^10).
