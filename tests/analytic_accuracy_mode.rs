@@ -266,6 +266,19 @@ fn a_sweep_says_whether_the_mesh_or_the_step_dominates() {
     }
 }
 
+/// `path` asked `tol` from a largest step `dt`: the run, which says it met `tol`.
+fn met_run(path: &str, tol: f64, dt: &str) -> signorini::run::RunResult {
+    let s = Scene::from_file_with(
+        std::path::Path::new(path),
+        &[format!("time.accuracy={tol:e}"), format!("time.dt={dt}")],
+    )
+    .unwrap();
+    let r = run_scene(&s, None, &mut Quiet).unwrap();
+    let a = r.summary.accuracy.as_ref().expect("an accuracy summary");
+    assert!(a.met, "{path} at tol {tol}: {a:?}");
+    r
+}
+
 /// The impact times of a force trace: the end of the first step of each run of positive
 /// forces (the steps `dt`, or all `h` when the run kept one step).
 fn impact_times(force: &[f64], dt: &[f64], h: f64) -> Vec<f64> {
@@ -298,14 +311,7 @@ fn impacting_oscillator_meets_the_accuracy_asked() {
     let e_end = 0.5 * v * v + 0.5 * k * q * q;
     let e0 = 0.5 * k;
     for tol in [1e-2, 1e-3] {
-        let s = Scene::from_file_with(
-            std::path::Path::new("meshes/oscillator.toml"),
-            &[format!("time.accuracy={tol:e}"), "time.dt=1.6e-2".into()],
-        )
-        .unwrap();
-        let r = run_scene(&s, None, &mut Quiet).unwrap();
-        let a = r.summary.accuracy.as_ref().expect("an accuracy summary");
-        assert!(a.met, "tol {tol}: {a:?}");
+        let r = met_run("meshes/oscillator.toml", tol, "1.6e-2");
         let got = impact_times(&r.force, &r.dt, r.summary.dt);
         assert_eq!(got.len(), want.len(), "tol {tol}: {got:?} against {want:?}");
         for (i, (g, w)) in got.iter().zip(&want).enumerate() {
@@ -331,14 +337,7 @@ fn impacting_oscillator_meets_the_accuracy_asked() {
 fn two_bars_exchange_their_momenta_to_the_accuracy_asked() {
     let m_v0 = 7800.0 * 3.14159265358979e-4 * 1.0 * 0.1;
     for tol in [1e-1, 1e-2] {
-        let s = Scene::from_file_with(
-            std::path::Path::new("meshes/two_bars.toml"),
-            &[format!("time.accuracy={tol:e}"), "time.dt=3.2e-6".into()],
-        )
-        .unwrap();
-        let r = run_scene(&s, None, &mut Quiet).unwrap();
-        let a = r.summary.accuracy.as_ref().expect("an accuracy summary");
-        assert!(a.met, "tol {tol}: {a:?}");
+        let r = met_run("meshes/two_bars.toml", tol, "3.2e-6");
         let b = &r.summary.bodies;
         assert_eq!(b.len(), 2);
         let striker = b[0].last.momentum[0];
