@@ -126,8 +126,8 @@ pub struct ControllerState {
     /// The step grew one rung and no window at it has been decided yet.
     #[serde(default)]
     pub grown: bool,
-    /// Estimates summed so far (impulse, energy, smooth gaps, nonsmooth gaps max,
-    /// state).
+    /// Estimates summed so far (impulse, energy, unused — smooth windows have no gap
+    /// difference —, the largest gap difference, state).
     pub sums: [crate::integrators::saved::Bits; 5],
     /// Maxima met: cumulative impulse, largest energy, largest gap change, largest
     /// displacement from the start (mass norm).
@@ -491,7 +491,7 @@ impl Controller {
             // relative to the total impulse, as a sweep measures it
             impulse_history: rel(st.sums[0].0, st.scales[0].0),
             energy: rel(st.sums[1].0, e_scale),
-            gaps: rel(st.sums[2].0 + st.sums[3].0, ell),
+            gaps: rel(st.sums[3].0, ell),
             state: rel(st.sums[4].0, u_scale),
         };
         let tol = self.spec.tol;

@@ -102,8 +102,8 @@ pub struct AccuracyEstimates {
     pub impulse_history: f64,
     /// The energy: `Σ |E_A − E_B|`, relative to the largest energy met.
     pub energy: f64,
-    /// The gaps: the smooth windows' `Σ max_c |g_A − g_B|` plus the largest of the
-    /// windows where a contact opened or closed, relative to the largest gap change.
+    /// The gaps: the largest `max_c |g_A − g_B|` over the contacts that opened or closed
+    /// with an open gap (event location), relative to the largest gap change.
     pub gaps: f64,
     /// The displacement field in the mass norm `‖e_q‖_M = √(e_qᵀ M e_q)`: `Σ ‖q_A −
     /// q_B‖_M` relative to the largest `‖q − q₀‖_M` met. It sees what the contact's

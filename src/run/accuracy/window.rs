@@ -250,7 +250,7 @@ impl Controller {
             ratios: [
                 ratio(d[0], budget(tol * impulse, spent[0])),
                 ratio(d[1], budget(tol * e_scale, spent[1])),
-                ratio(d[2], tol * ell * if smooth { share } else { 1.0 }),
+                ratio(d[2], tol * ell),
                 ratio(
                     d[3],
                     if smooth {
@@ -274,11 +274,9 @@ impl Controller {
         let sums = &mut self.st.sums;
         sums[0] = Bits(sums[0].0 + w.d[0]);
         sums[1] = Bits(sums[1].0 + w.d[1]);
-        if w.smooth {
-            sums[2] = Bits(sums[2].0 + w.d[2]);
-        } else {
-            sums[3] = Bits(sums[3].0.max(w.d[2]));
-        }
+        // only a window where a contact opens or closes has a gap difference
+        // ([`Controller::gaps`]): the event-location estimate is their largest
+        sums[3] = Bits(sums[3].0.max(w.d[2]));
         sums[4] = Bits(sums[4].0 + w.d[3]);
         let sc = &mut self.st.scales;
         sc[0] = Bits(sc[0].0 + w.values[0]);
