@@ -34,6 +34,21 @@ pub(crate) fn print_summary(s: &run::Summary, out: &std::path::Path) {
             a.bounded_by
         );
         out!(
+            "                    the windows' own: impulse history {:.2e}, energy {:.2e}, gaps {:.2e}, state {:.2e}; the companion run's: impulse history {:.2e}, energy {:.2e}, state {:.2e}{}",
+            a.local.impulse_history,
+            a.local.energy,
+            a.local.gaps,
+            a.local.state,
+            a.companion.impulse_history,
+            a.companion.energy,
+            a.companion.state,
+            if a.companion.resyncs > 0 {
+                format!(" ({} restart(s) from the run's state)", a.companion.resyncs)
+            } else {
+                String::new()
+            }
+        );
+        out!(
             "steps chosen        {} windows of two steps, {} rejected, {} steps taken in all; h from {:.3e} to {:.3e} s (ladder {:.3e} … {:.3e} s); {} window(s) at the floor",
             a.windows,
             a.rejected,

@@ -74,9 +74,9 @@ impl Plan {
             );
         }
         self.ledger.add(
-            "accuracy mode: snapshots and comparison vectors",
+            "accuracy mode: snapshots, the companion and comparison vectors",
             (n + rows) as u64,
-            (3 * 2 + 4) * 8,
+            (4 * 2 + 4) * 8,
         );
     }
 

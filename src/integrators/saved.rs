@@ -67,7 +67,7 @@ impl<'de> Deserialize<'de> for Floats {
 /// warm start of the next friction solve), projections, contact statuses and any vector
 /// a scheme carries from step to step (Schatzman–Paoli's `q_{k−1}`); gaps, Jacobians and
 /// Delassus data are functions of `q` and are evaluated again.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct IntegratorState {
     /// The scheme's name (a checkpoint resumes with the scheme that wrote it).

@@ -113,6 +113,24 @@ pub struct AccuracyEstimates {
     pub state: f64,
 }
 
+/// The companion run's differences from the run, relative to the same scales as
+/// [`AccuracyEstimates`] ([`super`]: the companion takes one step per kept window, from
+/// its own state). Undivided: where the step's error is first order (an impact, a
+/// release, the θ-method at θ ≠ ½), the companion's is twice the run's and the
+/// difference the run's own; where it is second order, three times the run's.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct CompanionEstimates {
+    /// `∫₀ᵀ |P − P_c| dt / (P(T) T)`: the cumulative contact impulse in time.
+    pub impulse_history: f64,
+    /// `|E(T) − E_c(T)|` relative to the largest energy met.
+    pub energy: f64,
+    /// `‖q(T) − q_c(T)‖_M` relative to the largest `‖q − q₀‖_M` met.
+    pub state: f64,
+    /// Times the companion failed a step and started again from the run's state (its
+    /// differences before then are kept; what it would have made after is lost).
+    pub resyncs: usize,
+}
+
 /// What the accuracy mode did and estimates (`summary.json` `accuracy`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct AccuracySummary {
@@ -121,8 +139,15 @@ pub struct AccuracySummary {
     /// Whether the estimates are all within `target` (the windows accepted at the floor
     /// included: their differences are in the sums).
     pub met: bool,
-    /// Estimated error per observable.
+    /// Estimated error per observable: the larger of the windows' estimates
+    /// ([`AccuracySummary::local`]) and the companion run's difference
+    /// ([`AccuracySummary::companion`]).
     pub estimated: AccuracyEstimates,
+    /// The windows' own estimates (sums of `|A − B|` from each window's start).
+    pub local: AccuracyEstimates,
+    /// The companion run's differences from the run (global: what an error made in one
+    /// window does to the observables later).
+    pub companion: CompanionEstimates,
     /// What the estimates cover: the time discretisation's error on the mesh the run
     /// has ([`SCOPE`]); the mesh's own error is not estimated.
     pub scope: String,
@@ -133,7 +158,8 @@ pub struct AccuracySummary {
     pub windows: usize,
     /// Windows rejected (taken again at a smaller step).
     pub rejected: usize,
-    /// Steps taken in all, the comparison steps `A` and the rejected windows included.
+    /// Steps taken in all: the comparison steps `A`, the companion's and the rejected
+    /// windows' included.
     pub steps_taken: usize,
     /// Windows accepted at the floor with `ε > 1`: where the local allowance was not
     /// reached (an accumulation of impacts, a contact that chatters); their differences
@@ -168,6 +194,15 @@ impl AccuracySummary {
         .map(|(n, x)| format!("{n} {x:.3e}"))
         .collect();
         let mut detail = format!("estimated errors above it: {}", over.join(", "));
+        let c = &self.companion;
+        if c.impulse_history.max(c.energy).max(c.state) > self.target {
+            detail.push_str(&format!(
+                " (the companion run at twice the steps differs by impulse history {:.3e}, \
+                 energy {:.3e}, state {:.3e}: an error made in one window and met later; \
+                 a smaller time.accuracy or time.dt asks for more)",
+                c.impulse_history, c.energy, c.state
+            ));
+        }
         if self.floor_windows > 0 {
             detail.push_str(&format!(
                 "; {} window(s) at the smallest step dt_min = {:e} s missed their allowance \
