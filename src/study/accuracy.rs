@@ -25,6 +25,8 @@
 //!   distance its initial or final momentum covers over the run (a body that falls and
 //!   bounces ends near its start: its net travel is no scale);
 //! - the probes' displacements, relative to the largest reference value;
+//! - the displacement field at the end in the mass norm, `‖q − q_ref‖_M`, relative to
+//!   the largest `‖q − q₀‖_M` the accuracy runs met (`state`: their estimates' scale);
 //! - the impacting bar's plateau, duration and release velocity (its `[reference]`).
 //!
 //! The achieved error of a run is the largest of these. Wall times are the step loop's
@@ -66,12 +68,13 @@ pub struct Measured {
 }
 
 /// The observables compared, in [`Measured::errors`] order.
-pub const OBSERVABLE_NAMES: [&str; 8] = [
+pub const OBSERVABLE_NAMES: [&str; 9] = [
     "impulse_in_time",
     "energy",
     "momentum",
     "centre",
     "probes",
+    "state",
     "plateau",
     "duration",
     "release_velocity",
@@ -125,9 +128,23 @@ fn trace(r: &RunResult) -> ForceTrace<'_> {
     }
 }
 
+/// The mass matrix and the displacement scale the field's error is measured with.
+struct Field<'a> {
+    mass: &'a crate::linalg::SparseMatrix,
+    scale: f64,
+}
+
 /// The errors of `r` against the reference `f` (module doc).
-fn errors(r: &RunResult, f: &RunResult, t_end: f64) -> Vec<f64> {
+fn errors(r: &RunResult, f: &RunResult, t_end: f64, field: Option<&Field<'_>>) -> Vec<f64> {
     let mut e = vec![f64::NAN; OBSERVABLE_NAMES.len()];
+    if let Some(fd) = field {
+        let (x, y) = (&r.state.q, &f.state.q);
+        if x.len() == y.len() && x.len() == fd.mass.as_ref().ncols() && fd.scale > 0.0 {
+            let d: Vec<f64> = x.iter().zip(y).map(|(a, b)| a - b).collect();
+            let [dmd] = crate::linalg::bilinear_forms(fd.mass.as_ref(), [(&d, &d)]);
+            e[5] = dmd.max(0.0).sqrt() / fd.scale;
+        }
+    }
     let (a, b) = (&r.summary, &f.summary);
     let total: f64 = match f.dt.is_empty() {
         true => f.force.iter().sum::<f64>() * b.dt,
@@ -209,9 +226,9 @@ fn errors(r: &RunResult, f: &RunResult, t_end: f64) -> Vec<f64> {
                 f64::NAN
             }
         };
-        e[5] = rel(x.plateau_force, y.plateau_force);
-        e[6] = rel(x.duration, y.duration);
-        e[7] = rel(x.release_velocity, y.release_velocity);
+        e[6] = rel(x.plateau_force, y.plateau_force);
+        e[7] = rel(x.duration, y.duration);
+        e[8] = rel(x.release_velocity, y.release_velocity);
     }
     e
 }
@@ -265,8 +282,19 @@ pub fn study(scene: &Scene, tols: &[f64], repeat: usize, dir: &Path) -> Result<V
         Ok(s)
     };
     let (reference, _) = timed(&fixed_scene(h_ref)?, 1)?;
+    // the field in the mass norm, relative to the largest displacement the accuracy
+    // runs met (the scale of their own estimates)
+    let model = base.build().ok().map(|(m, _)| m);
+    let scale = acc
+        .iter()
+        .filter_map(|(_, r, _)| r.summary.accuracy.as_ref().map(|a| a.state_scale))
+        .fold(0.0, f64::max);
+    let field = model.as_ref().map(|m| Field {
+        mass: &m.problem.system.mass,
+        scale,
+    });
     let measured = |r: &RunResult, wall: f64| Measured {
-        errors: errors(r, &reference, t_end),
+        errors: errors(r, &reference, t_end, field.as_ref()),
         at_samples: at_samples(r, &reference, t_end),
         steps: r.summary.steps,
         wall,

@@ -553,6 +553,7 @@ impl Controller {
             local,
             companion,
             scope: SCOPE.to_string(),
+            state_scale: u_scale,
             bounded_by: if st.bounded[most] == 0 {
                 "none (every window at the largest step)".to_string()
             } else {

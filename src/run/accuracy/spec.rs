@@ -148,6 +148,9 @@ pub struct AccuracySummary {
     /// The companion run's differences from the run (global: what an error made in one
     /// window does to the observables later).
     pub companion: CompanionEstimates,
+    /// The scale of the displacement field's estimates: the largest `‖q − q₀‖_M` met
+    /// (m·√kg; the pilot's included).
+    pub state_scale: f64,
     /// What the estimates cover: the time discretisation's error on the mesh the run
     /// has ([`SCOPE`]); the mesh's own error is not estimated.
     pub scope: String,
