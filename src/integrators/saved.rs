@@ -87,6 +87,11 @@ pub struct IntegratorState {
     /// its clock at the saved step and time.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dt: Option<Bits>,
+    /// The step the saved impulse was made over, where it is not `dt` (a state saved
+    /// after a change of step, before a step at the new one): the warm start of a
+    /// frictional solve is scaled by the ratio of the steps.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub impulse_dt: Option<Bits>,
     /// The step and time at which `h` last changed (`None`: the start, `t = 0`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub origin: Option<(usize, Bits)>,
@@ -127,6 +132,7 @@ mod tests {
             vectors: [("q".to_string(), Floats(vec![0.0]))].into_iter().collect(),
             status: Vec::new(),
             dt: None,
+            impulse_dt: None,
             origin: None,
         };
         assert_eq!(s.vector("q", 1).unwrap(), &[0.0]);

@@ -130,6 +130,7 @@ impl State {
         s.status.clear();
         s.status.extend(self.status.iter().map(|c| c.code()));
         s.dt = None;
+        s.impulse_dt = None;
         s.origin = None;
     }
 

@@ -131,6 +131,7 @@ impl ThetaCore {
                 w_at_qk: false,
                 origin: (0, 0.0),
                 pending_factorizations: 0,
+                warm_h: h,
                 snapshot: Default::default(),
             },
             dofs: DofScratch {

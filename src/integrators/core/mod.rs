@@ -323,6 +323,11 @@ pub(crate) struct StepCarry {
     /// Factorizations [`ThetaCore::set_dt`] made since the last step, counted in the
     /// next step's [`StepStats::factorizations`].
     pub(crate) pending_factorizations: usize,
+    /// The step the state's impulse was made over: a frictional solve at another `h`
+    /// starts from that impulse scaled by `h / warm_h` (an impulse is a force times its
+    /// step; the accuracy mode's comparison steps at `2h` otherwise started from half
+    /// their impulse and needed up to 4× the sweeps).
+    pub(crate) warm_h: f64,
     /// The state saved by [`ThetaCore::set_dt`] around a change of step, kept so that a
     /// change to a cached `h` allocates nothing.
     pub(crate) snapshot: crate::integrators::saved::IntegratorState,
@@ -480,6 +485,7 @@ impl ThetaCore {
             self.state.projection[c] = self.rs.tau[self.cfg.off[c]];
         }
         self.state.step += 1;
+        self.carry.warm_h = self.h;
         self.state.time =
             self.carry.origin.1 + (self.state.step - self.carry.origin.0) as f64 * self.h;
         self.evaluate_at_state();

@@ -226,7 +226,18 @@ impl ThetaCore {
                         }
                         // friction: warm start from the previous step's impulse
                         let warm = if frictional && it == 1 {
-                            &self.state.impulse_rows
+                            let r = self.h / self.carry.warm_h;
+                            if r.to_bits() == 1f64.to_bits() || !r.is_finite() {
+                                &self.state.impulse_rows
+                            } else {
+                                // the impulse of a step at another h, scaled to this one
+                                for (w, p) in
+                                    self.carry.p_warm.iter_mut().zip(&self.state.impulse_rows)
+                                {
+                                    *w = p * r;
+                                }
+                                &self.carry.p_warm
+                            }
                         } else {
                             &self.rs.p
                         };

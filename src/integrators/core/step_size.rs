@@ -189,6 +189,8 @@ impl ThetaCore {
     pub fn save_into(&self, scheme: &str, s: &mut IntegratorState) {
         self.state.save_into(scheme, s);
         s.dt = Some(Bits(self.h));
+        s.impulse_dt =
+            (self.carry.warm_h.to_bits() != self.h.to_bits()).then_some(Bits(self.carry.warm_h));
         s.origin = (self.carry.origin != (0, 0.0))
             .then_some((self.carry.origin.0, Bits(self.carry.origin.1)));
     }
@@ -196,6 +198,8 @@ impl ThetaCore {
     /// The clock of a restored state `s`: its origin, or the restored step when it ran at
     /// another `h` than this core's.
     pub(super) fn restore_clock(&mut self, s: &IntegratorState) {
+        // the impulse was made over the saving core's step unless it says otherwise
+        self.carry.warm_h = s.impulse_dt.or(s.dt).map_or(self.h, |d| d.0);
         self.carry.origin = s.origin.map_or((0, 0.0), |(k, t)| (k, t.0));
         if s.dt.is_some_and(|d| d.0.to_bits() != self.h.to_bits()) {
             self.carry.origin = (s.step, s.time.0);
