@@ -161,7 +161,7 @@ pub struct ControllerState {
     /// ([`Controller::pilot`]).
     pub pilot: [crate::integrators::saved::Bits; 3],
     /// The companion run's state (one step per kept window from its own state:
-    /// [`Controller::companion_step`]); `None` before the first window.
+    /// the module doc of [`self`]); `None` before the first window.
     #[serde(default)]
     pub companion: Option<IntegratorState>,
     /// The companion's comparison so far: `∫|P − P_c| dt`, `|P − P_c|` at the last
