@@ -118,6 +118,25 @@ impl BarScene {
         let n = self.elements as u64 + 1;
         m.add("dofs", n, crate::limits::bytes_per_dof(3, 1));
         m.add("frame geometry", n, 64);
+        if self.accuracy_spec().is_some() {
+            // per step of the ladder: the tridiagonal factor (2 × n) and the Delassus
+            // data (Â⁻¹G and its scratch, 4 × n), for the cached steps and the one being
+            // formed, with its M̂ (3 diagonals, values and indices); then the snapshots,
+            // the companion and the comparison vectors, and the energy forms
+            // (`Plan::add_accuracy`; measured: 410 bytes per dof above the run at one step)
+            let rungs = crate::integrators::core::STEP_CACHE_ENTRIES as u64 + 1;
+            m.add(
+                "accuracy mode: factors and Delassus data of other steps",
+                n,
+                rungs * 6 * 8,
+            );
+            m.add("accuracy mode: a new step's M̂", n, 3 * 16);
+            m.add(
+                "accuracy mode: snapshots, the companion, comparison vectors, energy forms",
+                n,
+                (crate::integrators::plan::ACCURACY_VECTORS + 6) * 8,
+            );
+        }
         m
     }
 
