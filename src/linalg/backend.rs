@@ -20,6 +20,11 @@ pub trait LinearSolver: Send {
     fn refactor(&mut self, a: SparseColMatRef<'_, usize, f64>, what: &str) -> Result<(), Error>;
     /// Overwrites `x` with `A⁻¹ x`.
     fn solve_in_place(&mut self, x: &mut [f64]);
+    /// The symbolic analysis this factor runs on, for the factor of another matrix of
+    /// its pattern (`None`: the backend keeps none to share).
+    fn analysis(&self) -> Option<super::SpdAnalysis> {
+        None
+    }
     /// `out = base + A⁻¹ x`, leaving `x` as scratch (its content afterwards is not
     /// specified): the free velocity `v_free = v_k + M̂⁻¹ r` of every linear step. The
     /// tridiagonal factor forms it within its backward sweep (one pass over the state

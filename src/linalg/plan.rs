@@ -159,18 +159,23 @@ pub fn analyse_spd_kept(
     Ok((
         plan,
         Some(SpdAnalysis {
-            symbolic,
+            symbolic: std::sync::Arc::new(symbolic),
             ordering: name,
+            pattern: pattern_fingerprint(a),
         }),
     ))
 }
 
 /// The symbolic Cholesky analysis of an SPD pattern and the name of its ordering
-/// ([`analyse_spd_kept`]), which [`SpdFactor::with_analysis`] factors on.
-#[derive(Debug)]
+/// ([`analyse_spd_kept`]), which [`SpdFactor::with_analysis`] factors on; shared by the
+/// factors of every matrix of that pattern ([`super::LinearSolver::analysis`]: the
+/// accuracy mode's `M̂(h)` of each step of its ladder), with a fingerprint of the
+/// pattern that guards the sharing.
+#[derive(Clone, Debug)]
 pub struct SpdAnalysis {
-    pub(super) symbolic: SymbolicCholesky<usize>,
+    pub(super) symbolic: std::sync::Arc<SymbolicCholesky<usize>>,
     pub(super) ordering: &'static str,
+    pub(super) pattern: u64,
 }
 
 /// What [`solver::SparseLdlt::new`] would build for `a` (AMD, no pivoting), from the
@@ -197,4 +202,19 @@ pub struct FactorPlan {
     /// A supernodal Cholesky factor: the zone flexibilities come from it and its tangent
     /// (`linalg::zone_flex`, whose set-up holds up to `entries` more).
     pub supernodal: bool,
+}
+
+/// A fingerprint of `a`'s pattern (FNV-1a over its order, column pointers and row
+/// indices): two matrices with the same fingerprint share a symbolic factorization
+/// ([`SpdFactor::analysis`]).
+pub(super) fn pattern_fingerprint(a: SparseColMatRef<'_, usize, f64>) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: usize| {
+        h ^= x as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    };
+    eat(a.nrows());
+    a.col_ptr().iter().for_each(|&x| eat(x));
+    a.row_idx().iter().for_each(|&x| eat(x));
+    h
 }

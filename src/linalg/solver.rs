@@ -54,6 +54,9 @@ impl LinearSolver for SpdFactor {
     fn solve_in_place(&mut self, x: &mut [f64]) {
         SpdFactor::solve_in_place(self, x)
     }
+    fn analysis(&self) -> Option<super::SpdAnalysis> {
+        SpdFactor::analysis(self)
+    }
     fn solve_add(&mut self, x: &mut [f64], base: &[f64], out: &mut [f64]) {
         SpdFactor::solve_add(self, x, base, out)
     }

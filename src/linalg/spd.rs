@@ -33,7 +33,12 @@ pub(super) enum Backend {
 pub(super) struct FaerLlt {
     /// "AMD" or "nested dissection".
     pub(super) ordering: &'static str,
-    pub(super) symbolic: SymbolicCholesky<usize>,
+    /// The symbolic analysis, shared with the factors of other matrices of the same
+    /// pattern ([`SpdFactor::analysis`]: the accuracy mode's `M̂(h)` of each step of its
+    /// ladder).
+    pub(super) symbolic: std::sync::Arc<SymbolicCholesky<usize>>,
+    /// A fingerprint of the pattern analysed (`plan::pattern_fingerprint`).
+    pub(super) pattern: u64,
     pub(super) values: Vec<f64>,
     pub(super) mem: MemBuffer,
     pub(super) scratch: Vec<f64>,
@@ -276,11 +281,20 @@ impl SpdFactor {
         ordering: Option<&DofOrdering>,
     ) -> Result<Self, Error> {
         let (symbolic, ordering) = symbolic_choice(a, what, ordering)?;
-        Self::factor_on(a, what, SpdAnalysis { symbolic, ordering })
+        Self::factor_on(
+            a,
+            what,
+            SpdAnalysis {
+                symbolic: std::sync::Arc::new(symbolic),
+                ordering,
+                pattern: super::plan::pattern_fingerprint(a),
+            },
+        )
     }
 
     /// [`SpdFactor::with_ordering`] on the symbolic analysis of `a`'s pattern made
-    /// before ([`super::analyse_spd_kept`] on the same matrix; `None`: `a` is
+    /// before ([`super::analyse_spd_kept`] on the same matrix, or another factor's
+    /// [`SpdFactor::analysis`]; `None`, or an analysis of another pattern: `a` is
     /// tridiagonal, or analyse it now).
     pub fn with_analysis(
         a: SparseColMatRef<'_, usize, f64>,
@@ -289,7 +303,12 @@ impl SpdFactor {
         ordering: Option<&DofOrdering>,
     ) -> Result<Self, Error> {
         match analysis {
-            Some(an) if an.symbolic.nrows() == a.nrows() => Self::factor_on(a, what, an),
+            Some(an)
+                if an.symbolic.nrows() == a.nrows()
+                    && an.pattern == super::plan::pattern_fingerprint(a) =>
+            {
+                Self::factor_on(a, what, an)
+            }
             _ => Self::with_ordering(a, what, ordering),
         }
     }
@@ -304,6 +323,7 @@ impl SpdFactor {
         let SpdAnalysis {
             symbolic,
             ordering: ordering_name,
+            pattern,
         } = analysis;
         let req = factor_scratch(&symbolic);
         // the factor's size is known now: check it (and the scratch) before allocating
@@ -329,6 +349,7 @@ impl SpdFactor {
             backend: Backend::Faer(Box::new(FaerLlt {
                 ordering: ordering_name,
                 symbolic,
+                pattern,
                 values,
                 mem: MemBuffer::new(req),
                 scratch: vec![0.0; n],
@@ -338,6 +359,19 @@ impl SpdFactor {
         };
         this.refactor(a, what)?;
         Ok(this)
+    }
+
+    /// The symbolic analysis this factor runs on, for the factor of another matrix of
+    /// the same pattern (`None`: a tridiagonal factor, which has none).
+    pub fn analysis(&self) -> Option<SpdAnalysis> {
+        match &self.backend {
+            Backend::Faer(f) => Some(SpdAnalysis {
+                symbolic: std::sync::Arc::clone(&f.symbolic),
+                ordering: f.ordering,
+                pattern: f.pattern,
+            }),
+            Backend::Tridiagonal(_) => None,
+        }
     }
 
     /// Which backend factored the matrix, for summaries.
@@ -725,5 +759,67 @@ mod tests {
         )
         .unwrap();
         assert!(SpdFactor::new(bad.as_ref(), "bad").is_err());
+    }
+
+    /// A factor on a shared symbolic analysis (the accuracy mode's `M̂(h)` of another
+    /// step) gives the bits of a factor analysed afresh, and a matrix of another pattern
+    /// is analysed afresh (its solve accurate to rounding).
+    #[test]
+    fn a_factor_of_the_same_pattern_shares_its_analysis_bit_for_bit() {
+        let k = 12;
+        let n = k * k;
+        let grid = |s: f64| {
+            let mut t = Vec::new();
+            for i in 0..k {
+                for j in 0..k {
+                    let p = i * k + j;
+                    t.push(Triplet::new(p, p, 1.0 + 4.0 * s));
+                    for (di, dj) in [(0usize, 1usize), (1, 0)] {
+                        let (ii, jj) = (i + di, j + dj);
+                        if ii < k && jj < k {
+                            let q = ii * k + jj;
+                            t.push(Triplet::new(p, q, -s));
+                            t.push(Triplet::new(q, p, -s));
+                        }
+                    }
+                }
+            }
+            SparseMatrix::try_new_from_triplets(n, n, &t).unwrap()
+        };
+        let (a1, a2) = (grid(1.0), grid(2.5));
+        let f1 = SpdFactor::new(a1.as_ref(), "test").unwrap();
+        assert!(
+            matches!(f1.backend, Backend::Faer(_)),
+            "a grid is not tridiagonal"
+        );
+        let mut shared =
+            SpdFactor::with_analysis(a2.as_ref(), "test", f1.analysis(), None).unwrap();
+        let mut fresh = SpdFactor::new(a2.as_ref(), "test").unwrap();
+        let b: Vec<f64> = (0..n).map(|i| (i as f64 * 0.3).sin()).collect();
+        let (mut x, mut y) = (b.clone(), b.clone());
+        shared.solve_in_place(&mut x);
+        fresh.solve_in_place(&mut y);
+        assert!(x.iter().zip(&y).all(|(a, b)| a.to_bits() == b.to_bits()));
+        // another pattern (a tridiagonal matrix of the same order): analysed afresh
+        let mut t = Vec::new();
+        for i in 0..n {
+            t.push(Triplet::new(i, i, 4.0));
+            if i + 1 < n {
+                t.push(Triplet::new(i, i + 1, -1.0));
+                t.push(Triplet::new(i + 1, i, -1.0));
+            }
+        }
+        let a3 = SparseMatrix::try_new_from_triplets(n, n, &t).unwrap();
+        let mut other = SpdFactor::with_analysis(a3.as_ref(), "test", f1.analysis(), None).unwrap();
+        let mut r = vec![0.0; n];
+        spmv(a3.as_ref(), &b, &mut r);
+        other.solve_in_place(&mut r);
+        let err = r
+            .iter()
+            .zip(&b)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        // κ ≤ 3 (as above): a few ulps
+        assert!(err < 1e-14, "err = {err}");
     }
 }

@@ -111,11 +111,26 @@ impl ThetaCore {
     /// [`ThetaCore::condense`]).
     fn factor_at(&mut self, h: f64) -> Result<Delassus, Error> {
         let p = self.cfg.built;
+        // a constant `M̂(h)` has one pattern for every h: the structure factors it on
+        // the current factor's symbolic analysis, handed over with the matrix formed
+        // (a backend without one to share, or another pattern, is analysed afresh)
+        let form = self.cfg.step_form;
+        let planned = match self.del.factor.analysis() {
+            Some(an) if self.structure.step_matrix_constant() => {
+                let mut m = crate::integrators::step_matrix::StepMatrix::form(
+                    &self.sys,
+                    form.coefficients(h),
+                );
+                m.keep_analysis(Some(an));
+                Some(m)
+            }
+            _ => None,
+        };
         let factor = self.structure.factor(
             &self.sys,
-            (self.cfg.step_form, h),
+            (form, h),
             (&self.state.q, &self.state.v),
-            None,
+            planned,
         )?;
         let jac = ContactJacobian::for_set(self.contacts.as_ref());
         let mut del = Delassus::new(
