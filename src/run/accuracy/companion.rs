@@ -19,7 +19,9 @@ impl Controller {
         last: bool,
     ) -> Result<(), Error> {
         use crate::integrators::saved::Bits;
-        let p_r = self.st.global[2].0 + self.impulse_b(integ.state());
+        // the run's cumulative impulse, this window's included (normal impulses are
+        // never negative: the scale's sum of their magnitudes is the sum itself)
+        let p_r = self.st.scales[0].0;
         let Some(mut comp) = self.st.companion.take() else {
             return Ok(());
         };
@@ -43,7 +45,7 @@ impl Controller {
                 self.q_a.copy_from_slice(&s.q);
                 self.v_a.copy_from_slice(&s.v);
             }
-            self.st.global[3].0 + s.impulse.iter().sum::<f64>()
+            self.st.global[2].0 + s.impulse.iter().sum::<f64>()
         } else {
             self.st.resyncs += 1;
             comp.clone_from(&self.b2);
@@ -55,17 +57,13 @@ impl Controller {
         let dp = (p_r - p_c).abs();
         g[0] = Bits(g[0].0 + 0.5 * (g[1].0 + dp) * big);
         g[1] = Bits(dp);
-        g[2] = Bits(p_r);
-        g[3] = Bits(p_c);
-        if last {
-            let m = if ok {
-                self.measure(integ, true, true)
-            } else {
-                window::Measures::same()
-            };
+        g[2] = Bits(p_c);
+        // (a companion that failed its last step is the run's state: no difference)
+        if last && ok {
+            let m = self.measure(integ, true, true);
             let g = &mut self.st.global;
-            g[4] = Bits((m.total - m.total_a).abs());
-            g[5] = Bits(m.difference);
+            g[3] = Bits((m.total - m.total_a).abs());
+            g[4] = Bits(m.difference);
         }
         Ok(())
     }

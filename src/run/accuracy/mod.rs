@@ -165,10 +165,10 @@ pub struct ControllerState {
     #[serde(default)]
     pub companion: Option<IntegratorState>,
     /// The companion's comparison so far: `∫|P − P_c| dt`, `|P − P_c|` at the last
-    /// window's end, the run's and the companion's cumulative impulses `P`, `P_c`, and
-    /// at the run's end `|E − E_c|` and `‖q − q_c‖_M`.
+    /// window's end, the companion's cumulative impulse `P_c` (the run's is
+    /// `scales[0]`), and at the run's end `|E − E_c|` and `‖q − q_c‖_M`.
     #[serde(default)]
-    pub global: [crate::integrators::saved::Bits; 6],
+    pub global: [crate::integrators::saved::Bits; 5],
     /// Times the companion failed a step and started again from the run's state.
     #[serde(default)]
     pub resyncs: usize,
@@ -361,7 +361,12 @@ impl Controller {
         use crate::integrators::saved::Bits;
         integ.save_into(&mut self.s0);
         if self.st.companion.is_none() {
-            // the companion starts where the run does (allocated once)
+            // the companion starts where the run does (allocated once); a run resumed
+            // from a checkpoint written before companions existed starts it here, its
+            // differences until here lost (counted as a restart)
+            if self.st.counts[0] > 0 {
+                self.st.resyncs += 1;
+            }
             self.st.companion = Some(self.s0.clone());
         }
         self.gap_s0.copy_from_slice(&integ.state().gap);
@@ -532,9 +537,9 @@ impl Controller {
         };
         let g = st.global.map(|b| b.0);
         let companion = CompanionEstimates {
-            impulse_history: rel(g[0], g[2].abs() * self.spec.t_end),
-            energy: rel(g[4], e_scale),
-            state: rel(g[5], u_scale),
+            impulse_history: rel(g[0], st.scales[0].0 * self.spec.t_end),
+            energy: rel(g[3], e_scale),
+            state: rel(g[4], u_scale),
             resyncs: st.resyncs,
         };
         let estimated = AccuracyEstimates {

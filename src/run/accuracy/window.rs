@@ -17,18 +17,6 @@ pub(super) struct Measures {
     pub(super) difference: f64,
 }
 
-impl Measures {
-    /// A state compared with itself (no difference; energies NaN-free zeros).
-    pub(super) fn same() -> Self {
-        Measures {
-            total: 0.0,
-            total_a: 0.0,
-            displacement: 0.0,
-            difference: 0.0,
-        }
-    }
-}
-
 /// One window's comparison ([`Controller::compare`]).
 pub(super) struct Window {
     /// Ratios of the estimates to their allowances, in [`OBSERVABLES`] order.
