@@ -32,7 +32,8 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::assembly::AssemblyPlan;
 
-use super::solid::{CellKind, Point, hex8_points};
+use super::element::{Rule, points};
+use super::solid::{CellKind, Point};
 
 pub use super::material::{
     Hyperelastic, HyperelasticLaw, Inverted, StressTangent, green_lagrange_and_cauchy,
@@ -233,34 +234,16 @@ fn kernel_into<const NN: usize, const ND: usize>(
     Ok(energy)
 }
 
-/// The one-point rule of the linear tetrahedron: its gradients, hence `F`, `S` and `ℂ`,
-/// are constant over the cell, so the centroid integrates force, tangent and energy
-/// exactly, at a quarter of the cost of the 4-point rule the mass needs.
-const TET4_CENTROID: [super::solid::Point<4, 3>; 1] = [(
-    [0.25; 4],
-    [
-        [-1.0, -1.0, -1.0],
-        [1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [0.0, 0.0, 1.0],
-    ],
-    1.0 / 6.0,
-)];
-
-/// The one-point rule of the linear triangle (constant gradients, as [`TET4_CENTROID`]).
-const TRI3_CENTROID: [super::solid::Point<3, 2>; 1] =
-    [([1.0 / 3.0; 3], [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]], 0.5)];
-
 /// The tet4 cell at reference coordinates `x` (4 nodes) displaced by `u` (12 values).
 pub fn tet4(law: &Hyperelastic, x: &[[f64; 3]], u: &[f64]) -> Result<HyperElement<12>, Inverted> {
-    let pts = reference_points(x, &TET4_CENTROID)?;
+    let pts = reference_points(x, &points::<4, 3, 1>(CellKind::Tet4, Rule::Energy))?;
     kernel::<4, 12>(law, &pts, u, ALL)
 }
 
 /// The hex8 cell at reference coordinates `x` (8 nodes, VTK order) displaced by `u` (24
 /// values), 2 × 2 × 2 Gauss points.
 pub fn hex8(law: &Hyperelastic, x: &[[f64; 3]], u: &[f64]) -> Result<HyperElement<24>, Inverted> {
-    let pts = reference_points(x, &hex8_points())?;
+    let pts = reference_points(x, &points::<8, 3, 8>(CellKind::Hex8, Rule::Energy))?;
     kernel::<8, 24>(law, &pts, u, ALL)
 }
 
@@ -454,11 +437,12 @@ impl HyperBody {
         let law = &self.law;
         match self.cells[id].0 {
             CellKind::Hex8 => {
-                let pts = reference_points(&x, &hex8_points())?;
+                let pts = reference_points(&x, &points::<8, 3, 8>(CellKind::Hex8, Rule::Energy))?;
                 kernel_into::<8, 24>(law, &pts, &ue, ue0, want, fe, ke)
             }
             CellKind::Tet4 => {
-                let pts = reference_points(&x[..4], &TET4_CENTROID)?;
+                let pts =
+                    reference_points(&x[..4], &points::<4, 3, 1>(CellKind::Tet4, Rule::Energy))?;
                 kernel_into::<4, 12>(law, &pts, &ue[..12], ue0.map(|u| &u[..12]), want, fe, ke)
             }
             kind => {
@@ -466,7 +450,10 @@ impl HyperBody {
                 let n3 = 3 * nn;
                 let k3s = ke.is_some().then_some(&mut k3[..n3 * n3]);
                 let energy = if kind == CellKind::Tri3 {
-                    let pts = reference_points(&x[..3], &TRI3_CENTROID)?;
+                    let pts = reference_points(
+                        &x[..3],
+                        &points::<3, 2, 1>(CellKind::Tri3, Rule::Energy),
+                    )?;
                     kernel_into::<3, 9>(
                         law,
                         &pts,
@@ -477,7 +464,10 @@ impl HyperBody {
                         k3s,
                     )?
                 } else {
-                    let pts = reference_points(&x[..4], &super::solid::quad4_points())?;
+                    let pts = reference_points(
+                        &x[..4],
+                        &points::<4, 2, 4>(CellKind::Quad4, Rule::Energy),
+                    )?;
                     kernel_into::<4, 12>(
                         law,
                         &pts,

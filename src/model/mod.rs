@@ -16,6 +16,7 @@
 //! each body's mass, centre, linear and angular momentum, and [`energy`] keeps a run's
 //! energy balance.
 
+pub mod element;
 pub mod energy;
 pub mod generate;
 pub mod geometry;

@@ -55,8 +55,7 @@ use crate::error::Error;
 use crate::integrators::State;
 use crate::model::hyperelastic::green_lagrange_and_cauchy;
 use crate::model::solid::{
-    CellKind, Formulation, Material, MaterialModel, centre_gradient, centre_strain, hooke,
-    von_mises,
+    Formulation, Material, MaterialModel, centre_gradient, centre_strain, hooke, von_mises,
 };
 
 pub use crate::model::geometry::{GeomCell, Geometry, Outline};
@@ -73,10 +72,7 @@ fn node_ids(g: &Geometry) -> Vec<i64> {
 fn vtk_type(c: &GeomCell) -> u8 {
     match c {
         GeomCell::Line => 3,
-        GeomCell::Solid(CellKind::Tri3) => 5,
-        GeomCell::Solid(CellKind::Quad4) => 9,
-        GeomCell::Solid(CellKind::Tet4) => 10,
-        GeomCell::Solid(CellKind::Hex8) => 12,
+        GeomCell::Solid(k) => k.element().vtk_type(),
     }
 }
 

@@ -6,11 +6,10 @@
 use super::*;
 
 pub(super) fn gmsh_kind(t: usize) -> (usize, Result<CellKind, String>) {
+    if let Some(k) = CellKind::from_gmsh(t) {
+        return (k.dim(), Ok(k));
+    }
     match t {
-        2 => (2, Ok(CellKind::Tri3)),
-        3 => (2, Ok(CellKind::Quad4)),
-        4 => (3, Ok(CellKind::Tet4)),
-        5 => (3, Ok(CellKind::Hex8)),
         1 | 8 | 26 | 27 | 28 => (1, Err(format!("gmsh type {t} (line)"))),
         15 => (0, Err("gmsh type 15 (point)".into())),
         9 | 10 | 16 | 20 | 21 | 22 | 23 | 24 | 25 => {

@@ -4,11 +4,10 @@
 use super::*;
 
 pub(super) fn vtk_kind(t: u8) -> (usize, Result<CellKind, String>) {
+    if let Some(k) = CellKind::from_vtk(t) {
+        return (k.dim(), Ok(k));
+    }
     match t {
-        5 => (2, Ok(CellKind::Tri3)),
-        9 => (2, Ok(CellKind::Quad4)),
-        10 => (3, Ok(CellKind::Tet4)),
-        12 => (3, Ok(CellKind::Hex8)),
         1 | 2 => (0, Err(format!("VTK type {t} (vertex)"))),
         3 | 4 => (1, Err(format!("VTK type {t} (line)"))),
         6..=8 => (2, Err(format!("VTK type {t} (polygon/pixel)"))),

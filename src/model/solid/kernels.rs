@@ -3,6 +3,7 @@
 //! inverted cell reported with its index.
 
 use super::*;
+use crate::model::element::{Rule, points};
 
 /// Element matrices of one cell on fixed-size matrices, `ND = nodes·dim` square.
 #[derive(Clone, Debug)]
@@ -258,13 +259,16 @@ pub fn element_matrices(
         return Ok(match kind {
             CellKind::Tri3 => AnyElement::Tri3(axisymmetric_kernel(
                 x,
-                &tri3_interior_points(),
+                &points::<3, 2, 3>(kind, Rule::Interior),
                 mat,
                 &inverted,
             )?),
-            CellKind::Quad4 => {
-                AnyElement::Quad4(axisymmetric_kernel(x, &quad4_points(), mat, &inverted)?)
-            }
+            CellKind::Quad4 => AnyElement::Quad4(axisymmetric_kernel(
+                x,
+                &points::<4, 2, 4>(kind, Rule::Interior),
+                mat,
+                &inverted,
+            )?),
             _ => {
                 return Err(Error::invalid(
                     &format!("cell {id}"),
@@ -277,7 +281,7 @@ pub fn element_matrices(
     Ok(match kind {
         CellKind::Tri3 => AnyElement::Tri3(plane_kernel(
             x,
-            &tri3_points(),
+            &points::<3, 2, 3>(kind, Rule::Full),
             &mat.d2(f),
             rho,
             f.thickness(),
@@ -285,17 +289,25 @@ pub fn element_matrices(
         )?),
         CellKind::Quad4 => AnyElement::Quad4(plane_kernel(
             x,
-            &quad4_points(),
+            &points::<4, 2, 4>(kind, Rule::Full),
             &mat.d2(f),
             rho,
             f.thickness(),
             &inverted,
         )?),
-        CellKind::Tet4 => {
-            AnyElement::Tet4(solid_kernel(x, &tet4_points(), &mat.d3(), rho, &inverted)?)
-        }
-        CellKind::Hex8 => {
-            AnyElement::Hex8(solid_kernel(x, &hex8_points(), &mat.d3(), rho, &inverted)?)
-        }
+        CellKind::Tet4 => AnyElement::Tet4(solid_kernel(
+            x,
+            &points::<4, 3, 4>(kind, Rule::Full),
+            &mat.d3(),
+            rho,
+            &inverted,
+        )?),
+        CellKind::Hex8 => AnyElement::Hex8(solid_kernel(
+            x,
+            &points::<8, 3, 8>(kind, Rule::Full),
+            &mat.d3(),
+            rho,
+            &inverted,
+        )?),
     })
 }

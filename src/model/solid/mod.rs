@@ -13,8 +13,9 @@
 //! strains. An element whose Jacobian determinant is not positive at any integration
 //! point is reported as inverted, with its index.
 //!
-//! By role: the formulation, the cell kinds, the mesh and the 2-D elasticity matrices here;
-//! `quadrature` the integration points, `kernels` the element matrices,
+//! By role: the formulation, the mesh and the 2-D elasticity matrices here (the cell
+//! kinds, their shape functions and integration points are [`crate::model::element`]'s);
+//! `kernels` the element matrices,
 //! `assemble` the global assembly and the mesh checks, `stress` the cell-centre
 //! strains and stresses of the frames.
 
@@ -28,13 +29,11 @@ pub use super::material::{Material, MaterialModel};
 
 mod assemble;
 mod kernels;
-mod quadrature;
 mod stress;
 
+pub use super::element::{CellKind, HEX8_CORNERS, Point, QUAD4_CORNERS};
 pub use assemble::*;
 pub use kernels::*;
-pub(in crate::model) use quadrature::*;
-pub use quadrature::{HEX8_CORNERS, QUAD4_CORNERS};
 pub use stress::*;
 
 // The 2-D matrix needs the formulation, which is this module's: the constants and the
@@ -112,47 +111,6 @@ impl Formulation {
     }
 }
 
-/// First-order (linear-interpolation) cell kinds, for every material law.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum CellKind {
-    /// 3-node triangle.
-    Tri3,
-    /// 4-node quadrilateral (counter-clockwise).
-    Quad4,
-    /// 4-node tetrahedron (positive volume ordering).
-    Tet4,
-    /// 8-node hexahedron (VTK / Gmsh ordering).
-    Hex8,
-}
-
-impl CellKind {
-    /// Nodes per cell.
-    pub fn nodes(self) -> usize {
-        match self {
-            CellKind::Tri3 => 3,
-            CellKind::Quad4 | CellKind::Tet4 => 4,
-            CellKind::Hex8 => 8,
-        }
-    }
-    /// Space dimension of the cell.
-    pub fn dim(self) -> usize {
-        match self {
-            CellKind::Tri3 | CellKind::Quad4 => 2,
-            _ => 3,
-        }
-    }
-    /// Name as in meshes and messages.
-    pub fn name(self) -> &'static str {
-        match self {
-            CellKind::Tri3 => "tri3",
-            CellKind::Quad4 => "quad4",
-            CellKind::Tet4 => "tet4",
-            CellKind::Hex8 => "hex8",
-        }
-    }
-}
-
 /// A mesh of one cell kind: points (always 3 coordinates; z = 0 in 2-D) and cells.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
@@ -218,19 +176,7 @@ impl Mesh {
         let mut seen: std::collections::BTreeMap<Vec<usize>, (Vec<usize>, usize)> =
             Default::default();
         for (kind, c) in &self.cells {
-            let faces: &[&[usize]] = match kind {
-                CellKind::Tri3 => &[&[0, 1], &[1, 2], &[2, 0]],
-                CellKind::Quad4 => &[&[0, 1], &[1, 2], &[2, 3], &[3, 0]],
-                CellKind::Tet4 => &[&[0, 1, 2], &[0, 1, 3], &[1, 2, 3], &[0, 2, 3]],
-                CellKind::Hex8 => &[
-                    &[0, 1, 2, 3],
-                    &[4, 5, 6, 7],
-                    &[0, 1, 5, 4],
-                    &[1, 2, 6, 5],
-                    &[2, 3, 7, 6],
-                    &[3, 0, 4, 7],
-                ],
-            };
+            let faces = kind.element().faces();
             let centroid = mean(c.iter().map(|&v| self.points[v]));
             for f in faces {
                 let mut nodes: Vec<usize> = f.iter().map(|&a| c[a]).collect();

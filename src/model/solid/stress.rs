@@ -6,26 +6,9 @@ use super::*;
 /// Reference shape-function gradients at the cell centre (`nodes` entries; the third
 /// component is zero in 2-D).
 pub(super) fn centre_gradients(kind: CellKind) -> [[f64; 3]; 8] {
+    let e = kind.element();
     let mut g = [[0.0; 3]; 8];
-    match kind {
-        CellKind::Tri3 => {
-            for (a, v) in tri3_points()[0].1.iter().enumerate() {
-                g[a] = [v[0], v[1], 0.0];
-            }
-        }
-        CellKind::Quad4 => {
-            for (a, s) in QUAD4_CORNERS.iter().enumerate() {
-                g[a] = [0.25 * s[0], 0.25 * s[1], 0.0];
-            }
-        }
-        CellKind::Tet4 => g[..4].copy_from_slice(&tet4_points()[0].1),
-        CellKind::Hex8 => {
-            for (a, s) in hex8_points()[0].1.iter().enumerate() {
-                // at the centre every factor (1 ± ξ) is 1: ∂N_a/∂ξ_i = sign_i / 8
-                g[a] = s.map(|c| 0.125 * c.signum());
-            }
-        }
-    }
+    e.gradients(e.centre(), &mut g);
     g
 }
 

@@ -1,0 +1,305 @@
+//! The element kinds (issue 51): one type per kind behind [`Element`] — its nodes and
+//! their reference coordinates, its faces (edges in 2-D) as node lists, its reference
+//! shape functions and gradients, its quadrature rules, its VTK and Gmsh codes, its
+//! lumping rule — and [`CellKind`], the registry that names them in meshes, scene files
+//! and messages.
+//!
+//! Everything that needs to know a kind asks it here: the mesh readers (codes), the
+//! frames (VTK code), the boundary facets (faces), the element kernels and the
+//! hyperelastic forces (shape functions at the rules' points, [`points`]), the strains of
+//! the frames (gradients at the centre). The kernels are compiled per cell size (fixed
+//! nalgebra matrices): [`CellKind`]'s `match` in `model::solid::element_matrices` and
+//! `model::hyperelastic` picks the size.
+//!
+//! **Adding a kind**: its file here (a unit struct implementing [`Element`]), its
+//! variant in [`CellKind`] with its arm in [`CellKind::element`], and its size's arm
+//! in the two kernel dispatches; the unit tests of this module then check its shape
+//! functions (partition of unity, Kronecker property at the nodes, gradients against
+//! finite differences), its rules (reference volume) and its faces (outward, by the
+//! centroid) without more code.
+
+mod hex8;
+mod quad4;
+mod tet4;
+mod tri3;
+
+pub use hex8::{HEX8_CORNERS, Hex8};
+pub use quad4::{QUAD4_CORNERS, Quad4};
+pub use tet4::Tet4;
+pub use tri3::Tri3;
+
+/// The 2-point Gauss abscissae on `[−1, 1]` (weights 1).
+pub(crate) const G2: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_625_8];
+
+/// Which quadrature rule a computation asks of an element.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rule {
+    /// The small-strain kernels' rule: the consistent mass exactly on an undistorted
+    /// cell, and the stiffness.
+    Full,
+    /// A rule with every point strictly inside the cell (the axisymmetric kernel divides
+    /// by the radius there).
+    Interior,
+    /// The large-strain internal force, tangent and energy: the fewest points that
+    /// integrate them exactly where the gradients are constant (simplices), the full rule
+    /// otherwise.
+    Energy,
+}
+
+/// How a lumped mass is formed from the element's consistent mass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lumping {
+    /// Row sums: positive for the linear elements.
+    RowSum,
+}
+
+/// One element kind: what a kernel, a reader or a writer needs to know of it (module
+/// doc). Reference coordinates have three components (zero past the element's
+/// dimension).
+pub trait Element: Send + Sync {
+    /// The name in meshes, scene files and messages (`tri3`, `hex8`, …).
+    fn name(&self) -> &'static str;
+    /// Nodes per cell.
+    fn nodes(&self) -> usize;
+    /// Space dimension.
+    fn dim(&self) -> usize;
+    /// The VTK cell type.
+    fn vtk_type(&self) -> u8;
+    /// The Gmsh element type (formats 2.2 and 4.1).
+    fn gmsh_type(&self) -> usize;
+    /// Reference coordinates of the nodes, in the node order (VTK's).
+    fn reference_nodes(&self) -> &'static [[f64; 3]];
+    /// The faces (edges in 2-D) as lists of the cell's local nodes.
+    fn faces(&self) -> &'static [&'static [usize]];
+    /// Shape function values at reference point `xi` into `n[..nodes]`.
+    fn shape(&self, xi: [f64; 3], n: &mut [f64]);
+    /// Reference gradients `∂N_a/∂ξ_j` at `xi` into `g[..nodes]`.
+    fn gradients(&self, xi: [f64; 3], g: &mut [[f64; 3]]);
+    /// Quadrature points and weights on the reference cell.
+    fn rule(&self, rule: Rule) -> &'static [([f64; 3], f64)];
+    /// Reference coordinates of the cell's centre (where the frames' strains are read).
+    fn centre(&self) -> [f64; 3];
+    /// The lumping rule.
+    fn lumping(&self) -> Lumping;
+}
+
+/// The element kinds, for every material law.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CellKind {
+    /// 3-node triangle ([`Tri3`]).
+    Tri3,
+    /// 4-node quadrilateral, counter-clockwise ([`Quad4`]).
+    Quad4,
+    /// 4-node tetrahedron, positive volume ordering ([`Tet4`]).
+    Tet4,
+    /// 8-node hexahedron, VTK / Gmsh ordering ([`Hex8`]).
+    Hex8,
+}
+
+impl CellKind {
+    /// Every kind, in declaration order.
+    pub const ALL: [CellKind; 4] = [
+        CellKind::Tri3,
+        CellKind::Quad4,
+        CellKind::Tet4,
+        CellKind::Hex8,
+    ];
+
+    /// The kind's element (the registry: one arm per kind).
+    pub fn element(self) -> &'static dyn Element {
+        match self {
+            CellKind::Tri3 => &Tri3,
+            CellKind::Quad4 => &Quad4,
+            CellKind::Tet4 => &Tet4,
+            CellKind::Hex8 => &Hex8,
+        }
+    }
+    /// Nodes per cell.
+    pub fn nodes(self) -> usize {
+        self.element().nodes()
+    }
+    /// Space dimension of the cell.
+    pub fn dim(self) -> usize {
+        self.element().dim()
+    }
+    /// Name as in meshes and messages.
+    pub fn name(self) -> &'static str {
+        self.element().name()
+    }
+    /// The kind of VTK cell type `t`, if it is one of ours.
+    pub fn from_vtk(t: u8) -> Option<CellKind> {
+        Self::ALL.into_iter().find(|k| k.element().vtk_type() == t)
+    }
+    /// The kind of Gmsh element type `t`, if it is one of ours.
+    pub fn from_gmsh(t: usize) -> Option<CellKind> {
+        Self::ALL.into_iter().find(|k| k.element().gmsh_type() == t)
+    }
+}
+
+/// One integration point: shape values, reference gradients (the element's dimension
+/// `D`), weight.
+pub type Point<const NN: usize, const D: usize> = ([f64; NN], [[f64; D]; NN], f64);
+
+/// The `P` points of `kind`'s `rule` with its shape values and gradients (`NN` nodes,
+/// dimension `D`): what the fixed-size kernels integrate with. Panics if the sizes are
+/// not the kind's (a programming error of a kernel dispatch, caught by every test that
+/// assembles the kind).
+pub fn points<const NN: usize, const D: usize, const P: usize>(
+    kind: CellKind,
+    rule: Rule,
+) -> [Point<NN, D>; P] {
+    let e = kind.element();
+    let pts = e.rule(rule);
+    assert!(
+        e.nodes() == NN && e.dim() == D && pts.len() == P,
+        "{}: {} nodes, dimension {}, {} points asked as {NN}, {D}, {P}",
+        e.name(),
+        e.nodes(),
+        e.dim(),
+        pts.len()
+    );
+    std::array::from_fn(|p| {
+        let (xi, w) = pts[p];
+        let mut n = [0.0; NN];
+        let mut g3 = [[0.0; 3]; NN];
+        e.shape(xi, &mut n);
+        e.gradients(xi, &mut g3);
+        (n, g3.map(|g| std::array::from_fn(|j| g[j])), w)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn volume(kind: CellKind) -> f64 {
+        match kind {
+            CellKind::Tri3 => 0.5,
+            CellKind::Tet4 => 1.0 / 6.0,
+            CellKind::Quad4 => 4.0,
+            CellKind::Hex8 => 8.0,
+        }
+    }
+
+    /// Partition of unity and zero gradient sum at every rule point (to round-off:
+    /// 1e-15), the Kronecker property at the nodes (exact for these kinds), gradients
+    /// equal to central differences of the shape functions (1e-9: the difference's
+    /// error is O(ε²) = 1e-12 for ε = 1e-6 times second derivatives of order one, plus
+    /// round-off 1e-16/ε).
+    #[test]
+    fn shape_functions_interpolate_and_their_gradients_are_their_derivatives() {
+        for kind in CellKind::ALL {
+            let e = kind.element();
+            let nn = e.nodes();
+            let (mut n, mut g) = (vec![0.0; nn], vec![[0.0; 3]; nn]);
+            for (a, &x) in e.reference_nodes().iter().enumerate() {
+                e.shape(x, &mut n);
+                for (b, &v) in n.iter().enumerate() {
+                    assert_eq!(v, if a == b { 1.0 } else { 0.0 }, "{} node {a}", e.name());
+                }
+            }
+            for rule in [Rule::Full, Rule::Interior, Rule::Energy] {
+                for &(x, _) in e.rule(rule) {
+                    e.shape(x, &mut n);
+                    e.gradients(x, &mut g);
+                    assert!((n.iter().sum::<f64>() - 1.0).abs() < 1e-15, "{}", e.name());
+                    for j in 0..3 {
+                        let s: f64 = g.iter().map(|g| g[j]).sum();
+                        assert!(s.abs() < 1e-15, "{} ∑∂N/∂ξ{j} = {s}", e.name());
+                    }
+                    let eps = 1e-6;
+                    for j in 0..e.dim() {
+                        let (mut np, mut nm) = (vec![0.0; nn], vec![0.0; nn]);
+                        let (mut xp, mut xm) = (x, x);
+                        xp[j] += eps;
+                        xm[j] -= eps;
+                        e.shape(xp, &mut np);
+                        e.shape(xm, &mut nm);
+                        for a in 0..nn {
+                            let fd = (np[a] - nm[a]) / (2.0 * eps);
+                            assert!((fd - g[a][j]).abs() < 1e-9, "{} N{a},{j}", e.name());
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Every rule's weights sum to the reference cell's measure (round-off: 1e-15
+    /// relative), and every point of the interior rule is inside the cell.
+    #[test]
+    fn rules_integrate_the_reference_volume() {
+        for kind in CellKind::ALL {
+            let e = kind.element();
+            for rule in [Rule::Full, Rule::Interior, Rule::Energy] {
+                let w: f64 = e.rule(rule).iter().map(|p| p.1).sum();
+                assert!(
+                    (w / volume(kind) - 1.0).abs() < 1e-15,
+                    "{} {rule:?}",
+                    e.name()
+                );
+            }
+            let mut n = vec![0.0; e.nodes()];
+            for &(x, _) in e.rule(Rule::Interior) {
+                e.shape(x, &mut n);
+                assert!(n.iter().all(|&v| v > 0.0), "{} point {x:?}", e.name());
+            }
+        }
+    }
+
+    /// Every face has a facet's node count (2 in 2-D, 3 or 4 in 3-D), every node lies on
+    /// some face, and no face is degenerate or through the centre (its normal by the node
+    /// order has a non-zero component along the way out, which `Mesh::boundary_facets`
+    /// uses to turn it outward).
+    #[test]
+    fn faces_cover_the_nodes_and_are_not_degenerate() {
+        for kind in CellKind::ALL {
+            let e = kind.element();
+            let x = e.reference_nodes();
+            let c = e.centre();
+            let mut seen = vec![false; e.nodes()];
+            for f in e.faces() {
+                assert!(
+                    f.len() == e.dim() || (e.dim() == 3 && f.len() == 4),
+                    "{}",
+                    e.name()
+                );
+                f.iter().for_each(|&a| seen[a] = true);
+                let d = |a: usize, b: usize| -> [f64; 3] {
+                    std::array::from_fn(|i| x[f[a]][i] - x[f[b]][i])
+                };
+                let normal = if f.len() == 2 {
+                    let t = d(1, 0);
+                    [t[1], -t[0], 0.0]
+                } else {
+                    let (u, v) = if f.len() == 3 {
+                        (d(1, 0), d(2, 0))
+                    } else {
+                        (d(2, 0), d(3, 1))
+                    };
+                    [
+                        u[1] * v[2] - u[2] * v[1],
+                        u[2] * v[0] - u[0] * v[2],
+                        u[0] * v[1] - u[1] * v[0],
+                    ]
+                };
+                let out: f64 = (0..3).map(|i| normal[i] * (x[f[0]][i] - c[i])).sum();
+                assert!(out != 0.0, "{} face {f:?} is degenerate", e.name());
+            }
+            assert!(seen.iter().all(|&s| s), "{}", e.name());
+        }
+    }
+
+    /// The registry reads back: each kind's VTK and Gmsh codes name it.
+    #[test]
+    fn codes_name_their_kind() {
+        for kind in CellKind::ALL {
+            let e = kind.element();
+            assert_eq!(CellKind::from_vtk(e.vtk_type()), Some(kind));
+            assert_eq!(CellKind::from_gmsh(e.gmsh_type()), Some(kind));
+        }
+        assert_eq!(CellKind::from_vtk(22), None);
+        assert_eq!(CellKind::from_gmsh(9), None);
+    }
+}
