@@ -81,38 +81,66 @@ pub fn box_mesh(kind: CellKind, n: [usize; 3], l: [f64; 3]) -> Mesh {
 }
 
 /// A `lx × ly` rectangle, `nx × ny` quadrilaterals, each split into two triangles when
-/// `kind` is [`CellKind::Tri3`].
+/// `kind` is [`CellKind::Tri3`] or [`CellKind::Tri6`] (along the diagonal from the
+/// lower left corner). Quadratic kinds take their mid-side (and quad9's centre) nodes on
+/// the grid of half the spacing; a quad8 mesh has no node at the cells' centres.
 pub fn rectangle_mesh(kind: CellKind, n: [usize; 2], l: [f64; 2]) -> Mesh {
+    let s = kind.element().order();
     let [nx, ny] = n;
-    let id = |i: usize, j: usize| j * (nx + 1) + i;
+    let [gx, gy] = [s * nx, s * ny];
+    // quad8 leaves the cells' centres out: no node may be left without mass
+    let unused = |i: usize, j: usize| kind == CellKind::Quad8 && i % 2 == 1 && j % 2 == 1;
+    let mut index = vec![usize::MAX; (gx + 1) * (gy + 1)];
     let mut mesh = Mesh::default();
-    for j in 0..=ny {
-        for i in 0..=nx {
+    for j in 0..=gy {
+        for i in 0..=gx {
+            if unused(i, j) {
+                continue;
+            }
+            index[j * (gx + 1) + i] = mesh.points.len();
             mesh.points.push([
-                l[0] * i as f64 / nx as f64,
-                l[1] * j as f64 / ny as f64,
+                l[0] * i as f64 / gx as f64,
+                l[1] * j as f64 / gy as f64,
                 0.0,
             ]);
         }
     }
+    let id = |i: usize, j: usize| index[j * (gx + 1) + i];
     for j in 0..ny {
         for i in 0..nx {
-            let q = [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)];
+            // node (a, b) of the cell's own grid (a, b in 0..=s)
+            let f = |a: usize, b: usize| id(s * i + a, s * j + b);
+            let q = [f(0, 0), f(s, 0), f(s, s), f(0, s)];
             match kind {
                 CellKind::Tri3 => {
                     mesh.cells.push((CellKind::Tri3, vec![q[0], q[1], q[2]]));
                     mesh.cells.push((CellKind::Tri3, vec![q[0], q[2], q[3]]));
+                }
+                CellKind::Tri6 => {
+                    let c = f(1, 1);
+                    mesh.cells
+                        .push((kind, vec![q[0], q[1], q[2], f(1, 0), f(2, 1), c]));
+                    mesh.cells
+                        .push((kind, vec![q[0], q[2], q[3], c, f(1, 2), f(0, 1)]));
+                }
+                CellKind::Quad8 | CellKind::Quad9 => {
+                    let mut c = q.to_vec();
+                    c.extend([f(1, 0), f(2, 1), f(1, 2), f(0, 1)]);
+                    if kind == CellKind::Quad9 {
+                        c.push(f(1, 1));
+                    }
+                    mesh.cells.push((kind, c));
                 }
                 _ => mesh.cells.push((CellKind::Quad4, q.to_vec())),
             }
         }
     }
     let faces: [(&str, usize, usize); 4] =
-        [("x0", 0, 0), ("x1", 0, nx), ("y0", 1, 0), ("y1", 1, ny)];
+        [("x0", 0, 0), ("x1", 0, gx), ("y0", 1, 0), ("y1", 1, gy)];
     for (name, axis, at) in faces {
-        let set = (0..=ny)
-            .flat_map(|j| (0..=nx).map(move |i| (i, j)))
-            .filter(|&(i, j)| [i, j][axis] == at)
+        let set = (0..=gy)
+            .flat_map(|j| (0..=gx).map(move |i| (i, j)))
+            .filter(|&(i, j)| [i, j][axis] == at && !unused(i, j))
             .map(|(i, j)| id(i, j))
             .collect();
         mesh.node_sets.insert(name.to_string(), set);

@@ -140,8 +140,8 @@ impl RotationCheck {
     pub fn largest(&self, t: f64, q: &[f64]) -> Option<Turned> {
         let cut = 0.9 * self.max;
         let mut worst: Option<Turned> = None;
-        let mut x = [[0.0; 3]; 8];
-        let mut u = [[0.0; 3]; 8];
+        let mut x = [[0.0; 3]; crate::model::element::MAX_NODES];
+        let mut u = [[0.0; 3]; crate::model::element::MAX_NODES];
         for cell in &self.cells {
             let nn = cell.kind.nodes();
             for (a, &p) in self.nodes[cell.start..cell.start + nn].iter().enumerate() {

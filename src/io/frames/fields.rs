@@ -80,8 +80,8 @@ impl FrameWriter {
                     sig = [mat.young * eps[0], 0.0, 0.0, 0.0, 0.0, 0.0];
                 }
                 GeomCell::Solid(k) => {
-                    let mut x = [[0.0; 3]; 8];
-                    let mut u = [[0.0; 3]; 8];
+                    let mut x = [[0.0; 3]; crate::model::element::MAX_NODES];
+                    let mut u = [[0.0; 3]; crate::model::element::MAX_NODES];
                     for (j, &p) in nodes.iter().enumerate() {
                         x[j] = g.points[p];
                         u[j] = [self.disp[3 * p], self.disp[3 * p + 1], self.disp[3 * p + 2]];

@@ -20,16 +20,56 @@
 
 mod hex8;
 mod quad4;
+mod quad8;
+mod quad9;
 mod tet4;
 mod tri3;
+mod tri6;
 
 pub use hex8::{HEX8_CORNERS, Hex8};
 pub use quad4::{QUAD4_CORNERS, Quad4};
+pub use quad8::Quad8;
+pub use quad9::Quad9;
 pub use tet4::Tet4;
 pub use tri3::Tri3;
+pub use tri6::Tri6;
+
+/// The most nodes a cell of any kind has (fixed-size buffers of the kernels, the
+/// readers and the frames).
+pub const MAX_NODES: usize = 27;
 
 /// The 2-point Gauss abscissae on `[−1, 1]` (weights 1).
 pub(crate) const G2: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_625_8];
+
+/// The 3-point Gauss abscissae and weights on `[−1, 1]` (degree 5).
+pub(crate) const G3: [(f64, f64); 3] = [
+    (-0.774_596_669_241_483_4, 5.0 / 9.0),
+    (0.0, 8.0 / 9.0),
+    (0.774_596_669_241_483_4, 5.0 / 9.0),
+];
+
+/// 3×3 Gauss points on `[−1, 1]²`, `r` slowest: the consistent mass and the stiffness
+/// of an undistorted quadratic quadrilateral exactly.
+pub(crate) const GAUSS3_2D: [([f64; 3], f64); 9] = {
+    let mut out = [([0.0; 3], 0.0); 9];
+    let mut p = 0;
+    while p < 9 {
+        let (a, b) = (G3[p / 3], G3[p % 3]);
+        out[p] = ([a.0, b.0, 0.0], a.1 * b.1);
+        p += 1;
+    }
+    out
+};
+
+/// The 1-D quadratic Lagrange function of the node at `node` ∈ {−1, 0, 1} and its
+/// derivative, at `x`.
+pub(crate) fn lagrange2(node: f64, x: f64) -> (f64, f64) {
+    if node == 0.0 {
+        (1.0 - x * x, -2.0 * x)
+    } else {
+        (0.5 * x * (x + node), x + 0.5 * node)
+    }
+}
 
 /// Which quadrature rule a computation asks of an element.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -51,6 +91,10 @@ pub enum Rule {
 pub enum Lumping {
     /// Row sums: positive for the linear elements.
     RowSum,
+    /// Hinton, Rock and Zienkiewicz (1976): the consistent diagonal scaled to keep the
+    /// element's mass — positive where row sums are zero or negative (the corners of
+    /// tri6, quad8, tet10, hex20).
+    Hrz,
 }
 
 /// One element kind: what a kernel, a reader or a writer needs to know of it (module
@@ -63,6 +107,14 @@ pub trait Element: Send + Sync {
     fn nodes(&self) -> usize;
     /// Space dimension.
     fn dim(&self) -> usize;
+    /// Polynomial order of the shape functions (1 linear, 2 quadratic).
+    fn order(&self) -> usize {
+        1
+    }
+    /// Vertex nodes (the first ones in the node order).
+    fn corners(&self) -> usize {
+        self.nodes()
+    }
     /// The VTK cell type.
     fn vtk_type(&self) -> u8;
     /// The Gmsh element type (formats 2.2 and 4.1).
@@ -95,6 +147,12 @@ pub enum CellKind {
     Tet4,
     /// 8-node hexahedron, VTK / Gmsh ordering ([`Hex8`]).
     Hex8,
+    /// 6-node quadratic triangle ([`Tri6`]).
+    Tri6,
+    /// 8-node serendipity quadrilateral ([`Quad8`]).
+    Quad8,
+    /// 9-node Lagrange quadrilateral ([`Quad9`]).
+    Quad9,
 }
 
 impl CellKind {
@@ -113,6 +171,9 @@ impl CellKind {
             CellKind::Quad4 => &Quad4,
             CellKind::Tet4 => &Tet4,
             CellKind::Hex8 => &Hex8,
+            CellKind::Tri6 => &Tri6,
+            CellKind::Quad8 => &Quad8,
+            CellKind::Quad9 => &Quad9,
         }
     }
     /// Nodes per cell.
@@ -127,6 +188,16 @@ impl CellKind {
     pub fn name(self) -> &'static str {
         self.element().name()
     }
+    /// The names of the kinds of dimension `dim` (every kind for `None`), for messages:
+    /// `tri3, quad4, …`.
+    pub fn names(dim: Option<usize>) -> String {
+        Self::ALL
+            .into_iter()
+            .filter(|k| dim.is_none_or(|d| k.dim() == d))
+            .map(|k| k.name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
     /// The kind of VTK cell type `t`, if it is one of ours.
     pub fn from_vtk(t: u8) -> Option<CellKind> {
         Self::ALL.into_iter().find(|k| k.element().vtk_type() == t)
@@ -134,6 +205,18 @@ impl CellKind {
     /// The kind of Gmsh element type `t`, if it is one of ours.
     pub fn from_gmsh(t: usize) -> Option<CellKind> {
         Self::ALL.into_iter().find(|k| k.element().gmsh_type() == t)
+    }
+}
+
+/// The corners of a facet (an edge in 2-D, a face in 3-D) of `len` nodes, corners
+/// first: 2 for an edge (2 or 3 nodes), 3 for a triangle (3 or 6), 4 for a quadrilateral
+/// (4, 8 or 9); `None` for any other count.
+pub fn facet_corners(dim: usize, len: usize) -> Option<usize> {
+    match (dim, len) {
+        (2, 2 | 3) => Some(2),
+        (3, 3 | 6) => Some(3),
+        (3, 4 | 8 | 9) => Some(4),
+        _ => None,
     }
 }
 
@@ -173,12 +256,63 @@ pub fn points<const NN: usize, const D: usize, const P: usize>(
 mod tests {
     use super::*;
 
+    fn simplex(e: &dyn Element) -> bool {
+        e.corners() == e.dim() + 1
+    }
+
+    /// `∫ r^i s^j t^k` over the reference cell of `e`.
+    fn monomial(e: &dyn Element, p: [u32; 3]) -> f64 {
+        let fact = |n: u32| (1..=n).map(f64::from).product::<f64>();
+        let d = e.dim();
+        if simplex(e) {
+            let sum: u32 = p[..d].iter().sum();
+            p[..d].iter().map(|&i| fact(i)).product::<f64>() / fact(sum + d as u32)
+        } else {
+            p[..d]
+                .iter()
+                .map(|&i| {
+                    if i % 2 == 1 {
+                        0.0
+                    } else {
+                        2.0 / f64::from(i + 1)
+                    }
+                })
+                .product()
+        }
+    }
+
     fn volume(kind: CellKind) -> f64 {
-        match kind {
-            CellKind::Tri3 => 0.5,
-            CellKind::Tet4 => 1.0 / 6.0,
-            CellKind::Quad4 => 4.0,
-            CellKind::Hex8 => 8.0,
+        monomial(kind.element(), [0; 3])
+    }
+
+    /// The full rule integrates every monomial of degree ≤ 2·order (the consistent mass
+    /// of an undistorted cell) exactly: to 1e-14 relative to the cell's volume (the
+    /// tabulated rules' constants carry 15 digits).
+    #[test]
+    fn the_full_rule_integrates_the_mass_exactly() {
+        for kind in CellKind::ALL {
+            let e = kind.element();
+            let deg = 2 * e.order() as u32;
+            let d = e.dim();
+            for i in 0..=deg {
+                for j in 0..=deg - i {
+                    for k in 0..=if d == 3 { deg - i - j } else { 0 } {
+                        let q: f64 = e
+                            .rule(Rule::Full)
+                            .iter()
+                            .map(|(x, w)| {
+                                w * x[0].powi(i as i32) * x[1].powi(j as i32) * x[2].powi(k as i32)
+                            })
+                            .sum();
+                        let exact = monomial(e, [i, j, k]);
+                        assert!(
+                            (q - exact).abs() < 1e-14 * volume(kind),
+                            "{} r^{i} s^{j} t^{k}: {q} against {exact}",
+                            e.name()
+                        );
+                    }
+                }
+            }
         }
     }
 
@@ -248,10 +382,10 @@ mod tests {
         }
     }
 
-    /// Every face has a facet's node count (2 in 2-D, 3 or 4 in 3-D), every node lies on
-    /// some face, and no face is degenerate or through the centre (its normal by the node
-    /// order has a non-zero component along the way out, which `Mesh::boundary_facets`
-    /// uses to turn it outward).
+    /// Every face has a facet's node count ([`facet_corners`] knows it), every corner
+    /// lies on some face, and no face is degenerate or through the centre (its normal by
+    /// its corners has a non-zero component along the way out, which
+    /// `Mesh::boundary_facets` uses to turn it outward).
     #[test]
     fn faces_cover_the_nodes_and_are_not_degenerate() {
         for kind in CellKind::ALL {
@@ -260,20 +394,17 @@ mod tests {
             let c = e.centre();
             let mut seen = vec![false; e.nodes()];
             for f in e.faces() {
-                assert!(
-                    f.len() == e.dim() || (e.dim() == 3 && f.len() == 4),
-                    "{}",
-                    e.name()
-                );
+                let k = facet_corners(e.dim(), f.len());
+                assert!(k.is_some(), "{} face {f:?}", e.name());
                 f.iter().for_each(|&a| seen[a] = true);
                 let d = |a: usize, b: usize| -> [f64; 3] {
                     std::array::from_fn(|i| x[f[a]][i] - x[f[b]][i])
                 };
-                let normal = if f.len() == 2 {
+                let normal = if e.dim() == 2 {
                     let t = d(1, 0);
                     [t[1], -t[0], 0.0]
                 } else {
-                    let (u, v) = if f.len() == 3 {
+                    let (u, v) = if k == Some(3) {
                         (d(1, 0), d(2, 0))
                     } else {
                         (d(2, 0), d(3, 1))
@@ -287,7 +418,7 @@ mod tests {
                 let out: f64 = (0..3).map(|i| normal[i] * (x[f[0]][i] - c[i])).sum();
                 assert!(out != 0.0, "{} face {f:?} is degenerate", e.name());
             }
-            assert!(seen.iter().all(|&s| s), "{}", e.name());
+            assert!(seen[..e.corners()].iter().all(|&s| s), "{}", e.name());
         }
     }
 

@@ -3,6 +3,7 @@
 //! coordinates, cells of the formulation's dimension, node numbers in range).
 
 use super::*;
+use crate::model::element::{Lumping, MAX_NODES};
 
 /// Assembles `M` and `K` of a mesh in parallel (rayon; each task owns a range of
 /// columns of the one pattern, see [`PatternAssembler::par_assemble_pair`]); the result
@@ -49,11 +50,7 @@ pub fn check_mesh(mesh: &Mesh, f: Formulation) -> Result<(), Error> {
                 &format!(
                     "takes {dim}-D cells ({}), and cell {} of the mesh is {}: give \
                      formulation = {}",
-                    if dim == 3 {
-                        "tet4, hex8"
-                    } else {
-                        "tri3, quad4"
-                    },
+                    CellKind::names(Some(dim)),
                     mesh.cell_ids.get(id).map_or(id as u64, |&t| t),
                     kind.name(),
                     if dim == 3 {
@@ -82,6 +79,23 @@ pub fn check_mesh(mesh: &Mesh, f: Formulation) -> Result<(), Error> {
     Ok(())
 }
 
+/// The HRZ lumped mass of one element (Hinton, Rock & Zienkiewicz, 1976): the diagonal of
+/// its consistent mass scaled by the element's total over the diagonal's sum, so each
+/// node keeps a positive share and the element its mass (a solid's mass is `I ⊗ m`: each
+/// displacement component gets the same scaling).
+fn add_hrz_mass(
+    asm: &mut impl crate::assembly::Accumulate,
+    dofs: &[usize],
+    me: impl Fn(usize, usize) -> f64,
+) {
+    let n = dofs.len();
+    let total: f64 = (0..n).map(|a| (0..n).map(|b| me(a, b)).sum::<f64>()).sum();
+    let diagonal: f64 = (0..n).map(|a| me(a, a)).sum();
+    for (a, &i) in dofs.iter().enumerate() {
+        asm.add(i, i, me(a, a) * total / diagonal);
+    }
+}
+
 /// [`assemble`] with the contact nodes named (for the redistributed mass).
 pub fn assemble_with_contacts(
     mesh: &Mesh,
@@ -101,6 +115,23 @@ pub fn assemble_with_contacts(
         require_positive("thickness", thickness)?;
     }
     check_mesh(mesh, f)?;
+    if mass == MassKind::Redistributed
+        && let Some((kind, _)) = mesh
+            .cells
+            .iter()
+            .find(|(k, _)| k.element().lumping() != Lumping::RowSum)
+    {
+        return Err(Error::invalid(
+            "mass",
+            "redistributed",
+            &format!(
+                "moves a cell's mass off its contact nodes by row sums, which are zero or \
+                 negative at the corners of a {} cell: give mass = \"consistent\" or \
+                 \"lumped\" (HRZ for quadratic cells)",
+                kind.name()
+            ),
+        ));
+    }
     let dim = f.dim();
     let n = mesh.points.len() * dim;
     let cell_nodes: Vec<&[usize]> = mesh.cells.iter().map(|(_, c)| c.as_slice()).collect();
@@ -108,8 +139,8 @@ pub fn assemble_with_contacts(
     let mut am = ak.zeroed_like();
     ak.par_assemble_pair(&mut am, &cell_nodes, |id, k, m| {
         let (kind, nodes) = &mesh.cells[id];
-        let mut x = [[0.0; 3]; 8];
-        let mut dofs = [0usize; 24];
+        let mut x = [[0.0; 3]; MAX_NODES];
+        let mut dofs = [0usize; 3 * MAX_NODES];
         for (a, &v) in nodes.iter().enumerate() {
             x[a] = mesh.points[v];
             for i in 0..dim {
@@ -120,13 +151,17 @@ pub fn assemble_with_contacts(
         let (x, dofs) = (&x[..nodes.len()], &dofs[..nd]);
         let e = element_matrices(id, *kind, x, mat, f)?;
         k.add_element(dofs, |a, b| e.k(a, b));
-        super::super::add_element_mass(
-            m,
-            mass,
-            dofs,
-            |a, b| e.m(a, b),
-            |a| is_contact_node[dofs[a] / dim],
-        );
+        if mass == MassKind::Lumped && kind.element().lumping() == Lumping::Hrz {
+            add_hrz_mass(m, dofs, |a, b| e.m(a, b));
+        } else {
+            super::super::add_element_mass(
+                m,
+                mass,
+                dofs,
+                |a, b| e.m(a, b),
+                |a| is_contact_node[dofs[a] / dim],
+            );
+        }
         Ok(())
     })
     .map_err(|(id, e)| match (&mesh.source, e) {

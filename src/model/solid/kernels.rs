@@ -30,6 +30,12 @@ pub enum AnyElement {
     Tet4(ElementMatrices<12>),
     /// hex8, 24 dofs.
     Hex8(ElementMatrices<24>),
+    /// tri6, 12 dofs.
+    Tri6(ElementMatrices<12>),
+    /// quad8, 16 dofs.
+    Quad8(ElementMatrices<16>),
+    /// quad9, 18 dofs.
+    Quad9(ElementMatrices<18>),
 }
 
 macro_rules! each_element {
@@ -39,6 +45,9 @@ macro_rules! each_element {
             AnyElement::Quad4($e) => $body,
             AnyElement::Tet4($e) => $body,
             AnyElement::Hex8($e) => $body,
+            AnyElement::Tri6($e) => $body,
+            AnyElement::Quad8($e) => $body,
+            AnyElement::Quad9($e) => $body,
         }
     };
 }
@@ -269,11 +278,29 @@ pub fn element_matrices(
                 mat,
                 &inverted,
             )?),
+            CellKind::Tri6 => AnyElement::Tri6(axisymmetric_kernel(
+                x,
+                &points::<6, 2, 6>(kind, Rule::Interior),
+                mat,
+                &inverted,
+            )?),
+            CellKind::Quad8 => AnyElement::Quad8(axisymmetric_kernel(
+                x,
+                &points::<8, 2, 9>(kind, Rule::Interior),
+                mat,
+                &inverted,
+            )?),
+            CellKind::Quad9 => AnyElement::Quad9(axisymmetric_kernel(
+                x,
+                &points::<9, 2, 9>(kind, Rule::Interior),
+                mat,
+                &inverted,
+            )?),
             _ => {
                 return Err(Error::invalid(
                     &format!("cell {id}"),
                     kind.name(),
-                    "does not fit an axisymmetric formulation (tri3 or quad4)",
+                    "does not fit an axisymmetric formulation (a 2-D cell)",
                 ));
             }
         });
@@ -307,6 +334,30 @@ pub fn element_matrices(
             &points::<8, 3, 8>(kind, Rule::Full),
             &mat.d3(),
             rho,
+            &inverted,
+        )?),
+        CellKind::Tri6 => AnyElement::Tri6(plane_kernel(
+            x,
+            &points::<6, 2, 6>(kind, Rule::Full),
+            &mat.d2(f),
+            rho,
+            f.thickness(),
+            &inverted,
+        )?),
+        CellKind::Quad8 => AnyElement::Quad8(plane_kernel(
+            x,
+            &points::<8, 2, 9>(kind, Rule::Full),
+            &mat.d2(f),
+            rho,
+            f.thickness(),
+            &inverted,
+        )?),
+        CellKind::Quad9 => AnyElement::Quad9(plane_kernel(
+            x,
+            &points::<9, 2, 9>(kind, Rule::Full),
+            &mat.d2(f),
+            rho,
+            f.thickness(),
             &inverted,
         )?),
     })

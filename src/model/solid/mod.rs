@@ -31,6 +31,7 @@ mod assemble;
 mod kernels;
 mod stress;
 
+use super::element::facet_corners;
 pub use super::element::{CellKind, HEX8_CORNERS, Point, QUAD4_CORNERS};
 pub use assemble::*;
 pub use kernels::*;
@@ -190,8 +191,9 @@ impl Mesh {
                     .iter()
                     .map(|&v| Vector3::from(self.points[v]))
                     .collect();
-                let out = mean(x.iter().map(|p| (*p).into())) - centroid;
-                let normal = match x.len() {
+                let corners = facet_corners(kind.dim(), nodes.len()).unwrap_or(nodes.len());
+                let out = mean(x[..corners].iter().map(|p| (*p).into())) - centroid;
+                let normal = match corners {
                     2 => {
                         let t = x[1] - x[0];
                         Vector3::new(t[1], -t[0], 0.0)
@@ -200,11 +202,7 @@ impl Mesh {
                     _ => (x[2] - x[0]).cross(&(x[3] - x[1])),
                 };
                 if normal.dot(&out) < 0.0 {
-                    nodes.reverse();
-                    if nodes.len() == 4 {
-                        // keep the first node first (a cyclic order either way)
-                        nodes.rotate_right(1);
-                    }
+                    reverse_facet(&mut nodes, corners);
                 }
                 seen.insert(key, (nodes, 1));
             }
@@ -213,6 +211,33 @@ impl Mesh {
             .filter(|(f, n)| *n == 1 && f.iter().all(|&v| inside[v]))
             .map(|(f, _)| f)
             .collect()
+    }
+}
+
+/// Reverses the orientation of a facet with `k` corners (corners first, then the
+/// mid-side nodes of the edges `i → i + 1`, then a centre node): the corners in reverse
+/// order, the first kept first on a quadrilateral (a cyclic order either way), the
+/// mid-side nodes following their edges.
+fn reverse_facet(f: &mut [usize], k: usize) {
+    let mut order = [0usize; 4];
+    for (i, o) in order.iter_mut().enumerate().take(k) {
+        *o = k - 1 - i;
+    }
+    if k == 4 {
+        order.rotate_right(1);
+    }
+    let old: Vec<usize> = f.to_vec();
+    for i in 0..k {
+        f[i] = old[order[i]];
+    }
+    if k > 2 && old.len() >= 2 * k {
+        for i in 0..k {
+            // the new edge i joins old corners order[i] and order[i + 1]; the old edge j
+            // joins j and j + 1
+            let (a, b) = (order[i], order[(i + 1) % k]);
+            let j = if (a + 1) % k == b { a } else { b };
+            f[k + i] = old[k + j];
+        }
     }
 }
 

@@ -2,12 +2,13 @@
 //! Hooke's stress and the von Mises measure (Voigt order of the module doc).
 
 use super::*;
+use crate::model::element::MAX_NODES;
 
 /// Reference shape-function gradients at the cell centre (`nodes` entries; the third
 /// component is zero in 2-D).
-pub(super) fn centre_gradients(kind: CellKind) -> [[f64; 3]; 8] {
+pub(super) fn centre_gradients(kind: CellKind) -> [[f64; 3]; MAX_NODES] {
     let e = kind.element();
-    let mut g = [[0.0; 3]; 8];
+    let mut g = [[0.0; 3]; MAX_NODES];
     e.gradients(e.centre(), &mut g);
     g
 }
@@ -30,10 +31,21 @@ pub fn centre_strain(
         Formulation::PlaneStrain => 0.0,
         Formulation::PlaneStress { .. } => -mat.poisson / (1.0 - mat.poisson) * (e(0, 0) + e(1, 1)),
         Formulation::Axisymmetric => {
-            // hoop strain u_r / r at the centre (the mean of the nodes for tri3, quad4)
-            let k = kind.nodes() as f64;
-            let r = x.iter().map(|p| p[0]).sum::<f64>() / k;
-            let ur = u.iter().map(|p| p[0]).sum::<f64>() / k;
+            // hoop strain u_r / r at the centre: the mean of the nodes for the linear
+            // kinds (their shape functions there), the shape functions otherwise
+            let e = kind.element();
+            let (r, ur) = if e.order() == 1 {
+                let k = kind.nodes() as f64;
+                (
+                    x.iter().map(|p| p[0]).sum::<f64>() / k,
+                    u.iter().map(|p| p[0]).sum::<f64>() / k,
+                )
+            } else {
+                let mut n = [0.0; MAX_NODES];
+                e.shape(e.centre(), &mut n);
+                let at = |v: &[[f64; 3]]| (0..e.nodes()).map(|a| n[a] * v[a][0]).sum::<f64>();
+                (at(x), at(u))
+            };
             if r > 0.0 { ur / r } else { 0.0 }
         }
     };

@@ -2,6 +2,7 @@
 //! facets of a contact target.
 
 use super::*;
+use crate::model::element::MAX_NODES;
 
 impl BodySpec {
     /// The displacement components of a node of this body: 1 for a rod, else its
@@ -151,8 +152,8 @@ fn arrays_mesh(
     // each cell by its sorted nodes → where it was first listed: a cell listed twice
     // would add its mass and stiffness twice (a hex8 cube listed twice weighed 1.125 kg
     // for 1 kg)
-    // (the key: the sorted nodes, padded; at most 8 a cell — no allocation per cell)
-    let mut seen: std::collections::HashMap<[usize; 8], (&str, usize)> =
+    // (the key: the sorted nodes, padded; at most MAX_NODES a cell — no allocation per cell)
+    let mut seen: std::collections::HashMap<[usize; MAX_NODES], (&str, usize)> =
         std::collections::HashMap::with_capacity(nc.min(1 << 24));
     for (name, list) in cells {
         let kind: CellKind = serde_json::from_value(serde_json::Value::String(name.clone()))
@@ -160,7 +161,7 @@ fn arrays_mesh(
                 Error::invalid(
                     "mesh.cells",
                     name,
-                    "is not a cell kind: hex8, tet4, quad4 or tri3",
+                    &format!("is not a cell kind: {}", CellKind::names(None)),
                 )
             })?;
         mesh.cells.reserve(list.len());
@@ -181,7 +182,7 @@ fn arrays_mesh(
                 ));
             }
             nodes.iter().for_each(|&v| used[v] = true);
-            let mut sorted = [usize::MAX; 8];
+            let mut sorted = [usize::MAX; MAX_NODES];
             sorted[..nodes.len()].copy_from_slice(nodes);
             sorted.sort_unstable();
             if let Some((first, fc)) = seen.insert(sorted, (name.as_str(), c)) {
@@ -301,7 +302,25 @@ pub(super) fn target_facets(
             .map(|&v| vec![v])
             .collect()
     } else {
-        mesh.boundary_facets(&set)
+        let facets = mesh.boundary_facets(&set);
+        // a quadratic facet is a curve or a curved face: the body–body contact's facets
+        // are straight segments, triangles and quadrilaterals
+        if let Some(f) = facets
+            .iter()
+            .find(|f| crate::model::element::facet_corners(body.dim(), f.len()) != Some(f.len()))
+        {
+            return Err(Error::invalid(
+                "surface",
+                &t.surface,
+                &format!(
+                    "has a facet of {} nodes (a quadratic cell's): a body's contact target \
+                     takes linear cells (tri3, quad4, tet4, hex8) for now; contacts of its \
+                     nodes against an obstacle take any cell",
+                    f.len()
+                ),
+            ));
+        }
+        facets
     };
     let mut on_axis = 0;
     if matches!(body.formulation, Formulation::Axisymmetric) {

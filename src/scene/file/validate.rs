@@ -402,6 +402,15 @@ pub(super) fn time_function(
     }
 }
 
+/// The cells the `rectangle` generator makes.
+const RECTANGLE_CELLS: &[CellKind] = &[
+    CellKind::Quad4,
+    CellKind::Tri3,
+    CellKind::Quad8,
+    CellKind::Quad9,
+    CellKind::Tri6,
+];
+
 /// Checks a generator's request before anything is generated: the cell kind is one it
 /// makes, the counts are positive and their products fit the memory limit, the sizes
 /// are positive and finite, the origin is finite.
@@ -415,8 +424,8 @@ pub(super) fn generator_checks(
     let (kinds, per_box): (&[CellKind], u64) = match (generator, cell) {
         ("box", CellKind::Tet4) => (&[CellKind::Hex8, CellKind::Tet4], 6),
         ("box", _) => (&[CellKind::Hex8, CellKind::Tet4], 1),
-        (_, CellKind::Tri3) => (&[CellKind::Quad4, CellKind::Tri3], 2),
-        _ => (&[CellKind::Quad4, CellKind::Tri3], 1),
+        (_, CellKind::Tri3 | CellKind::Tri6) => (RECTANGLE_CELLS, 2),
+        _ => (RECTANGLE_CELLS, 1),
     };
     if !kinds.contains(&cell) {
         return Err(Error::invalid(
@@ -445,15 +454,19 @@ pub(super) fn generator_checks(
     for (i, o) in origin.iter().enumerate() {
         crate::error::require_finite(&format!("mesh.origin[{i}]"), *o)?;
     }
-    let prod = |extra: u64| {
+    // nodes on the grid of the cells (of half their spacing for quadratic cells)
+    let s = cell.element().order() as u64;
+    let prod = |scale: u64, extra: u64| {
         cells
             .iter()
-            .try_fold(1u64, |a, &c| a.checked_mul(c as u64 + extra))
+            .try_fold(1u64, |a, &c| {
+                a.checked_mul((c as u64).checked_mul(scale)? + extra)
+            })
             .unwrap_or(u64::MAX)
     };
-    let n_cells = prod(0).saturating_mul(per_box);
+    let n_cells = prod(1, 0).saturating_mul(per_box);
     let dim = cells.len() as u64;
-    crate::limits::mesh_memory(prod(1), n_cells, cell.nodes() as u64, dim)
+    crate::limits::mesh_memory(prod(s, 1), n_cells, cell.nodes() as u64, dim)
         .check("mesh.cells", format!("{cells:?}"))
 }
 
