@@ -157,8 +157,8 @@ fn bad_meshes_are_rejected_with_what_is_wrong() {
             "node tag 9",
         ),
         (
-            "tet10.msh",
-            format!("{HEAD}{nodes}$Elements\n1\n1 11 2 1 1 1 2 3 4 1 2 3 4 1 2\n$EndElements\n"),
+            "prism.msh",
+            format!("{HEAD}{nodes}$Elements\n1\n1 6 2 1 1 1 2 3 4 1 2\n$EndElements\n"),
             "unsupported element type",
         ),
         (
@@ -239,4 +239,90 @@ fn bad_meshes_are_rejected_with_what_is_wrong() {
         .unwrap()
         .to_string();
     assert!(e.contains("empty"), "{e}");
+}
+
+/// The quadratic meshes of `meshes/make_quadratic_meshes.py` (gmsh 4.15.2 with
+/// `setOrder(2)`, meshio 5.3.5): each `.vtu`, meshio's conversion of the `.msh` beside
+/// it into VTK's node order, reads to the same cells as the `.msh` through signorini's
+/// Gmsh reader — node by node, the same coordinates — so the reader's Gmsh-to-VTK node
+/// permutations (tet10, hex20, hex27) are meshio's; and every quadratic mesh measures
+/// its geometry: the box exactly (round-off, 1e-12), the ball and the disks (mid-side
+/// nodes on the curved boundary) within 1e-3 of `4/3 πR³` and 1e-4 of `πR²` (a piecewise
+/// quadratic boundary at these sizes: measured 1.4e-4 and 1e-5).
+#[test]
+fn quadratic_meshes_read_in_meshio_node_order_and_measure_their_geometry() {
+    use std::f64::consts::PI;
+    for (msh, vtu) in [
+        ("quadratic/ball_tet10.msh", "quadratic/ball_tet10.vtu"),
+        ("quadratic/block_hex20.msh", "quadratic/block_hex20.vtu"),
+        ("quadratic/block_hex27.msh", "quadratic/block_hex27.vtu"),
+        ("quadratic/disk_quad9.msh", "quadratic/disk_quad9.vtu"),
+    ] {
+        let a = read_mesh(&mesh_path(msh)).unwrap();
+        let b = read_mesh(&mesh_path(vtu)).unwrap();
+        assert_eq!(a.cells.len(), b.cells.len(), "{msh}");
+        for (ca, cb) in a.cells.iter().zip(&b.cells) {
+            assert_eq!(ca.0, cb.0, "{msh}");
+            for (&va, &vb) in ca.1.iter().zip(&cb.1) {
+                assert_eq!(a.points[va], b.points[vb], "{msh}: a cell's nodes differ");
+            }
+        }
+    }
+    let steel = Material {
+        young: 210e9,
+        poisson: 0.3,
+        density: 1.0,
+        model: signorini::model::solid::MaterialModel::LINEAR,
+    };
+    for (file, kind, f, exact, tol) in [
+        (
+            "quadratic/ball_tet10.msh",
+            CellKind::Tet10,
+            Formulation::Solid,
+            4.0 / 3.0 * PI * 0.05f64.powi(3),
+            1e-3,
+        ),
+        (
+            "quadratic/block_hex20.msh",
+            CellKind::Hex20,
+            Formulation::Solid,
+            0.1 * 0.1 * 0.05,
+            1e-12,
+        ),
+        (
+            "quadratic/block_hex27.msh",
+            CellKind::Hex27,
+            Formulation::Solid,
+            0.1 * 0.1 * 0.05,
+            1e-12,
+        ),
+        (
+            "quadratic/disk_tri6.msh",
+            CellKind::Tri6,
+            Formulation::PlaneStrain,
+            PI * 0.05f64.powi(2),
+            1e-4,
+        ),
+        (
+            "quadratic/disk_quad8.msh",
+            CellKind::Quad8,
+            Formulation::PlaneStrain,
+            PI * 0.05f64.powi(2),
+            1e-4,
+        ),
+        (
+            "quadratic/disk_quad9.msh",
+            CellKind::Quad9,
+            Formulation::PlaneStrain,
+            PI * 0.05f64.powi(2),
+            1e-4,
+        ),
+    ] {
+        let mesh = read_mesh(&mesh_path(file)).unwrap();
+        assert!(mesh.cells.iter().all(|c| c.0 == kind), "{file}");
+        let sys = assemble(&mesh, &steel, f, MassKind::Consistent).unwrap();
+        let rel = sys.total_mass() / exact - 1.0;
+        println!("{file}: volume error {rel:e}");
+        assert!(rel.abs() < tol, "{file}: volume error {rel:e}");
+    }
 }

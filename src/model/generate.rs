@@ -1,41 +1,58 @@
-//! Built-in structured meshes: boxes of hex8 or tet4 cells, rectangles of quad4 or
-//! tri3 cells, with the six (four) boundary faces as named node sets `x0, x1, y0, y1,
+//! Built-in structured meshes: boxes of hex8, tet4, hex20, hex27 or tet10 cells,
+//! rectangles of quad4, tri3, quad8, quad9 or tri6 cells, with the six (four) boundary faces as named node sets `x0, x1, y0, y1,
 //! z0, z1`.
 
 use super::solid::{CellKind, Mesh};
 
 /// A `lx × ly × lz` box from the origin, `nx × ny × nz` hexahedra, each split into six
-/// tetrahedra (Kuhn triangulation, conforming) when `kind` is [`CellKind::Tet4`].
+/// tetrahedra (Kuhn triangulation, conforming) when `kind` is [`CellKind::Tet4`] or
+/// [`CellKind::Tet10`]. Quadratic kinds take their mid-edge (and hex27's face and
+/// centre) nodes on the grid of half the spacing; a hex20 mesh has no node at the
+/// cells' face centres and centres.
 pub fn box_mesh(kind: CellKind, n: [usize; 3], l: [f64; 3]) -> Mesh {
+    let s = kind.element().order();
     let [nx, ny, nz] = n;
-    let id = |i: usize, j: usize, k: usize| (k * (ny + 1) + j) * (nx + 1) + i;
+    let [gx, gy, gz] = [s * nx, s * ny, s * nz];
+    // hex20 leaves out the grid nodes with two or three odd coordinates
+    let unused =
+        |i: usize, j: usize, k: usize| kind == CellKind::Hex20 && (i % 2 + j % 2 + k % 2) >= 2;
+    let mut index = vec![usize::MAX; (gx + 1) * (gy + 1) * (gz + 1)];
     let mut mesh = Mesh::default();
-    for k in 0..=nz {
-        for j in 0..=ny {
-            for i in 0..=nx {
+    for k in 0..=gz {
+        for j in 0..=gy {
+            for i in 0..=gx {
+                if unused(i, j, k) {
+                    continue;
+                }
+                index[(k * (gy + 1) + j) * (gx + 1) + i] = mesh.points.len();
                 mesh.points.push([
-                    l[0] * i as f64 / nx as f64,
-                    l[1] * j as f64 / ny as f64,
-                    l[2] * k as f64 / nz as f64,
+                    l[0] * i as f64 / gx as f64,
+                    l[1] * j as f64 / gy as f64,
+                    l[2] * k as f64 / gz as f64,
                 ]);
             }
         }
     }
+    let id = |i: usize, j: usize, k: usize| index[(k * (gy + 1) + j) * (gx + 1) + i];
+    // the hexahedron's corners on its own grid (offsets 0 or s)
+    const CORNER: [[usize; 3]; 8] = [
+        [0, 0, 0],
+        [1, 0, 0],
+        [1, 1, 0],
+        [0, 1, 0],
+        [0, 0, 1],
+        [1, 0, 1],
+        [1, 1, 1],
+        [0, 1, 1],
+    ];
     for k in 0..nz {
         for j in 0..ny {
             for i in 0..nx {
-                let h = [
-                    id(i, j, k),
-                    id(i + 1, j, k),
-                    id(i + 1, j + 1, k),
-                    id(i, j + 1, k),
-                    id(i, j, k + 1),
-                    id(i + 1, j, k + 1),
-                    id(i + 1, j + 1, k + 1),
-                    id(i, j + 1, k + 1),
-                ];
+                // node at offsets o (each in 0..=s) of this cell's grid
+                let at = |o: [usize; 3]| id(s * i + o[0], s * j + o[1], s * k + o[2]);
+                let h: [usize; 8] = std::array::from_fn(|a| at(CORNER[a].map(|c| c * s)));
                 match kind {
-                    CellKind::Tet4 => {
+                    CellKind::Tet4 | CellKind::Tet10 => {
                         for t in [
                             [0, 1, 2, 6],
                             [0, 2, 3, 6],
@@ -44,12 +61,30 @@ pub fn box_mesh(kind: CellKind, n: [usize; 3], l: [f64; 3]) -> Mesh {
                             [0, 4, 5, 6],
                             [0, 5, 1, 6],
                         ] {
-                            let mut c: Vec<usize> = t.iter().map(|&a| h[a]).collect();
+                            let mut t = t;
+                            let c: Vec<usize> = t.iter().map(|&a| h[a]).collect();
                             if signed_volume(&mesh.points, &c) < 0.0 {
-                                c.swap(2, 3);
+                                t.swap(2, 3);
                             }
-                            mesh.cells.push((CellKind::Tet4, c));
+                            let mut c: Vec<usize> = t.iter().map(|&a| h[a]).collect();
+                            if kind == CellKind::Tet10 {
+                                // mid-edge nodes: the midpoints of the corners' offsets
+                                for [a, b] in [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]] {
+                                    let (p, q) = (CORNER[t[a]], CORNER[t[b]]);
+                                    c.push(at(std::array::from_fn(|x| p[x] + q[x])));
+                                }
+                            }
+                            mesh.cells.push((kind, c));
                         }
+                    }
+                    CellKind::Hex20 | CellKind::Hex27 => {
+                        let e = kind.element();
+                        let c = e
+                            .reference_nodes()
+                            .iter()
+                            .map(|x| at(x.map(|v| (v + 1.0) as usize)))
+                            .collect();
+                        mesh.cells.push((kind, c));
                     }
                     _ => mesh.cells.push((CellKind::Hex8, h.to_vec())),
                 }
@@ -58,18 +93,18 @@ pub fn box_mesh(kind: CellKind, n: [usize; 3], l: [f64; 3]) -> Mesh {
     }
     let faces: [(&str, usize, usize); 6] = [
         ("x0", 0, 0),
-        ("x1", 0, nx),
+        ("x1", 0, gx),
         ("y0", 1, 0),
-        ("y1", 1, ny),
+        ("y1", 1, gy),
         ("z0", 2, 0),
-        ("z1", 2, nz),
+        ("z1", 2, gz),
     ];
     for (name, axis, at) in faces {
         let mut set = Vec::new();
-        for k in 0..=nz {
-            for j in 0..=ny {
-                for i in 0..=nx {
-                    if [i, j, k][axis] == at {
+        for k in 0..=gz {
+            for j in 0..=gy {
+                for i in 0..=gx {
+                    if [i, j, k][axis] == at && !unused(i, j, k) {
                         set.push(id(i, j, k));
                     }
                 }

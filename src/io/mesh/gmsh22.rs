@@ -58,6 +58,10 @@ pub(super) fn read_msh22(
                 .unwrap_or_else(|| format!("physical_{p}"));
             raw.sets.entry(name).or_default().extend_from_slice(&ns);
         }
+        let ns = match &kind {
+            Ok(k) => k.from_gmsh_order(ns),
+            Err(_) => ns,
+        };
         raw.cells.push((d, kind, ns));
         raw.cell_ids.push(num);
     }

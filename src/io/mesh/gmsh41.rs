@@ -271,6 +271,10 @@ pub(super) fn read_msh41(
                     .unwrap_or_else(|| format!("physical_{g}"));
                 raw.sets.entry(name).or_default().extend_from_slice(&ns);
             }
+            let ns = match &kind {
+                Ok(k) => k.from_gmsh_order(ns),
+                Err(_) => ns,
+            };
             raw.cells.push((d, kind.clone(), ns));
             raw.cell_ids.push(e.element_tag);
         }

@@ -132,7 +132,13 @@ impl RawMesh {
                 continue;
             }
             let kind = kind.clone().map_err(|name| {
-                bad(path, format!("cell {id}: unsupported element type {name} (signorini reads tri3, quad4, tet4, hex8)"))
+                bad(
+                    path,
+                    format!(
+                        "cell {id}: unsupported element type {name} (signorini reads {})",
+                        CellKind::names(None)
+                    ),
+                )
             })?;
             if nodes.len() != kind.nodes() {
                 return Err(bad(

@@ -11,26 +11,33 @@
 //! nalgebra matrices): [`CellKind`]'s `match` in `model::solid::element_matrices` and
 //! `model::hyperelastic` picks the size.
 //!
-//! **Adding a kind**: its file here (a unit struct implementing [`Element`]), its
-//! variant in [`CellKind`] with its arm in [`CellKind::element`], and its size's arm
-//! in the two kernel dispatches; the unit tests of this module then check its shape
+//! **Adding a kind**: its file here (a unit struct implementing [`Element`]), its line
+//! in the `registry!` list of this file (the variant of [`CellKind`] and its element),
+//! and its size's arm in the kernel dispatch of `model::solid::element_matrices` (the
+//! compiler asks for it); the unit tests of this module then check its shape
 //! functions (partition of unity, Kronecker property at the nodes, gradients against
 //! finite differences), its rules (reference volume) and its faces (outward, by the
 //! centroid) without more code.
 
+mod hex20;
+mod hex27;
 mod hex8;
 mod quad4;
 mod quad8;
 mod quad9;
+mod tet10;
 mod tet4;
 mod tri3;
 mod tri6;
 
 pub use hex8::{HEX8_CORNERS, Hex8};
+pub use hex20::{HEX20_GMSH, Hex20};
+pub use hex27::{HEX27_GMSH, Hex27};
 pub use quad4::{QUAD4_CORNERS, Quad4};
 pub use quad8::Quad8;
 pub use quad9::Quad9;
 pub use tet4::Tet4;
+pub use tet10::Tet10;
 pub use tri3::Tri3;
 pub use tri6::Tri6;
 
@@ -60,6 +67,98 @@ pub(crate) const GAUSS3_2D: [([f64; 3], f64); 9] = {
     }
     out
 };
+
+/// 3×3×3 Gauss points on `[−1, 1]³`, `r` slowest: the consistent mass and the stiffness
+/// of an undistorted quadratic hexahedron exactly.
+pub(crate) const GAUSS3_3D: [([f64; 3], f64); 27] = {
+    let mut out = [([0.0; 3], 0.0); 27];
+    let mut p = 0;
+    while p < 27 {
+        let (a, b, c) = (G3[p / 9], G3[(p / 3) % 3], G3[p % 3]);
+        out[p] = ([a.0, b.0, c.0], a.1 * b.1 * c.1);
+        p += 1;
+    }
+    out
+};
+
+/// Reference coordinates of the quadratic hexahedra's nodes in VTK's order: the
+/// corners, the mid-edge nodes (edges 0–1, 1–2, 2–3, 3–0, 4–5, 5–6, 6–7, 7–4, 0–4,
+/// 1–5, 2–6, 3–7), the face centres (x = −1, x = +1, y = −1, y = +1, z = −1, z = +1:
+/// VTK's parametric coordinates of the triquadratic hexahedron, as meshio converts
+/// Gmsh's) and the centre; hex20 has the first 20.
+pub(crate) const HEX_NODES: [[f64; 3]; 27] = [
+    [-1.0, -1.0, -1.0],
+    [1.0, -1.0, -1.0],
+    [1.0, 1.0, -1.0],
+    [-1.0, 1.0, -1.0],
+    [-1.0, -1.0, 1.0],
+    [1.0, -1.0, 1.0],
+    [1.0, 1.0, 1.0],
+    [-1.0, 1.0, 1.0],
+    [0.0, -1.0, -1.0],
+    [1.0, 0.0, -1.0],
+    [0.0, 1.0, -1.0],
+    [-1.0, 0.0, -1.0],
+    [0.0, -1.0, 1.0],
+    [1.0, 0.0, 1.0],
+    [0.0, 1.0, 1.0],
+    [-1.0, 0.0, 1.0],
+    [-1.0, -1.0, 0.0],
+    [1.0, -1.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [-1.0, 1.0, 0.0],
+    [-1.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [0.0, -1.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [0.0, 0.0, -1.0],
+    [0.0, 0.0, 1.0],
+    [0.0, 0.0, 0.0],
+];
+
+/// hex20's nodes: the first 20 of [`HEX_NODES`].
+pub(crate) const HEX_EDGE_NODES: [[f64; 3]; 20] = {
+    let mut out = [[0.0; 3]; 20];
+    let mut i = 0;
+    while i < 20 {
+        out[i] = HEX_NODES[i];
+        i += 1;
+    }
+    out
+};
+
+/// A rule on the reference tetrahedron exact to degree 4 (the consistent mass of an
+/// affine tet10), with positive weights and every point inside: the conical product
+/// (Stroud) of Gauss–Legendre rules through the collapse `r = u`, `s = v(1 − u)`,
+/// `t = w(1 − u)(1 − v)`, whose Jacobian `(1 − u)²(1 − v)` raises the degree in `u` by
+/// two and in `v` by one: 4 points in `u` (degree 7), 3 in `v` and `w` (degree 5),
+/// 36 points. Written here rather than tabulated: every constant is the Gauss rules'.
+pub(crate) fn conical_rule() -> Vec<([f64; 3], f64)> {
+    const G4: [(f64, f64); 4] = [
+        (-0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
+        (-0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
+        (0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
+        (0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
+    ];
+    // Gauss–Legendre on [0, 1]
+    let unit = |(x, w): (f64, f64)| (0.5 * (1.0 + x), 0.5 * w);
+    let mut out = Vec::with_capacity(36);
+    for &gu in &G4 {
+        let (u, wu) = unit(gu);
+        for &gv in &G3 {
+            let (v, wv) = unit(gv);
+            for &gw in &G3 {
+                let (w, ww) = unit(gw);
+                let jac = (1.0 - u) * (1.0 - u) * (1.0 - v);
+                out.push((
+                    [u, v * (1.0 - u), w * (1.0 - u) * (1.0 - v)],
+                    wu * wv * ww * jac,
+                ));
+            }
+        }
+    }
+    out
+}
 
 /// The 1-D quadratic Lagrange function of the node at `node` ∈ {−1, 0, 1} and its
 /// derivative, at `x`.
@@ -119,6 +218,11 @@ pub trait Element: Send + Sync {
     fn vtk_type(&self) -> u8;
     /// The Gmsh element type (formats 2.2 and 4.1).
     fn gmsh_type(&self) -> usize;
+    /// Where Gmsh's node order differs from ours (VTK's): our node `a` is the Gmsh
+    /// cell's node `order[a]`. `None`: the same order.
+    fn gmsh_order(&self) -> Option<&'static [usize]> {
+        None
+    }
     /// Reference coordinates of the nodes, in the node order (VTK's).
     fn reference_nodes(&self) -> &'static [[f64; 3]];
     /// The faces (edges in 2-D) as lists of the cell's local nodes.
@@ -135,47 +239,57 @@ pub trait Element: Send + Sync {
     fn lumping(&self) -> Lumping;
 }
 
-/// The element kinds, for every material law.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum CellKind {
+/// Declares [`CellKind`] from one list — a variant and its element per line — with
+/// [`CellKind::ALL`] and [`CellKind::element`] from the same list, so a kind cannot be
+/// declared without being registered.
+macro_rules! registry {
+    ($($(#[$doc:meta])* $variant:ident => $element:ident,)*) => {
+        /// The element kinds, for every material law.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+        #[serde(rename_all = "kebab-case")]
+        pub enum CellKind {
+            $($(#[$doc])* $variant,)*
+        }
+
+        impl CellKind {
+            /// Every kind, in declaration order.
+            pub const ALL: &'static [CellKind] = &[$(CellKind::$variant,)*];
+
+            /// The kind's element.
+            pub fn element(self) -> &'static dyn Element {
+                match self {
+                    $(CellKind::$variant => &$element,)*
+                }
+            }
+        }
+    };
+}
+
+// The registry: one line per kind.
+registry! {
     /// 3-node triangle ([`Tri3`]).
-    Tri3,
+    Tri3 => Tri3,
     /// 4-node quadrilateral, counter-clockwise ([`Quad4`]).
-    Quad4,
+    Quad4 => Quad4,
     /// 4-node tetrahedron, positive volume ordering ([`Tet4`]).
-    Tet4,
+    Tet4 => Tet4,
     /// 8-node hexahedron, VTK / Gmsh ordering ([`Hex8`]).
-    Hex8,
+    Hex8 => Hex8,
     /// 6-node quadratic triangle ([`Tri6`]).
-    Tri6,
+    Tri6 => Tri6,
     /// 8-node serendipity quadrilateral ([`Quad8`]).
-    Quad8,
+    Quad8 => Quad8,
     /// 9-node Lagrange quadrilateral ([`Quad9`]).
-    Quad9,
+    Quad9 => Quad9,
+    /// 10-node quadratic tetrahedron ([`Tet10`]).
+    Tet10 => Tet10,
+    /// 20-node serendipity hexahedron ([`Hex20`]).
+    Hex20 => Hex20,
+    /// 27-node Lagrange hexahedron ([`Hex27`]).
+    Hex27 => Hex27,
 }
 
 impl CellKind {
-    /// Every kind, in declaration order.
-    pub const ALL: [CellKind; 4] = [
-        CellKind::Tri3,
-        CellKind::Quad4,
-        CellKind::Tet4,
-        CellKind::Hex8,
-    ];
-
-    /// The kind's element (the registry: one arm per kind).
-    pub fn element(self) -> &'static dyn Element {
-        match self {
-            CellKind::Tri3 => &Tri3,
-            CellKind::Quad4 => &Quad4,
-            CellKind::Tet4 => &Tet4,
-            CellKind::Hex8 => &Hex8,
-            CellKind::Tri6 => &Tri6,
-            CellKind::Quad8 => &Quad8,
-            CellKind::Quad9 => &Quad9,
-        }
-    }
     /// Nodes per cell.
     pub fn nodes(self) -> usize {
         self.element().nodes()
@@ -192,7 +306,7 @@ impl CellKind {
     /// `tri3, quad4, …`.
     pub fn names(dim: Option<usize>) -> String {
         Self::ALL
-            .into_iter()
+            .iter()
             .filter(|k| dim.is_none_or(|d| k.dim() == d))
             .map(|k| k.name())
             .collect::<Vec<_>>()
@@ -200,11 +314,25 @@ impl CellKind {
     }
     /// The kind of VTK cell type `t`, if it is one of ours.
     pub fn from_vtk(t: u8) -> Option<CellKind> {
-        Self::ALL.into_iter().find(|k| k.element().vtk_type() == t)
+        Self::ALL
+            .iter()
+            .copied()
+            .find(|k| k.element().vtk_type() == t)
+    }
+    /// A cell's nodes as a Gmsh file lists them, in our (VTK's) order; a list of another
+    /// length than the kind's is returned as it is (the reader reports the count).
+    pub fn from_gmsh_order(self, nodes: Vec<usize>) -> Vec<usize> {
+        match self.element().gmsh_order() {
+            Some(order) if nodes.len() == order.len() => order.iter().map(|&g| nodes[g]).collect(),
+            _ => nodes,
+        }
     }
     /// The kind of Gmsh element type `t`, if it is one of ours.
     pub fn from_gmsh(t: usize) -> Option<CellKind> {
-        Self::ALL.into_iter().find(|k| k.element().gmsh_type() == t)
+        Self::ALL
+            .iter()
+            .copied()
+            .find(|k| k.element().gmsh_type() == t)
     }
 }
 
@@ -290,7 +418,7 @@ mod tests {
     /// tabulated rules' constants carry 15 digits).
     #[test]
     fn the_full_rule_integrates_the_mass_exactly() {
-        for kind in CellKind::ALL {
+        for &kind in CellKind::ALL {
             let e = kind.element();
             let deg = 2 * e.order() as u32;
             let d = e.dim();
@@ -323,7 +451,7 @@ mod tests {
     /// round-off 1e-16/ε).
     #[test]
     fn shape_functions_interpolate_and_their_gradients_are_their_derivatives() {
-        for kind in CellKind::ALL {
+        for &kind in CellKind::ALL {
             let e = kind.element();
             let nn = e.nodes();
             let (mut n, mut g) = (vec![0.0; nn], vec![[0.0; 3]; nn]);
@@ -364,7 +492,7 @@ mod tests {
     /// relative), and every point of the interior rule is inside the cell.
     #[test]
     fn rules_integrate_the_reference_volume() {
-        for kind in CellKind::ALL {
+        for &kind in CellKind::ALL {
             let e = kind.element();
             for rule in [Rule::Full, Rule::Interior, Rule::Energy] {
                 let w: f64 = e.rule(rule).iter().map(|p| p.1).sum();
@@ -374,10 +502,14 @@ mod tests {
                     e.name()
                 );
             }
-            let mut n = vec![0.0; e.nodes()];
             for &(x, _) in e.rule(Rule::Interior) {
-                e.shape(x, &mut n);
-                assert!(n.iter().all(|&v| v > 0.0), "{} point {x:?}", e.name());
+                let d = e.dim();
+                let inside = if e.corners() == d + 1 {
+                    x[..d].iter().all(|&v| v > 0.0) && x[..d].iter().sum::<f64>() < 1.0
+                } else {
+                    x[..d].iter().all(|v| v.abs() < 1.0)
+                };
+                assert!(inside, "{} point {x:?}", e.name());
             }
         }
     }
@@ -388,7 +520,7 @@ mod tests {
     /// `Mesh::boundary_facets` uses to turn it outward).
     #[test]
     fn faces_cover_the_nodes_and_are_not_degenerate() {
-        for kind in CellKind::ALL {
+        for &kind in CellKind::ALL {
             let e = kind.element();
             let x = e.reference_nodes();
             let c = e.centre();
@@ -419,18 +551,37 @@ mod tests {
                 assert!(out != 0.0, "{} face {f:?} is degenerate", e.name());
             }
             assert!(seen[..e.corners()].iter().all(|&s| s), "{}", e.name());
+            // the mid-side nodes of a face sit at the middle of its edges, a face's centre
+            // node at the mean of its corners (which checks the face lists' node order)
+            for f in e.faces() {
+                let k = facet_corners(e.dim(), f.len()).unwrap_or(f.len());
+                let mid = |p: usize, q: usize| -> [f64; 3] {
+                    std::array::from_fn(|i| 0.5 * (x[p][i] + x[q][i]))
+                };
+                let edges = if k == 2 { 1 } else { k };
+                for i in 0..(f.len() - k).min(edges) {
+                    assert_eq!(x[f[k + i]], mid(f[i], f[(i + 1) % k]), "{} {f:?}", e.name());
+                }
+                if f.len() == 2 * k + 1 {
+                    let c: [f64; 3] = std::array::from_fn(|i| {
+                        f[..k].iter().map(|&a| x[a][i]).sum::<f64>() / k as f64
+                    });
+                    assert_eq!(x[f[2 * k]], c, "{} {f:?}", e.name());
+                }
+            }
         }
     }
 
     /// The registry reads back: each kind's VTK and Gmsh codes name it.
     #[test]
     fn codes_name_their_kind() {
-        for kind in CellKind::ALL {
+        for &kind in CellKind::ALL {
             let e = kind.element();
             assert_eq!(CellKind::from_vtk(e.vtk_type()), Some(kind));
             assert_eq!(CellKind::from_gmsh(e.gmsh_type()), Some(kind));
         }
-        assert_eq!(CellKind::from_vtk(22), None);
-        assert_eq!(CellKind::from_gmsh(9), None);
+        // a wedge is no kind of ours
+        assert_eq!(CellKind::from_vtk(13), None);
+        assert_eq!(CellKind::from_gmsh(6), None);
     }
 }

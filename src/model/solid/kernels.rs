@@ -36,6 +36,12 @@ pub enum AnyElement {
     Quad8(ElementMatrices<16>),
     /// quad9, 18 dofs.
     Quad9(ElementMatrices<18>),
+    /// tet10, 30 dofs.
+    Tet10(ElementMatrices<30>),
+    /// hex20, 60 dofs.
+    Hex20(ElementMatrices<60>),
+    /// hex27, 81 dofs.
+    Hex27(ElementMatrices<81>),
 }
 
 macro_rules! each_element {
@@ -48,6 +54,9 @@ macro_rules! each_element {
             AnyElement::Tri6($e) => $body,
             AnyElement::Quad8($e) => $body,
             AnyElement::Quad9($e) => $body,
+            AnyElement::Tet10($e) => $body,
+            AnyElement::Hex20($e) => $body,
+            AnyElement::Hex27($e) => $body,
         }
     };
 }
@@ -248,6 +257,33 @@ pub(super) fn solid_kernel<const NN: usize, const ND: usize>(
     Ok(e)
 }
 
+/// A curved (quadratic) cell's Jacobian must be positive at its nodes too, not only at
+/// the integration points: a mid-side node moved across its cell folds the map near an
+/// edge while every interior point stays positive.
+fn curved_cell_is_positive(
+    kind: CellKind,
+    x: &[[f64; 3]],
+    inverted: &dyn Fn(f64) -> Error,
+) -> Result<(), Error> {
+    let e = kind.element();
+    let d = e.dim();
+    let mut g = [[0.0; 3]; crate::model::element::MAX_NODES];
+    for &xi in e.reference_nodes() {
+        e.gradients(xi, &mut g);
+        let mut jac = Matrix3::<f64>::identity();
+        for i in 0..d {
+            for j in 0..d {
+                jac[(i, j)] = (0..e.nodes()).map(|a| x[a][i] * g[a][j]).sum();
+            }
+        }
+        let det = jac.determinant();
+        if det.is_nan() || det <= 0.0 {
+            return Err(inverted(det));
+        }
+    }
+    Ok(())
+}
+
 /// Computes the element matrices of cell `id` (nodes at `x`); errors name the cell.
 pub fn element_matrices(
     id: usize,
@@ -264,6 +300,9 @@ pub fn element_matrices(
         )
     };
     let rho = mat.density;
+    if kind.element().order() > 1 {
+        curved_cell_is_positive(kind, x, &inverted)?;
+    }
     if f == Formulation::Axisymmetric {
         return Ok(match kind {
             CellKind::Tri3 => AnyElement::Tri3(axisymmetric_kernel(
@@ -332,6 +371,27 @@ pub fn element_matrices(
         CellKind::Hex8 => AnyElement::Hex8(solid_kernel(
             x,
             &points::<8, 3, 8>(kind, Rule::Full),
+            &mat.d3(),
+            rho,
+            &inverted,
+        )?),
+        CellKind::Tet10 => AnyElement::Tet10(solid_kernel(
+            x,
+            &points::<10, 3, 36>(kind, Rule::Full),
+            &mat.d3(),
+            rho,
+            &inverted,
+        )?),
+        CellKind::Hex20 => AnyElement::Hex20(solid_kernel(
+            x,
+            &points::<20, 3, 27>(kind, Rule::Full),
+            &mat.d3(),
+            rho,
+            &inverted,
+        )?),
+        CellKind::Hex27 => AnyElement::Hex27(solid_kernel(
+            x,
+            &points::<27, 3, 27>(kind, Rule::Full),
             &mat.d3(),
             rho,
             &inverted,

@@ -402,6 +402,15 @@ pub(super) fn time_function(
     }
 }
 
+/// The cells the `box` generator makes.
+const BOX_CELLS: &[CellKind] = &[
+    CellKind::Hex8,
+    CellKind::Tet4,
+    CellKind::Hex20,
+    CellKind::Hex27,
+    CellKind::Tet10,
+];
+
 /// The cells the `rectangle` generator makes.
 const RECTANGLE_CELLS: &[CellKind] = &[
     CellKind::Quad4,
@@ -422,8 +431,8 @@ pub(super) fn generator_checks(
     origin: &[f64],
 ) -> Result<(), Error> {
     let (kinds, per_box): (&[CellKind], u64) = match (generator, cell) {
-        ("box", CellKind::Tet4) => (&[CellKind::Hex8, CellKind::Tet4], 6),
-        ("box", _) => (&[CellKind::Hex8, CellKind::Tet4], 1),
+        ("box", CellKind::Tet4 | CellKind::Tet10) => (BOX_CELLS, 6),
+        ("box", _) => (BOX_CELLS, 1),
         (_, CellKind::Tri3 | CellKind::Tri6) => (RECTANGLE_CELLS, 2),
         _ => (RECTANGLE_CELLS, 1),
     };
