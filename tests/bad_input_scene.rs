@@ -452,9 +452,9 @@ const CASES: &[Case] = &[
         "arrays mesh: an unknown cell kind",
         &[(
             "mesh = { generator = \"box\", cell = \"hex8\", cells = [1, 1, 1], size = [0.1, 0.1, 0.1] }",
-            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { hex20 = [[0, 1, 2, 3, 4, 5, 6, 7]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
+            "mesh = { generator = \"arrays\", points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.1], [0.1, 0.0, 0.1], [0.1, 0.1, 0.1], [0.0, 0.1, 0.1]], cells = { wedge6 = [[0, 1, 2, 3, 4, 5, 6, 7]] }, node_sets = { z0 = [0, 1, 2, 3] } }",
         )],
-        &["mesh.cells", "hex20", "not a cell kind"],
+        &["mesh.cells", "wedge6", "not a cell kind"],
     ),
     (
         "arrays mesh: a NaN coordinate",

@@ -192,7 +192,7 @@ fn bad_scenes_name_the_key() {
             "obstacles",
         ),
         (
-            GOOD.replace(r#"cell = "hex8""#, r#"cell = "hex27""#),
+            GOOD.replace(r#"cell = "hex8""#, r#"cell = "hex64""#),
             "bodies",
         ),
         (

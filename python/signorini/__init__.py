@@ -280,7 +280,9 @@ class Mesh:
       point no cell uses);
     - ``bodies``: the bodies' names, in the scene's order;
     - ``cells``: ``{kind: (n, nodes) int64}`` connectivity by cell kind (``line``,
-      ``tri3``, ``quad4``, ``tet4``, ``hex8``; indices into ``points``), and
+      ``tri3``, ``quad4``, ``tet4``, ``hex8``, and the quadratic ``tri6``, ``quad8``,
+      ``quad9``, ``tet10``, ``hex20``, ``hex27`` in VTK's node order; indices into
+      ``points``), and
       ``cell_bodies``: ``{kind: (n,)}`` the body of each of those cells;
     - ``dim``: displacement components per point (1 for rods, 2 or 3 for solids);
     - ``dof_map``: ``(N, dim)`` where each component is in ``q`` and ``v`` (−1: fixed

@@ -110,10 +110,13 @@ fn body<'py>(
                         return Err(bad(
                             &mp,
                             echo(&mv),
-                            if mk == "cells" {
-                                "a dict of cell kind (hex8, tet4, quad4, tri3) to an array of cells"
+                            &if mk == "cells" {
+                                format!(
+                                    "a dict of cell kind ({}) to an array of cells",
+                                    CellKind::names(None)
+                                )
                             } else {
-                                "a dict of set name to an array of point indices"
+                                "a dict of set name to an array of point indices".to_string()
                             },
                         ));
                     }
