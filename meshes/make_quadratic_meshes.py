@@ -18,6 +18,11 @@ into VTK's order: tests/io_mesh_files.rs checks that signorini's Gmsh reader agr
   quadratic/disk_quad8.msh   Gmsh 4.1 ASCII, quad8 disk (recombined, order 2 incomplete)
   quadratic/disk_quad9.msh   Gmsh 4.1 ASCII, quad9 disk (recombined, order 2 complete)
   quadratic/disk_quad9.vtu   its meshio .vtu
+  quadratic/hertz_ball_quad9_8e-5.msh   the axisymmetric Hertz ball's half section
+                             (meshes/hertz_ball.msh's geometry and groups) in quad9, graded
+                             from 8e-5 m at the pole to 1e-3 m beyond 6 mm
+  quadratic/hertz_ball_quad9_1.6e-4.msh the same from 1.6e-4 m to 2e-3 m
+  quadratic/hertz_ball_quad8_8e-5.msh   the 8e-5 m one in quad8
 """
 import gmsh
 import meshio
@@ -96,6 +101,51 @@ for name, recombine, incomplete, version in [
     gmsh.model.mesh.setOrder(2)
     write(name, version)
     gmsh.model.remove()
+# the Hertz ball's half section in quadratic quadrilaterals (docs/scenes.md's table)
+def hertz(path, sizes, incomplete):
+    r = 0.01
+    gmsh.model.add("hertz")
+    occ = gmsh.model.occ
+    d = occ.addDisk(0, r, 0, r, r)
+    b = occ.addRectangle(0, 0, 0, r, 2 * r)
+    occ.intersect([(2, d)], [(2, b)])
+    occ.synchronize()
+    axis, arc = [], []
+    for dim, t in gmsh.model.getEntities(1):
+        xmax = gmsh.model.getBoundingBox(dim, t)[3]
+        (axis if xmax < 1e-6 else arc).append(t)
+    gmsh.model.addPhysicalGroup(2, [t for _, t in gmsh.model.getEntities(2)], name="ball")
+    gmsh.model.addPhysicalGroup(1, axis, name="axis")
+    gmsh.model.addPhysicalGroup(1, arc, name="surface")
+    origin = gmsh.model.occ.addPoint(0, 0, 0)
+    gmsh.model.occ.synchronize()
+    f = gmsh.model.mesh.field
+    f.add("Distance", 1)
+    f.setNumbers(1, "PointsList", [origin])
+    f.add("Threshold", 2)
+    f.setNumber(2, "InField", 1)
+    for k, v in zip(["SizeMin", "SizeMax", "DistMin", "DistMax"], sizes):
+        f.setNumber(2, k, v)
+    f.setAsBackgroundMesh(2)
+    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
+              "Mesh.MeshSizeFromCurvature"]:
+        gmsh.option.setNumber(k, 0)
+    gmsh.option.setNumber("Mesh.RecombineAll", 1)
+    gmsh.option.setNumber("Mesh.Algorithm", 8)
+    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", incomplete)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 1e22)
+    gmsh.model.mesh.generate(2)
+    gmsh.model.mesh.setOrder(2)
+    write(path, 4.1)
+    gmsh.model.remove()
+    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
+              "Mesh.MeshSizeFromCurvature"]:
+        gmsh.option.setNumber(k, 1)
+
+
+hertz("hertz_ball_quad9_8e-5.msh", (8e-5, 1e-3, 1e-3, 6e-3), 0)
+hertz("hertz_ball_quad9_1.6e-4.msh", (1.6e-4, 2e-3, 1e-3, 6e-3), 0)
+hertz("hertz_ball_quad8_8e-5.msh", (8e-5, 1e-3, 1e-3, 6e-3), 1)
 gmsh.finalize()
 
 for name in ["ball_tet10", "block_hex20", "block_hex27", "disk_quad9"]:
