@@ -32,7 +32,7 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 use crate::assembly::AssemblyPlan;
 
-use super::element::{Rule, points};
+use super::element::{MAX_NODES, Rule, points};
 use super::solid::{CellKind, Point};
 
 pub use super::material::{
@@ -247,15 +247,27 @@ pub fn hex8(law: &Hyperelastic, x: &[[f64; 3]], u: &[f64]) -> Result<HyperElemen
     kernel::<8, 24>(law, &pts, u, ALL)
 }
 
-/// The cells this module integrates: tet4 and hex8, tri3 and quad4 in plane strain.
+/// The cells this module integrates: every kind (3-D ones as solids, 2-D ones in plane
+/// strain).
 pub fn supports(kind: CellKind) -> bool {
-    matches!(
-        kind,
-        CellKind::Tet4 | CellKind::Hex8 | CellKind::Tri3 | CellKind::Quad4
-    )
+    match kind {
+        CellKind::Tri3
+        | CellKind::Quad4
+        | CellKind::Tet4
+        | CellKind::Hex8
+        | CellKind::Tri6
+        | CellKind::Quad8
+        | CellKind::Quad9
+        | CellKind::Tet10
+        | CellKind::Hex20
+        | CellKind::Hex27 => true,
+    }
 }
 
-/// A hyperelastic body on a mesh of tet4 or hex8 cells: the internal force `f_int(u)`
+/// The most dofs of a cell in 3 components per node.
+const MAX_ND: usize = 3 * MAX_NODES;
+
+/// A hyperelastic body on a mesh of any cell kind: the internal force `f_int(u)`
 /// and tangent `K_t(u)` assembled in parallel on the mesh's fixed pattern
 /// ([`AssemblyPlan`]), deterministically and without reserving anything per call.
 pub struct HyperBody {
@@ -289,14 +301,14 @@ impl std::fmt::Debug for HyperBody {
 }
 
 impl HyperBody {
-    /// The body of `mesh` under `law`: 3-D cells (tet4, hex8), or 2-D cells (tri3, quad4)
-    /// in plane strain; plans the assembly.
+    /// The body of `mesh` under `law`: 3-D cells, or 2-D cells in plane strain, of any
+    /// kind; plans the assembly.
     pub fn new(mesh: &super::solid::Mesh, law: Hyperelastic) -> Result<Self, crate::Error> {
         if let Some((id, (kind, _))) = mesh.cells.iter().enumerate().find(|(_, c)| !supports(c.0)) {
             return Err(crate::Error::invalid(
                 &format!("cell {id}"),
                 kind.name(),
-                "a hyperelastic body takes tet4, hex8 (3-D) and tri3, quad4 (plane strain) cells",
+                "a hyperelastic body takes solid (3-D) and plane-strain (2-D) cells",
             ));
         }
         let dim = mesh.cells.first().map_or(3, |(k, _)| k.dim());
@@ -346,27 +358,46 @@ impl HyperBody {
         tangent: &mut [f64],
         force: &mut [f64],
     ) -> Result<(), InvertedCell> {
-        use crate::assembly::Accumulate;
         let dim = self.dim;
         self.plan
             .assemble(tangent, force, |id, k, f| {
-                let nodes = &self.cells[id].1;
-                let nd = dim * nodes.len();
-                let mut dofs = [0usize; 24];
-                for (a, &v) in nodes.iter().enumerate() {
-                    for i in 0..dim {
-                        dofs[dim * a + i] = dim * v + i;
-                    }
+                // buffers of the linear cells' size unless the cell needs more (zeroing a
+                // hex27's 81 × 81 for every hex8 would cost more than its kernel)
+                if dim * self.cells[id].1.len() <= 24 {
+                    self.add_cell::<24, 576>(id, u, k, f)
+                } else {
+                    self.add_cell::<MAX_ND, { MAX_ND * MAX_ND }>(id, u, k, f)
                 }
-                let (mut fe, mut ke) = ([0.0; 24], [0.0; 576]);
-                self.cell_into(id, (None, u), ALL, &mut fe[..nd], Some(&mut ke[..nd * nd]))?;
-                k.add_element(&dofs[..nd], |a, b| ke[a + b * nd]);
-                for a in 0..nd {
-                    f.add(dofs[a], fe[a]);
-                }
-                Ok(())
             })
             .map_err(|(cell, e): (usize, Inverted)| InvertedCell { cell, det: e.det })
+    }
+
+    /// Cell `id`'s force and tangent added into `f` and `k`, in stack buffers of `ND`
+    /// and `ND2 = ND²` values.
+    fn add_cell<const ND: usize, const ND2: usize>(
+        &self,
+        id: usize,
+        u: &[f64],
+        k: &mut crate::assembly::ColumnSlab,
+        f: &mut crate::assembly::RowSlab,
+    ) -> Result<(), Inverted> {
+        use crate::assembly::Accumulate;
+        let dim = self.dim;
+        let nodes = &self.cells[id].1;
+        let nd = dim * nodes.len();
+        let mut dofs = [0usize; ND];
+        for (a, &v) in nodes.iter().enumerate() {
+            for i in 0..dim {
+                dofs[dim * a + i] = dim * v + i;
+            }
+        }
+        let (mut fe, mut ke) = ([0.0; ND], [0.0; ND2]);
+        self.cell_into(id, (None, u), ALL, &mut fe[..nd], Some(&mut ke[..nd * nd]))?;
+        k.add_element(&dofs[..nd], |a, b| ke[a + b * nd]);
+        for a in 0..nd {
+            f.add(dofs[a], fe[a]);
+        }
+        Ok(())
     }
 
     /// Buffers for [`HyperBody::evaluate_batched`] (a batch of element matrices).
@@ -435,6 +466,12 @@ impl HyperBody {
             k.fill(0.0);
         }
         let law = &self.law;
+        macro_rules! solid {
+            ($kind:expr, $nn:literal, $nd:literal, $p:literal) => {{
+                let pts = reference_points(&x[..$nn], &points::<$nn, 3, $p>($kind, Rule::Energy))?;
+                kernel_into::<$nn, $nd>(law, &pts, &ue[..$nd], ue0.map(|u| &u[..$nd]), want, fe, ke)
+            }};
+        }
         match self.cells[id].0 {
             CellKind::Hex8 => {
                 let pts = reference_points(&x, &points::<8, 3, 8>(CellKind::Hex8, Rule::Energy))?;
@@ -445,65 +482,90 @@ impl HyperBody {
                     reference_points(&x[..4], &points::<4, 3, 1>(CellKind::Tet4, Rule::Energy))?;
                 kernel_into::<4, 12>(law, &pts, &ue[..12], ue0.map(|u| &u[..12]), want, fe, ke)
             }
-            kind => {
+            CellKind::Tet10 => solid!(CellKind::Tet10, 10, 30, 36),
+            CellKind::Hex20 => solid!(CellKind::Hex20, 20, 60, 27),
+            CellKind::Hex27 => solid!(CellKind::Hex27, 27, 81, 27),
+            kind if nn <= 4 => {
                 let (mut f3, mut k3) = ([0.0; 12], [0.0; 144]);
-                let n3 = 3 * nn;
-                let k3s = ke.is_some().then_some(&mut k3[..n3 * n3]);
-                let energy = if kind == CellKind::Tri3 {
-                    let pts = reference_points(
-                        &x[..3],
-                        &points::<3, 2, 1>(CellKind::Tri3, Rule::Energy),
-                    )?;
-                    kernel_into::<3, 9>(
-                        law,
-                        &pts,
-                        &ue[..9],
-                        ue0.map(|u| &u[..9]),
-                        want,
-                        &mut f3[..9],
-                        k3s,
-                    )?
-                } else {
-                    let pts = reference_points(
-                        &x[..4],
-                        &points::<4, 2, 4>(CellKind::Quad4, Rule::Energy),
-                    )?;
-                    kernel_into::<4, 12>(
-                        law,
-                        &pts,
-                        &ue[..12],
-                        ue0.map(|u| &u[..12]),
-                        want,
-                        &mut f3[..12],
-                        k3s,
-                    )?
-                };
-                let n2 = 2 * nn;
-                for a in 0..nn {
-                    for i in 0..2 {
-                        fe[2 * a + i] = f3[3 * a + i];
-                        if let Some(k) = ke.as_deref_mut() {
-                            for b in 0..nn {
-                                for j in 0..2 {
-                                    k[(2 * a + i) + (2 * b + j) * n2] =
-                                        k3[(3 * a + i) + (3 * b + j) * n3];
-                                }
-                            }
+                let energy =
+                    self.plane_into(kind, &x, (&ue, ue0), want, &mut f3, &mut k3, ke.is_some())?;
+                Self::plane_out(nn, &f3, &k3, fe, ke);
+                Ok(energy)
+            }
+            kind => {
+                let (mut f3, mut k3) = ([0.0; 27], [0.0; 729]);
+                let energy =
+                    self.plane_into(kind, &x, (&ue, ue0), want, &mut f3, &mut k3, ke.is_some())?;
+                Self::plane_out(nn, &f3, &k3, fe, ke);
+                Ok(energy)
+            }
+        }
+    }
+
+    /// A plane-strain cell integrated as a 3-D one ([`HyperBody::cell_into`]): its force
+    /// and (with `tangent`) column-major tangent in 3 dofs per node into `f3`, `k3`.
+    #[allow(clippy::too_many_arguments)]
+    fn plane_into(
+        &self,
+        kind: CellKind,
+        x: &[[f64; 3]],
+        (ue, ue0): (&[f64], Option<&[f64]>),
+        want: Want,
+        f3: &mut [f64],
+        k3: &mut [f64],
+        tangent: bool,
+    ) -> Result<f64, Inverted> {
+        let law = &self.law;
+        macro_rules! plane {
+            ($nn:literal, $nd:literal, $p:literal) => {{
+                let pts = reference_points(&x[..$nn], &points::<$nn, 2, $p>(kind, Rule::Energy))?;
+                let k3s = tangent.then_some(&mut k3[..$nd * $nd]);
+                kernel_into::<$nn, $nd>(
+                    law,
+                    &pts,
+                    &ue[..$nd],
+                    ue0.map(|u| &u[..$nd]),
+                    want,
+                    &mut f3[..$nd],
+                    k3s,
+                )
+            }};
+        }
+        match kind {
+            CellKind::Tri3 => plane!(3, 9, 1),
+            CellKind::Quad4 => plane!(4, 12, 4),
+            CellKind::Tri6 => plane!(6, 18, 6),
+            CellKind::Quad8 => plane!(8, 24, 9),
+            CellKind::Quad9 => plane!(9, 27, 9),
+            _ => unreachable!("a 3-D cell in a plane-strain body: `HyperBody::new` refuses it"),
+        }
+    }
+
+    /// The in-plane rows and columns of a plane cell's 3-D force and tangent
+    /// ([`HyperBody::plane_into`]) into the body's 2 dofs per node.
+    fn plane_out(nn: usize, f3: &[f64], k3: &[f64], fe: &mut [f64], mut ke: Option<&mut [f64]>) {
+        let (n2, n3) = (2 * nn, 3 * nn);
+        for a in 0..nn {
+            for i in 0..2 {
+                fe[2 * a + i] = f3[3 * a + i];
+                if let Some(k) = ke.as_deref_mut() {
+                    for b in 0..nn {
+                        for j in 0..2 {
+                            k[(2 * a + i) + (2 * b + j) * n2] = k3[(3 * a + i) + (3 * b + j) * n3];
                         }
                     }
                 }
-                Ok(energy)
             }
         }
     }
 
     /// Cell `id`'s nodes, their reference coordinates and their displacements in `u`,
     /// three per node (z zero in plane strain; the first `nodes` entries used).
-    fn gather(&self, id: usize, u: &[f64]) -> (&[usize], [[f64; 3]; 8], [f64; 24]) {
+    fn gather(&self, id: usize, u: &[f64]) -> (&[usize], [[f64; 3]; MAX_NODES], [f64; MAX_ND]) {
         let nodes = &self.cells[id].1;
         let d = self.dim;
-        let mut x = [[0.0; 3]; 8];
-        let mut ue = [0.0; 24];
+        let mut x = [[0.0; 3]; MAX_NODES];
+        let mut ue = [0.0; MAX_ND];
         for (a, &v) in nodes.iter().enumerate() {
             x[a] = self.points[v];
             ue[3 * a..3 * a + d].copy_from_slice(&u[d * v..d * v + d]);
@@ -519,7 +581,7 @@ impl HyperBody {
             energy: true,
         };
         let mut total = 0.0;
-        let mut fe = [0.0; 24];
+        let mut fe = [0.0; MAX_ND];
         for id in 0..self.cells.len() {
             let nd = self.dim * self.cells[id].1.len();
             total += self
@@ -833,13 +895,20 @@ mod tests {
 
     /// A 3 × 2 × 2 hex8 box and the same box cut into tet4 cells; a 3 × 2 quad4 rectangle
     /// and the same cut into tri3 cells (plane strain).
-    fn meshes() -> [crate::model::solid::Mesh; 4] {
+    fn meshes() -> Vec<crate::model::solid::Mesh> {
         use crate::model::generate::{box_mesh, rectangle_mesh};
-        [
+        vec![
             box_mesh(CellKind::Hex8, [3, 2, 2], [0.3, 0.2, 0.2]),
             box_mesh(CellKind::Tet4, [3, 2, 2], [0.3, 0.2, 0.2]),
             rectangle_mesh(CellKind::Quad4, [3, 2], [0.3, 0.2]),
             rectangle_mesh(CellKind::Tri3, [3, 2], [0.3, 0.2]),
+            // the quadratic kinds (issue 51), on fewer cells
+            box_mesh(CellKind::Hex20, [2, 1, 1], [0.3, 0.2, 0.2]),
+            box_mesh(CellKind::Hex27, [2, 1, 1], [0.3, 0.2, 0.2]),
+            box_mesh(CellKind::Tet10, [1, 1, 1], [0.3, 0.2, 0.2]),
+            rectangle_mesh(CellKind::Quad8, [2, 1], [0.3, 0.2]),
+            rectangle_mesh(CellKind::Quad9, [2, 1], [0.3, 0.2]),
+            rectangle_mesh(CellKind::Tri6, [2, 1], [0.3, 0.2]),
         ]
     }
 

@@ -116,9 +116,9 @@ impl Scene {
                 return Err(Error::invalid(
                     &format!("bodies[{i}].material.model"),
                     b.material.model.name(),
-                    "large-deformation laws take solid bodies (tet4, hex8) and plane-strain \
-                     bodies (tri3, quad4); rods, plane-stress and axisymmetric bodies are \
-                     linear only (model = \"linear\")",
+                    "large-deformation laws take solid bodies and plane-strain bodies (any \
+                     cell kind); rods, plane-stress and axisymmetric bodies are linear only \
+                     (model = \"linear\")",
                 ));
             }
             if let Some(r) = b.damping {
