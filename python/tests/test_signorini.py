@@ -970,3 +970,28 @@ def test_the_accuracy_mode_runs_and_steps_to_its_end():
         except RuntimeError:
             stepped.step(50)
     assert np.array_equal(stepped.history["time"], t)
+
+
+def test_quadratic_cells_reach_python_in_vtk_order():
+    """Issue 51 §5: a hex_bar on hex27 cells and the Hertz ball on quad9 cells give
+    `mesh.cells["hex27"]` (n, 27) and `mesh.cells["quad9"]` (n, 9); each generated
+    hex27's node 26 is its centre (the mean of its corners: VTK's order) to round-off,
+    and each quad9 of the gmsh mesh has its node 8 within 5 % of its diagonal from its
+    corners' mean (curved cells move it, by 1.2 % at most on this mesh; a wrong node
+    order would put a corner or a mid-side node there, 35 % of a diagonal or more away)."""
+    scene = signorini.Scene.from_toml(MESHES / "hex_bar.toml").with_params(
+        set={"bodies[0].mesh.cell": "hex27", "bodies[0].mesh.cells": [4, 1, 1]}
+    )
+    m = scene.simulation().mesh
+    c = m.cells["hex27"]
+    assert set(m.cells) == {"hex27"} and c.shape == (4, 27)
+    assert np.allclose(m.points[c[:, 26]], m.points[c[:, :8]].mean(axis=1), atol=1e-15)
+    ball = signorini.Scene.from_toml(MESHES / "hertz_ball.toml").with_params(
+        set={"bodies[0].mesh.path": "quadratic/hertz_ball_quad9_1.6e-4.msh"}
+    )
+    q = ball.simulation().mesh
+    c = q.cells["quad9"]
+    assert set(q.cells) == {"quad9"} and c.shape[1] == 9
+    off = np.linalg.norm(q.points[c[:, 8]] - q.points[c[:, :4]].mean(axis=1), axis=1)
+    diagonal = np.linalg.norm(q.points[c[:, 0]] - q.points[c[:, 2]], axis=1)
+    assert (off / diagonal).max() < 0.05

@@ -485,14 +485,14 @@ impl HyperBody {
             CellKind::Tet10 => solid!(CellKind::Tet10, 10, 30, 36),
             CellKind::Hex20 => solid!(CellKind::Hex20, 20, 60, 27),
             CellKind::Hex27 => solid!(CellKind::Hex27, 27, 81, 27),
-            kind if nn <= 4 => {
+            kind @ (CellKind::Tri3 | CellKind::Quad4) => {
                 let (mut f3, mut k3) = ([0.0; 12], [0.0; 144]);
                 let energy =
                     self.plane_into(kind, &x, (&ue, ue0), want, &mut f3, &mut k3, ke.is_some())?;
                 Self::plane_out(nn, &f3, &k3, fe, ke);
                 Ok(energy)
             }
-            kind => {
+            kind @ (CellKind::Tri6 | CellKind::Quad8 | CellKind::Quad9) => {
                 let (mut f3, mut k3) = ([0.0; 27], [0.0; 729]);
                 let energy =
                     self.plane_into(kind, &x, (&ue, ue0), want, &mut f3, &mut k3, ke.is_some())?;

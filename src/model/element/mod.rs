@@ -8,13 +8,14 @@
 //! frames (VTK code), the boundary facets (faces), the element kernels and the
 //! hyperelastic forces (shape functions at the rules' points, [`points`]), the strains of
 //! the frames (gradients at the centre). The kernels are compiled per cell size (fixed
-//! nalgebra matrices): [`CellKind`]'s `match` in `model::solid::element_matrices` and
-//! `model::hyperelastic` picks the size.
+//! nalgebra matrices, no allocation per cell): a `match` on [`CellKind`] in
+//! `model::solid::element_matrices` and in `model::hyperelastic` picks the size.
 //!
-//! **Adding a kind**: its file here (a unit struct implementing [`Element`]), its line
-//! in the `registry!` list of this file (the variant of [`CellKind`] and its element),
-//! and its size's arm in the kernel dispatch of `model::solid::element_matrices` (the
-//! compiler asks for it); the unit tests of this module then check its shape
+//! **Adding a kind**: its file here (a unit struct implementing [`Element`]) and its
+//! line in the `registry!` list of this file (the variant of [`CellKind`] and its
+//! element); the compiler then asks for its size's arm in the three `match`es that pick
+//! a fixed-size kernel (`model::solid::element_matrices`, and
+//! `model::hyperelastic::HyperBody`'s cell dispatch and `supports`), each one line; the unit tests of this module then check its shape
 //! functions (partition of unity, Kronecker property at the nodes, gradients against
 //! finite differences), its rules (reference volume) and its faces (outward, by the
 //! centroid) without more code.
