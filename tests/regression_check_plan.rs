@@ -210,3 +210,26 @@ fn check_prints_the_ledger_and_refuses_what_does_not_fit() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `check` names the cell kinds it built and counts them (issue 51: a mesh of quadratic
+/// cells says so before it runs): the two hex bars with the striker in hex27 are 1 350
+/// hex8 and 800 hex27 cells (150 × 3 × 3 and 200 × 2 × 2), as the CLI prints them.
+#[test]
+fn check_counts_the_cells_of_each_kind() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = Command::new(env!("CARGO_BIN_EXE_signorini"))
+        .current_dir(root)
+        .args([
+            "check",
+            "meshes/hex_bars.toml",
+            "--set",
+            "bodies[0].mesh.cell=\"hex27\"",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("2150 cells (1350 hex8, 800 hex27)"), "{text}");
+    let report = scene("bar.toml").check().unwrap();
+    assert_eq!(report.cell_kinds, vec![("line".to_string(), 1000)]);
+}

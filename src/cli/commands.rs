@@ -267,9 +267,14 @@ pub(crate) fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
     // printed in full even when the memory does not fit (the error comes last)
     out!("scene               {} (valid)", args.scene.display());
     out!(
-        "model               {} bodies, {} cells, {} dofs ({} fixed dofs removed), {} candidate contacts",
+        "model               {} bodies, {} cells ({}), {} dofs ({} fixed dofs removed), {} candidate contacts",
         c.bodies,
         c.cells,
+        c.cell_kinds
+            .iter()
+            .map(|(k, n)| format!("{n} {k}"))
+            .collect::<Vec<_>>()
+            .join(", "),
         c.dofs,
         c.fixed_dofs,
         c.contacts

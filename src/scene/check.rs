@@ -33,6 +33,8 @@ pub struct CheckReport {
     pub bodies: usize,
     /// Cells over all bodies.
     pub cells: usize,
+    /// The cell kinds and their counts, in the registry's order (`line` for rods).
+    pub cell_kinds: Vec<(String, usize)>,
     /// Degrees of freedom after Dirichlet elimination.
     pub dofs: usize,
     /// Dofs removed by `fixed` node sets.
@@ -178,6 +180,30 @@ impl CheckReport {
         Ok(CheckReport {
             bodies,
             cells: report.cells,
+            cell_kinds: {
+                use crate::model::geometry::GeomCell;
+                let kinds = std::iter::once(None).chain(
+                    crate::model::element::CellKind::ALL
+                        .iter()
+                        .copied()
+                        .map(Some),
+                );
+                kinds
+                    .filter_map(|k| {
+                        let n = model
+                            .geometry
+                            .cells
+                            .iter()
+                            .filter(|c| match (&c.0, k) {
+                                (GeomCell::Line, None) => true,
+                                (GeomCell::Solid(a), Some(b)) => *a == b,
+                                _ => false,
+                            })
+                            .count();
+                        (n > 0).then(|| (k.map_or("line", |k| k.name()).to_string(), n))
+                    })
+                    .collect()
+            },
             dofs: report.dofs,
             fixed_dofs: report.fixed_dofs,
             contacts: report.contacts,
