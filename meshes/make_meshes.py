@@ -28,10 +28,12 @@ import numpy as np
 
 
 
-def graded_quads(sizes, path):
+def graded_quads(sizes, path, order=1, incomplete=0):
     """Meshes the current 2-D model with quad4 (recombined) graded from the origin:
     `sizes` = (size at the origin, size far away, distance where the grading starts,
-    distance where it ends); writes Gmsh 4.1 ASCII to `path` and removes the model."""
+    distance where it ends); with `order` 2, quad9 (quad8 with `incomplete` 1) whose
+    mid-side nodes lie on the curves; writes Gmsh 4.1 ASCII to `path` and removes the
+    model."""
     origin = gmsh.model.occ.addPoint(0, 0, 0)
     gmsh.model.occ.synchronize()
     f = gmsh.model.mesh.field
@@ -48,6 +50,9 @@ def graded_quads(sizes, path):
     gmsh.option.setNumber("Mesh.RecombineAll", 1)
     gmsh.option.setNumber("Mesh.Algorithm", 8)
     gmsh.model.mesh.generate(2)
+    if order == 2:
+        gmsh.option.setNumber("Mesh.SecondOrderIncomplete", incomplete)
+        gmsh.model.mesh.setOrder(2)
     gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
     gmsh.option.setNumber("Mesh.Binary", 0)
     gmsh.write(path)
@@ -58,7 +63,7 @@ def graded_quads(sizes, path):
     gmsh.option.setNumber("Mesh.RecombineAll", 0)
 
 
-def hertz_ball(lower=False):
+def hertz_ball(lower=False, path=None, sizes=(4e-5, 1e-3, 1e-3, 6e-3), order=1, incomplete=0):
     r = 0.01
     gmsh.model.add("hertz")
     occ = gmsh.model.occ
@@ -76,8 +81,9 @@ def hertz_ball(lower=False):
     gmsh.model.addPhysicalGroup(2, [t for _, t in gmsh.model.getEntities(2)], name="ball")
     gmsh.model.addPhysicalGroup(1, axis, name="axis")
     gmsh.model.addPhysicalGroup(1, arc, name="surface")
-    graded_quads((4e-5, 1e-3, 1e-3, 6e-3),
-                 "meshes/hertz_ball_lower.msh" if lower else "meshes/hertz_ball.msh")
+    if path is None:
+        path = "meshes/hertz_ball_lower.msh" if lower else "meshes/hertz_ball.msh"
+    graded_quads(sizes, path, order, incomplete)
 
 
 def hertz_plate():
@@ -101,54 +107,59 @@ def hertz_plate():
     graded_quads((4e-5, 2e-3, 1e-3, 1e-2), "meshes/hertz_plate.msh")
 
 
-gmsh.initialize()
-gmsh.option.setNumber("General.Terminal", 0)
+def main():
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
 
-# ball
-gmsh.model.add("ball")
-v = gmsh.model.occ.addSphere(0, 0, 0.05, 0.05)
-gmsh.model.occ.synchronize()
-gmsh.model.addPhysicalGroup(3, [v], name="ball")
-s = [t for (d, t) in gmsh.model.getBoundary([(3, v)], oriented=False)]
-gmsh.model.addPhysicalGroup(2, s, name="surface")
-gmsh.option.setNumber("Mesh.MeshSizeMax", 0.025)
-gmsh.model.mesh.generate(3)
-gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-gmsh.option.setNumber("Mesh.Binary", 0)
-gmsh.write("meshes/ball.msh")
-gmsh.option.setNumber("Mesh.Binary", 1)
-gmsh.write("meshes/ball_binary.msh")
-gmsh.model.remove()
+    # ball
+    gmsh.model.add("ball")
+    v = gmsh.model.occ.addSphere(0, 0, 0.05, 0.05)
+    gmsh.model.occ.synchronize()
+    gmsh.model.addPhysicalGroup(3, [v], name="ball")
+    s = [t for (d, t) in gmsh.model.getBoundary([(3, v)], oriented=False)]
+    gmsh.model.addPhysicalGroup(2, s, name="surface")
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 0.025)
+    gmsh.model.mesh.generate(3)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.option.setNumber("Mesh.Binary", 0)
+    gmsh.write("meshes/ball.msh")
+    gmsh.option.setNumber("Mesh.Binary", 1)
+    gmsh.write("meshes/ball_binary.msh")
+    gmsh.model.remove()
 
-# disk, Gmsh 2.2
-gmsh.model.add("disk")
-d = gmsh.model.occ.addDisk(0, 0.05, 0, 0.05, 0.05)
-gmsh.model.occ.synchronize()
-gmsh.model.addPhysicalGroup(2, [d], name="disk")
-c = [t for (dd, t) in gmsh.model.getBoundary([(2, d)], oriented=False)]
-gmsh.model.addPhysicalGroup(1, c, name="rim")
-gmsh.option.setNumber("Mesh.MeshSizeMax", 0.01)
-gmsh.option.setNumber("Mesh.Binary", 0)
-gmsh.model.mesh.generate(2)
-gmsh.option.setNumber("Mesh.MshFileVersion", 2.2)
-gmsh.write("meshes/disk.msh")
-gmsh.option.setNumber("Mesh.Binary", 1)
-gmsh.write("meshes/disk_binary.msh")
-gmsh.model.remove()
+    # disk, Gmsh 2.2
+    gmsh.model.add("disk")
+    d = gmsh.model.occ.addDisk(0, 0.05, 0, 0.05, 0.05)
+    gmsh.model.occ.synchronize()
+    gmsh.model.addPhysicalGroup(2, [d], name="disk")
+    c = [t for (dd, t) in gmsh.model.getBoundary([(2, d)], oriented=False)]
+    gmsh.model.addPhysicalGroup(1, c, name="rim")
+    gmsh.option.setNumber("Mesh.MeshSizeMax", 0.01)
+    gmsh.option.setNumber("Mesh.Binary", 0)
+    gmsh.model.mesh.generate(2)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 2.2)
+    gmsh.write("meshes/disk.msh")
+    gmsh.option.setNumber("Mesh.Binary", 1)
+    gmsh.write("meshes/disk_binary.msh")
+    gmsh.model.remove()
 
-# axisymmetric Hertz ball (tests/analytic_hertz_impact.rs)
-hertz_ball()
-hertz_ball(lower=True)
-hertz_plate()
-gmsh.finalize()
+    # axisymmetric Hertz ball (tests/analytic_hertz_impact.rs)
+    hertz_ball()
+    hertz_ball(lower=True)
+    hertz_plate()
+    gmsh.finalize()
 
-# plate of quads through meshio
-nx, ny = 8, 2
-xs, ys = np.linspace(0, 0.2, nx + 1), np.linspace(0, 0.05, ny + 1)
-pts = np.array([[x, y, 0.0] for y in ys for x in xs])
-quads = np.array([[j * (nx + 1) + i, j * (nx + 1) + i + 1, (j + 1) * (nx + 1) + i + 1,
-                   (j + 1) * (nx + 1) + i] for j in range(ny) for i in range(nx)])
-bottom = (pts[:, 1] == 0.0).astype(np.int32)
-m = meshio.Mesh(pts, [("quad", quads)], point_data={"bottom": bottom})
-m.write("meshes/plate.vtu")
-m.write("meshes/plate.vtk")
+    # plate of quads through meshio
+    nx, ny = 8, 2
+    xs, ys = np.linspace(0, 0.2, nx + 1), np.linspace(0, 0.05, ny + 1)
+    pts = np.array([[x, y, 0.0] for y in ys for x in xs])
+    quads = np.array([[j * (nx + 1) + i, j * (nx + 1) + i + 1, (j + 1) * (nx + 1) + i + 1,
+                       (j + 1) * (nx + 1) + i] for j in range(ny) for i in range(nx)])
+    bottom = (pts[:, 1] == 0.0).astype(np.int32)
+    m = meshio.Mesh(pts, [("quad", quads)], point_data={"bottom": bottom})
+    m.write("meshes/plate.vtu")
+    m.write("meshes/plate.vtk")
+
+
+if __name__ == "__main__":
+    main()

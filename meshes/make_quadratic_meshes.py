@@ -24,8 +24,14 @@ into VTK's order: tests/io_mesh_files.rs checks that signorini's Gmsh reader agr
   quadratic/hertz_ball_quad9_1.6e-4.msh the same from 1.6e-4 m to 2e-3 m
   quadratic/hertz_ball_quad8_8e-5.msh   the 8e-5 m one in quad8
 """
+import os
+import sys
+
 import gmsh
 import meshio
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from make_meshes import hertz_ball  # noqa: E402  (the Hertz ball's geometry, one place)
 
 out = "meshes/quadratic/"
 
@@ -101,51 +107,15 @@ for name, recombine, incomplete, version in [
     gmsh.model.mesh.setOrder(2)
     write(name, version)
     gmsh.model.remove()
-# the Hertz ball's half section in quadratic quadrilaterals (docs/scenes.md's table)
-def hertz(path, sizes, incomplete):
-    r = 0.01
-    gmsh.model.add("hertz")
-    occ = gmsh.model.occ
-    d = occ.addDisk(0, r, 0, r, r)
-    b = occ.addRectangle(0, 0, 0, r, 2 * r)
-    occ.intersect([(2, d)], [(2, b)])
-    occ.synchronize()
-    axis, arc = [], []
-    for dim, t in gmsh.model.getEntities(1):
-        xmax = gmsh.model.getBoundingBox(dim, t)[3]
-        (axis if xmax < 1e-6 else arc).append(t)
-    gmsh.model.addPhysicalGroup(2, [t for _, t in gmsh.model.getEntities(2)], name="ball")
-    gmsh.model.addPhysicalGroup(1, axis, name="axis")
-    gmsh.model.addPhysicalGroup(1, arc, name="surface")
-    origin = gmsh.model.occ.addPoint(0, 0, 0)
-    gmsh.model.occ.synchronize()
-    f = gmsh.model.mesh.field
-    f.add("Distance", 1)
-    f.setNumbers(1, "PointsList", [origin])
-    f.add("Threshold", 2)
-    f.setNumber(2, "InField", 1)
-    for k, v in zip(["SizeMin", "SizeMax", "DistMin", "DistMax"], sizes):
-        f.setNumber(2, k, v)
-    f.setAsBackgroundMesh(2)
-    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
-              "Mesh.MeshSizeFromCurvature"]:
-        gmsh.option.setNumber(k, 0)
-    gmsh.option.setNumber("Mesh.RecombineAll", 1)
-    gmsh.option.setNumber("Mesh.Algorithm", 8)
-    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", incomplete)
-    gmsh.option.setNumber("Mesh.MeshSizeMax", 1e22)
-    gmsh.model.mesh.generate(2)
-    gmsh.model.mesh.setOrder(2)
-    write(path, 4.1)
-    gmsh.model.remove()
-    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
-              "Mesh.MeshSizeFromCurvature"]:
-        gmsh.option.setNumber(k, 1)
-
-
-hertz("hertz_ball_quad9_8e-5.msh", (8e-5, 1e-3, 1e-3, 6e-3), 0)
-hertz("hertz_ball_quad9_1.6e-4.msh", (1.6e-4, 2e-3, 1e-3, 6e-3), 0)
-hertz("hertz_ball_quad8_8e-5.msh", (8e-5, 1e-3, 1e-3, 6e-3), 1)
+# the Hertz ball's half section in quadratic quadrilaterals (docs/scenes.md's table):
+# make_meshes.py's geometry and grading, second order
+gmsh.option.setNumber("Mesh.MeshSizeMax", 1e22)
+for name, sizes, incomplete in [
+    ("hertz_ball_quad9_8e-5.msh", (8e-5, 1e-3, 1e-3, 6e-3), 0),
+    ("hertz_ball_quad9_1.6e-4.msh", (1.6e-4, 2e-3, 1e-3, 6e-3), 0),
+    ("hertz_ball_quad8_8e-5.msh", (8e-5, 1e-3, 1e-3, 6e-3), 1),
+]:
+    hertz_ball(path=out + name, sizes=sizes, order=2, incomplete=incomplete)
 gmsh.finalize()
 
 for name in ["ball_tet10", "block_hex20", "block_hex27", "disk_quad9"]:
