@@ -23,6 +23,7 @@ pub mod linear;
 pub mod plane;
 pub mod slider;
 pub mod sphere;
+pub mod surface;
 
 /// The law of one contact: Newton's impact law and Coulomb's friction.
 #[derive(Clone, Copy, Debug, PartialEq, Default, serde::Serialize)]

@@ -192,13 +192,20 @@ impl Sides<'_> {
         for (ci, c) in self.scene.contacts.iter().enumerate() {
             let at = |e: Error| prefix(&format!("contacts[{ci}]"), e);
             let bi = self.scene.body_index(&c.body);
-            let nodes = std::mem::take(&mut nodes_of[ci]);
+            let mut nodes = std::mem::take(&mut nodes_of[ci]);
             let (set, against, target) = match &c.target {
                 Some(t) => {
                     let (set, line) = self.interface((ci, c), t, &nodes, dofs).map_err(at)?;
                     interfaces.push(line);
                     let against = format!("body \"{}\" (surface `{}`)", t.body, t.surface);
                     (set, against, t.body.clone())
+                }
+                None if c.rule == ContactRule::Surface => {
+                    let name = self.scene.obstacle(c).name().to_string();
+                    let (set, rows) = self.surface_set(c, bi, &nodes, dofs).map_err(at)?;
+                    // the outputs name each row by its nearest face node
+                    nodes = rows;
+                    (set, format!("obstacle \"{name}\" (surface rule)"), name)
                 }
                 None => {
                     let name = self.scene.obstacle(c).name().to_string();
@@ -319,6 +326,70 @@ impl Sides<'_> {
         obstacle
             .shape()
             .contact_set(node_dofs, refs, c.restitution, c.friction)
+    }
+}
+
+impl Sides<'_> {
+    /// The surface rule's rows of `c` (of body `bi`) against its plane obstacle
+    /// ([`crate::contact::surface`]): at the points of the boundary facets whose nodes
+    /// all lie in the kept `nodes`, on the kept `dofs` (a fixed node's position only
+    /// enters the offset); with the node each row is named by.
+    fn surface_set(
+        &self,
+        c: &ContactSpec,
+        bi: usize,
+        nodes: &[usize],
+        dofs: Dofs,
+    ) -> Result<(Box<dyn ContactSet>, Vec<usize>), Error> {
+        use crate::contact::linear::{LinearContact, LinearContacts};
+        let obstacle = self.scene.obstacle(c);
+        let Some((normal, offset)) = obstacle.shape().plane() else {
+            return Err(Error::invalid(
+                "rule",
+                "surface",
+                "takes a plane obstacle for now (curved obstacles: rule = \"nodes\")",
+            ));
+        };
+        if c.friction != 0.0 {
+            return Err(Error::invalid(
+                "rule",
+                "surface",
+                "takes frictionless contacts for now (friction = 0, or rule = \"nodes\")",
+            ));
+        }
+        let mesh = &self.meshes[bi];
+        let facets = mesh.boundary_facets(nodes);
+        let rows = crate::contact::surface::collocation_rows(self.dim, &facets, &mesh.points)?;
+        let law = crate::contact::ContactLaw {
+            restitution: c.restitution,
+            friction: 0.0,
+        };
+        let labels = rows.iter().map(|r| r.0).collect();
+        let rows = rows
+            .into_iter()
+            .map(|(_, row)| {
+                let mut lc = LinearContact {
+                    dofs: Vec::new(),
+                    offset: 0.0,
+                    normal: Vec::new(),
+                    tangents: Vec::new(),
+                    law,
+                };
+                for (b, w) in row {
+                    let x = &mesh.points[b];
+                    lc.offset +=
+                        w * ((0..self.dim).map(|i| normal[i] * x[i]).sum::<f64>() - offset);
+                    for (i, ni) in normal.iter().enumerate() {
+                        if let Some(d) = dofs.of(bi, b, i) {
+                            lc.dofs.push(d);
+                            lc.normal.push(w * ni);
+                        }
+                    }
+                }
+                lc
+            })
+            .collect();
+        Ok((Box::new(LinearContacts::new(rows)?), labels))
     }
 }
 

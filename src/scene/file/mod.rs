@@ -52,6 +52,8 @@
 mod arrays;
 mod build;
 mod contacts;
+mod rule;
+pub use rule::ContactRule;
 mod gaps;
 mod initial;
 mod mesh_spec;
@@ -417,7 +419,13 @@ pub struct ContactSpec {
     /// Coulomb friction coefficient μ (default 0: frictionless, no friction solver).
     #[serde(default)]
     pub friction: f64,
+    /// `nodes` (default: one row per node, its own gap) or `surface` (rows at points of
+    /// the body's faces, [`crate::contact::surface`]): frictionless contacts with a plane
+    /// obstacle for now.
+    #[serde(default, skip_serializing_if = "ContactRule::is_nodes")]
+    pub rule: ContactRule,
 }
+
 
 /// `target = { body, surface, … }` of a contact between bodies.
 #[derive(Clone, Debug, Serialize, Deserialize)]

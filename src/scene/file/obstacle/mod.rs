@@ -40,6 +40,11 @@ pub trait ObstacleShape {
         e: f64,
         mu: f64,
     ) -> Result<Box<dyn ContactSet>, Error>;
+    /// The unit normal `n` and offset `c` of the half-space `n·x ≥ c` when the obstacle
+    /// is a plane (the surface rule's gaps are affine there), else `None`.
+    fn plane(&self) -> Option<(Vec<f64>, f64)> {
+        None
+    }
     /// Draws the obstacle into `out` for ParaView, sized to the bodies' bounding box
     /// (`view`) in a scene of dimension `dim`.
     fn outline(&self, out: &mut Outline, view: &View, dim: usize);

@@ -74,6 +74,13 @@ impl ObstacleShape for PlaneSpec {
         ))
     }
 
+    fn plane(&self) -> Option<(Vec<f64>, f64)> {
+        let norm = self.normal.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let n: Vec<f64> = self.normal.iter().map(|x| x / norm).collect();
+        let c = self.point.iter().zip(&n).map(|(p, n)| p * n).sum();
+        Some((n, c))
+    }
+
     /// A square (3-D) or a segment (2-D) around the projection of the box centre.
     fn outline(&self, out: &mut Outline, view: &View, dim: usize) {
         let (centre, size) = (view.centre, view.size);
