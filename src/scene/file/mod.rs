@@ -426,7 +426,6 @@ pub struct ContactSpec {
     pub rule: ContactRule,
 }
 
-
 /// `target = { body, surface, … }` of a contact between bodies.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
