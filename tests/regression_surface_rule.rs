@@ -35,10 +35,21 @@ rule = "{rule}"
 /// A hex27 block 1 mm above a tilted plane (normal (0, 0.3, 1)/|·|): 2 × 2 × 1 cells give
 /// four quad9 bottom faces, 16 rows (25 face nodes), and each row's starting gap is the
 /// distance of its face point to the plane: `n·x(ξ_q)` with `x(ξ_q)` the Gauss point of a
-/// flat, affine face — the closed form `(0.3 y_q + z_q)/√1.09` to 1e-15 m.
+/// flat, affine face — the closed form `(0.3 y_q + z_q)/√1.09` to 1e-15 m; `check`
+/// names the rule and the counts.
 #[test]
 fn surface_rows_start_at_the_faces_geometric_gaps() {
     let scene = Scene::from_toml(&block("hex27", "[2, 2, 1]", "surface", "")).unwrap();
+    // `check` names the rule and counts the rows and the face nodes
+    let report = scene.check().unwrap();
+    assert_eq!(
+        report.interfaces,
+        vec![
+            "contacts[0]: 16 rows of \"block\" at points of its faces (rule = \"surface\", 25 \
+             face nodes) against obstacle \"floor\""
+                .to_string()
+        ]
+    );
     let (model, _) = scene.build().unwrap();
     let integ = model.into_integrator(&scene.scheme, scene.time.dt).unwrap();
     let gaps = &integ.state().gap;

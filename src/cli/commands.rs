@@ -290,7 +290,7 @@ pub(crate) fn check_scene(args: &SceneArgs) -> Result<(), signorini::Error> {
         friction
     );
     for line in &c.interfaces {
-        out!("interface           {line}");
+        out!("contact entry       {line}");
     }
     for p in &c.probes {
         out!(

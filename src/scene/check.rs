@@ -49,7 +49,7 @@ pub struct CheckReport {
     pub max_friction: f64,
     /// The friction solver's description (`None` when no contact has friction).
     pub friction_solver: Option<String>,
-    /// One line per contact between bodies.
+    /// One line per contact between bodies and per obstacle contact on the surface rule.
     pub interfaces: Vec<String>,
     /// The probes.
     pub probes: Vec<ProbeCheck>,

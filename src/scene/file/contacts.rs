@@ -203,6 +203,13 @@ impl Sides<'_> {
                 None if c.rule == ContactRule::Surface => {
                     let name = self.scene.obstacle(c).name().to_string();
                     let (set, rows) = self.surface_set(c, bi, &nodes, dofs).map_err(at)?;
+                    interfaces.push(format!(
+                        "contacts[{ci}]: {} rows of \"{}\" at points of its faces (rule = \"surface\", \
+                         {} face nodes) against obstacle \"{name}\"",
+                        rows.len(),
+                        c.body,
+                        nodes.len(),
+                    ));
                     // the outputs name each row by its nearest face node
                     nodes = rows;
                     (set, format!("obstacle \"{name}\" (surface rule)"), name)
