@@ -1168,7 +1168,7 @@ target = { body = "b", surface = "z1" }
         1,
         &["target.search", "in one step", "smaller time step"],
     );
-    // the good scene passes, and `check` shows the interface and its search
+    // the good scene passes, and `check` shows the contact entry and its search
     std::fs::write(dir.join("scene.toml"), TWO_BOXES).unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_signorini"))
         .current_dir(&*dir)
@@ -1178,7 +1178,7 @@ target = { body = "b", surface = "z1" }
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}");
     assert!(
-        text.contains("interface") && text.contains("9 nodes of \"a\" against 9 facets"),
+        text.contains("contact entry") && text.contains("9 nodes of \"a\" against 9 facets"),
         "{text}"
     );
 }
