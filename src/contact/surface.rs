@@ -16,7 +16,7 @@
 //! Hand-written: the rows are this project's face kinds and rules, not a crate's.
 
 use crate::error::Error;
-use crate::model::element::{CellKind, G2, MAX_NODES};
+use crate::model::element::{CellKind, G2, MAX_NODES, lagrange2};
 
 /// One row of the surface rule: the face node nearest its point (the node the outputs
 /// name it by) and its weights `(node, N_b(ξ_q))`.
@@ -70,10 +70,9 @@ pub fn collocation_rows(
                 }
                 None => {
                     // edge nodes at −1, 1 and the middle 0
-                    let x = xi[0];
-                    n[0] = 0.5 * x * (x - 1.0);
-                    n[1] = 0.5 * x * (x + 1.0);
-                    n[2] = 1.0 - x * x;
+                    for (n, node) in n.iter_mut().zip([-1.0, 1.0, 0.0]) {
+                        *n = lagrange2(node, xi[0]).0;
+                    }
                 }
             }
             let at: [f64; 3] =

@@ -327,11 +327,13 @@ impl LinearSystem {
     }
 }
 
-/// Adds the element mass `me` (dense, `dofs.len()` square) to `asm` as `kind` asks;
-/// `is_contact[a]` marks the element's local dofs that belong to contact nodes.
+/// Adds the element mass `me` (dense, `dofs.len()` square) to `asm` as `kind` asks, a
+/// lumped mass by the element's `lumping` rule; `is_contact[a]` marks the element's local
+/// dofs that belong to contact nodes (a redistributed mass needs row sums: its caller
+/// refuses elements of another lumping rule).
 pub(crate) fn add_element_mass(
     asm: &mut impl crate::assembly::Accumulate,
-    kind: MassKind,
+    (kind, lumping): (MassKind, element::Lumping),
     dofs: &[usize],
     me: impl Fn(usize, usize) -> f64,
     is_contact: impl Fn(usize) -> bool,
@@ -340,6 +342,16 @@ pub(crate) fn add_element_mass(
     let row_sum = |a: usize| (0..n).map(|b| me(a, b)).sum::<f64>();
     match kind {
         MassKind::Consistent => asm.add_element(dofs, me),
+        MassKind::Lumped if lumping == element::Lumping::Hrz => {
+            // Hinton, Rock & Zienkiewicz (1976): the diagonal scaled by the element's
+            // total over the diagonal's sum (a solid's mass is I ⊗ m: each displacement
+            // component gets the same scaling)
+            let total: f64 = (0..n).map(row_sum).sum();
+            let diagonal: f64 = (0..n).map(|a| me(a, a)).sum();
+            for (a, &i) in dofs.iter().enumerate() {
+                asm.add(i, i, me(a, a) * total / diagonal);
+            }
+        }
         MassKind::Lumped => {
             for (a, &i) in dofs.iter().enumerate() {
                 asm.add(i, i, row_sum(a));

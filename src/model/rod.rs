@@ -79,7 +79,7 @@ impl Rod {
             // node 0 is the contact node of the bar scene (redistributed mass)
             super::add_element_mass(
                 &mut am,
-                self.mass,
+                (self.mass, super::element::Lumping::RowSum),
                 &dofs,
                 |a, b| me[(a, b)],
                 |a| dofs[a] == 0,

@@ -181,27 +181,23 @@ impl CheckReport {
             bodies,
             cells: report.cells,
             cell_kinds: {
+                use crate::model::element::CellKind;
                 use crate::model::geometry::GeomCell;
-                let kinds = std::iter::once(None).chain(
-                    crate::model::element::CellKind::ALL
-                        .iter()
-                        .copied()
-                        .map(Some),
-                );
-                kinds
-                    .filter_map(|k| {
-                        let n = model
-                            .geometry
-                            .cells
-                            .iter()
-                            .filter(|c| match (&c.0, k) {
-                                (GeomCell::Line, None) => true,
-                                (GeomCell::Solid(a), Some(b)) => *a == b,
-                                _ => false,
-                            })
-                            .count();
-                        (n > 0).then(|| (k.map_or("line", |k| k.name()).to_string(), n))
-                    })
+                // one count per kind (slot 0: rods' lines), in the registry's order
+                let mut counts = vec![0usize; CellKind::ALL.len() + 1];
+                for (cell, _, _) in &model.geometry.cells {
+                    counts[match cell {
+                        GeomCell::Line => 0,
+                        GeomCell::Solid(k) => {
+                            1 + CellKind::ALL.iter().position(|a| a == k).unwrap_or(0)
+                        }
+                    }] += 1;
+                }
+                std::iter::once("line")
+                    .chain(CellKind::ALL.iter().map(|k| k.name()))
+                    .zip(counts)
+                    .filter(|&(_, n)| n > 0)
+                    .map(|(k, n)| (k.to_string(), n))
                     .collect()
             },
             dofs: report.dofs,

@@ -25,6 +25,21 @@ pub(super) const HEX20_FACES: [&[usize]; 6] = [
     &[3, 0, 4, 7, 11, 16, 15, 19],
 ];
 
+/// Node `c`'s factors per direction at `xi` and their derivatives: `1 + c_i x_i` where
+/// its coordinate is ±1, `1 − x_i²` where it is 0 (one direction at a mid-edge node).
+fn factors(c: &[f64; 3], xi: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    (
+        std::array::from_fn(|i| {
+            if c[i] == 0.0 {
+                1.0 - xi[i] * xi[i]
+            } else {
+                1.0 + c[i] * xi[i]
+            }
+        }),
+        std::array::from_fn(|i| if c[i] == 0.0 { -2.0 * xi[i] } else { c[i] }),
+    )
+}
+
 impl Element for Hex20 {
     fn name(&self) -> &'static str {
         "hex20"
@@ -58,15 +73,7 @@ impl Element for Hex20 {
     }
     fn shape(&self, xi: [f64; 3], n: &mut [f64]) {
         for (n, c) in n.iter_mut().zip(&HEX_EDGE_NODES) {
-            // (1 + c x) per direction where the node's coordinate is ±1, 1 − x² where it
-            // is 0 (one direction at a mid-edge node)
-            let f: [f64; 3] = std::array::from_fn(|i| {
-                if c[i] == 0.0 {
-                    1.0 - xi[i] * xi[i]
-                } else {
-                    1.0 + c[i] * xi[i]
-                }
-            });
+            let (f, _) = factors(c, xi);
             *n = if c.contains(&0.0) {
                 0.25 * f[0] * f[1] * f[2]
             } else {
@@ -76,29 +83,16 @@ impl Element for Hex20 {
     }
     fn gradients(&self, xi: [f64; 3], g: &mut [[f64; 3]]) {
         for (g, c) in g.iter_mut().zip(&HEX_EDGE_NODES) {
-            let f: [f64; 3] = std::array::from_fn(|i| {
-                if c[i] == 0.0 {
-                    1.0 - xi[i] * xi[i]
-                } else {
-                    1.0 + c[i] * xi[i]
-                }
-            });
-            let df: [f64; 3] =
-                std::array::from_fn(|i| if c[i] == 0.0 { -2.0 * xi[i] } else { c[i] });
-            if c.contains(&0.0) {
-                *g = [
-                    0.25 * df[0] * f[1] * f[2],
-                    0.25 * f[0] * df[1] * f[2],
-                    0.25 * f[0] * f[1] * df[2],
-                ];
+            let (f, df) = factors(c, xi);
+            // the product of the factors other than the i-th
+            let others = |i: usize| -> f64 { (0..3).filter(|&j| j != i).map(|j| f[j]).product() };
+            *g = if c.contains(&0.0) {
+                std::array::from_fn(|i| 0.25 * df[i] * others(i))
             } else {
                 let s = c[0] * xi[0] + c[1] * xi[1] + c[2] * xi[2] - 2.0;
                 // ∂/∂x_i of ⅛ f_i · (the other two) · s: f_i' … s + f_i … c_i
-                *g = std::array::from_fn(|i| {
-                    let o: f64 = (0..3).filter(|&j| j != i).map(|j| f[j]).product();
-                    0.125 * o * (df[i] * s + f[i] * c[i])
-                });
-            }
+                std::array::from_fn(|i| 0.125 * others(i) * (df[i] * s + f[i] * c[i]))
+            };
         }
     }
     fn rule(&self, _rule: Rule) -> &'static [([f64; 3], f64)] {

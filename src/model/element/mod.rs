@@ -349,6 +349,29 @@ pub fn facet_corners(dim: usize, len: usize) -> Option<usize> {
     }
 }
 
+/// The columns `∂x/∂ξ_j` of the Jacobian of a cell of `kind` with nodes at `x`, at
+/// reference point `xi`; in 2-D the third column is `e_z`, so the 3 × 3 determinant is
+/// the 2-D one. What the inverted-cell checks read at a curved cell's nodes.
+pub fn jacobian_columns(kind: CellKind, x: &[[f64; 3]], xi: [f64; 3]) -> [[f64; 3]; 3] {
+    let e = kind.element();
+    let (d, nn) = (e.dim(), e.nodes());
+    let mut g = [[0.0; 3]; MAX_NODES];
+    e.gradients(xi, &mut g);
+    std::array::from_fn(|j| {
+        if j < d {
+            std::array::from_fn(|i| {
+                if i < d {
+                    (0..nn).map(|a| x[a][i] * g[a][j]).sum()
+                } else {
+                    0.0
+                }
+            })
+        } else {
+            std::array::from_fn(|i| if i == j { 1.0 } else { 0.0 })
+        }
+    })
+}
+
 /// One integration point: shape values, reference gradients (the element's dimension
 /// `D`), weight.
 pub type Point<const NN: usize, const D: usize> = ([f64; NN], [[f64; D]; NN], f64);

@@ -79,23 +79,6 @@ pub fn check_mesh(mesh: &Mesh, f: Formulation) -> Result<(), Error> {
     Ok(())
 }
 
-/// The HRZ lumped mass of one element (Hinton, Rock & Zienkiewicz, 1976): the diagonal of
-/// its consistent mass scaled by the element's total over the diagonal's sum, so each
-/// node keeps a positive share and the element its mass (a solid's mass is `I ⊗ m`: each
-/// displacement component gets the same scaling).
-fn add_hrz_mass(
-    asm: &mut impl crate::assembly::Accumulate,
-    dofs: &[usize],
-    me: impl Fn(usize, usize) -> f64,
-) {
-    let n = dofs.len();
-    let total: f64 = (0..n).map(|a| (0..n).map(|b| me(a, b)).sum::<f64>()).sum();
-    let diagonal: f64 = (0..n).map(|a| me(a, a)).sum();
-    for (a, &i) in dofs.iter().enumerate() {
-        asm.add(i, i, me(a, a) * total / diagonal);
-    }
-}
-
 /// [`assemble`] with the contact nodes named (for the redistributed mass).
 pub fn assemble_with_contacts(
     mesh: &Mesh,
@@ -151,17 +134,13 @@ pub fn assemble_with_contacts(
         let (x, dofs) = (&x[..nodes.len()], &dofs[..nd]);
         let e = element_matrices(id, *kind, x, mat, f)?;
         k.add_element(dofs, |a, b| e.k(a, b));
-        if mass == MassKind::Lumped && kind.element().lumping() == Lumping::Hrz {
-            add_hrz_mass(m, dofs, |a, b| e.m(a, b));
-        } else {
-            super::super::add_element_mass(
-                m,
-                mass,
-                dofs,
-                |a, b| e.m(a, b),
-                |a| is_contact_node[dofs[a] / dim],
-            );
-        }
+        super::super::add_element_mass(
+            m,
+            (mass, kind.element().lumping()),
+            dofs,
+            |a, b| e.m(a, b),
+            |a| is_contact_node[dofs[a] / dim],
+        );
         Ok(())
     })
     .map_err(|(id, e)| match (&mesh.source, e) {

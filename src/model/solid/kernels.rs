@@ -265,18 +265,9 @@ fn curved_cell_is_positive(
     x: &[[f64; 3]],
     inverted: &dyn Fn(f64) -> Error,
 ) -> Result<(), Error> {
-    let e = kind.element();
-    let d = e.dim();
-    let mut g = [[0.0; 3]; crate::model::element::MAX_NODES];
-    for &xi in e.reference_nodes() {
-        e.gradients(xi, &mut g);
-        let mut jac = Matrix3::<f64>::identity();
-        for i in 0..d {
-            for j in 0..d {
-                jac[(i, j)] = (0..e.nodes()).map(|a| x[a][i] * g[a][j]).sum();
-            }
-        }
-        let det = jac.determinant();
+    for &xi in kind.element().reference_nodes() {
+        let c = crate::model::element::jacobian_columns(kind, x, xi).map(Vector3::from);
+        let det = Matrix3::from_columns(&c).determinant();
         if det.is_nan() || det <= 0.0 {
             return Err(inverted(det));
         }

@@ -351,33 +351,19 @@ fn corner_dets(kind: CellKind, x: &[[f64; 3]]) -> Vec<(f64, f64)> {
             })
             .collect(),
         // a curved (quadratic) cell: det J at every node, from the shape functions
-        _ => {
-            let e = kind.element();
-            let d = e.dim();
-            let mut g = [[0.0; 3]; crate::model::element::MAX_NODES];
-            e.reference_nodes()
-                .iter()
-                .map(|&xi| {
-                    e.gradients(xi, &mut g);
-                    let col = |j: usize| -> [f64; 3] {
-                        std::array::from_fn(|i| {
-                            if i < d {
-                                (0..e.nodes()).map(|a| x[a][i] * g[a][j]).sum()
-                            } else {
-                                0.0
-                            }
-                        })
-                    };
-                    if d == 2 {
-                        let (a, b) = (col(0), col(1));
-                        (det2(a, b), norm(a) * norm(b))
-                    } else {
-                        let (a, b, c) = (col(0), col(1), col(2));
-                        (det3(a, b, c), norm(a) * norm(b) * norm(c))
-                    }
-                })
-                .collect()
-        }
+        _ => kind
+            .element()
+            .reference_nodes()
+            .iter()
+            .map(|&xi| {
+                let [a, b, c] = crate::model::element::jacobian_columns(kind, x, xi);
+                if kind.dim() == 2 {
+                    (det2(a, b), norm(a) * norm(b))
+                } else {
+                    (det3(a, b, c), norm(a) * norm(b) * norm(c))
+                }
+            })
+            .collect(),
     }
 }
 
