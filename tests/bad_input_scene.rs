@@ -743,6 +743,38 @@ const CASES: &[Case] = &[
         &["forces[0].total", "reaches 1e160 N", "at most 1e150 N"],
     ),
     (
+        "pressure on no body",
+        &[(
+            "[[obstacles]]",
+            "[[pressures]]\nbody = \"c\"\nfaces = \"z1\"\npressure = 1e3\n[[obstacles]]",
+        )],
+        &["pressures[0].body", "c", "names no body"],
+    ),
+    (
+        "NaN pressure",
+        &[(
+            "[[obstacles]]",
+            "[[pressures]]\nbody = \"b\"\nfaces = \"z1\"\npressure = nan\n[[obstacles]]",
+        )],
+        &["pressures[0].pressure", "NaN", "finite pressure"],
+    ),
+    (
+        "pressure of 1e200",
+        &[(
+            "[[obstacles]]",
+            "[[pressures]]\nbody = \"b\"\nfaces = \"z1\"\npressure = 1e200\n[[obstacles]]",
+        )],
+        &["pressures[0].pressure", "at most 1e150 Pa"],
+    ),
+    (
+        "pressure on an unknown face set",
+        &[(
+            "[[obstacles]]",
+            "[[pressures]]\nbody = \"b\"\nfaces = \"lid\"\npressure = 1e3\n[[obstacles]]",
+        )],
+        &["pressures[0].faces", "lid", "no such node set"],
+    ),
+    (
         "gravity of 1e200",
         &[(
             "[[obstacles]]",

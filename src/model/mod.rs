@@ -13,8 +13,9 @@
 //! [`multibody`] and [`point_mass`]; `combine` joins bodies and eliminates fixed and
 //! prescribed dofs, `measures` gives a state's energies and momentum (and a body's
 //! centre of mass and rigid-motion velocity, for initial states), [`body_measures`]
-//! each body's mass, centre, linear and angular momentum, and [`energy`] keeps a run's
-//! energy balance.
+//! each body's mass, centre, linear and angular momentum, [`energy`] keeps a run's
+//! energy balance, and [`pressure`] gives the consistent nodal forces of a uniform
+//! pressure on boundary faces.
 
 pub mod element;
 pub mod energy;
@@ -25,6 +26,7 @@ pub mod material;
 pub mod multibody;
 pub mod ordering;
 pub mod point_mass;
+pub mod pressure;
 pub mod rod;
 pub mod solid;
 pub mod system;

@@ -129,6 +129,7 @@ pub fn builtin_scene(name: &str) -> Result<file::Scene, Error> {
         contacts: Vec::new(),
         loads: file::Loads::default(),
         forces: Vec::new(),
+        pressures: Vec::new(),
         prescribed: Vec::new(),
         probes: Vec::new(),
         output: crate::io::OutputOptions::default(),

@@ -104,7 +104,9 @@ impl Formulation {
             _ => 2,
         }
     }
-    fn thickness(self) -> f64 {
+    /// The depth a plane body's cells and faces are integrated over: the thickness of a
+    /// plane-stress body, 1 m otherwise (per metre of depth in plane strain).
+    pub fn thickness(self) -> f64 {
         match self {
             Formulation::PlaneStress { thickness } => thickness,
             _ => 1.0,

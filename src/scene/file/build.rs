@@ -457,7 +457,8 @@ impl Build<'_> {
         Ok(Some(part))
     }
 
-    /// Phase 8: the forces on node sets, split over their nodes (after the elimination:
+    /// Phase 8: the forces on node sets, split over their nodes, and the pressures on
+    /// boundary faces (after the elimination:
     /// loads on fixed dofs are dropped, the supports carry them).
     fn forces(
         &self,
@@ -492,6 +493,8 @@ impl Build<'_> {
                 .loads
                 .push(crate::model::NodalLoad { dofs, values, time });
         }
+        let pressures = super::loads::pressure_loads(self.scene, &self.meshes, map, offsets)?;
+        system.loads.extend(pressures);
         Ok(())
     }
 

@@ -56,6 +56,9 @@ mod rule;
 pub use rule::ContactRule;
 mod gaps;
 mod initial;
+mod loads;
+use loads::time_points;
+pub use loads::{ForceSpec, Loads, PressureSpec};
 mod mesh_spec;
 mod meshes;
 mod obstacle;
@@ -119,6 +122,9 @@ pub struct Scene {
     /// Forces on node sets with a time function.
     #[serde(default)]
     pub forces: Vec<ForceSpec>,
+    /// Uniform pressures on boundary faces with a time function.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pressures: Vec<PressureSpec>,
     /// Prescribed velocities of node sets with a time function.
     #[serde(default)]
     pub prescribed: Vec<PrescribedSpec>,
@@ -462,43 +468,6 @@ pub enum Pairing {
     NodeToNode,
 }
 
-/// `[[forces]]`: a force on a node set, split evenly over its nodes, scaled by a
-/// piecewise-linear function of time.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ForceSpec {
-    /// Body name.
-    pub body: String,
-    /// A node set of the body's mesh (as for `[[contacts]]`: a set, `boundary` or `all`).
-    pub nodes: String,
-    /// The total force over the set (N), one component per space dimension.
-    pub total: Vec<f64>,
-    /// `[[t, factor], …]`: the factor multiplying `total` at time `t`, linear between the
-    /// points and constant outside them (default: 1 at all times).
-    #[serde(default, deserialize_with = "time_points")]
-    pub time: Option<Vec<[f64; 2]>>,
-}
-
-/// `[[t, factor], …]` with exactly two numbers a point: serde's fixed-size arrays take
-/// the first two of a longer list and drop the rest silently (issue 34).
-fn time_points<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<Vec<[f64; 2]>>, D::Error> {
-    let v: Option<Vec<Vec<f64>>> = Option::deserialize(d)?;
-    v.map(|points| {
-        points
-            .into_iter()
-            .enumerate()
-            .map(|(i, p)| match p[..] {
-                [t, f] => Ok([t, f]),
-                _ => Err(serde::de::Error::custom(format!(
-                    "time point {i} has {} number(s), expected 2: [t, factor]",
-                    p.len()
-                ))),
-            })
-            .collect()
-    })
-    .transpose()
-}
-
 /// `[[prescribed]]`: node-set dofs moved at a prescribed velocity `velocity · φ(t)`
 /// (displacement `velocity · ∫₀ᵗ φ`), eliminated from the system (θ-method schemes).
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -540,15 +509,6 @@ pub struct ProbeSpec {
 /// Most times one probe may name (each costs one displacement vector in the summary
 /// and in a checkpoint).
 pub const MAX_PROBE_TIMES: usize = 100_000;
-
-/// `[loads]`.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Loads {
-    /// Uniform acceleration field (m/s²), e.g. `[0, 0, -9.81]`.
-    #[serde(default)]
-    pub gravity: Option<Vec<f64>>,
-}
 
 /// What [`Scene::build`] reports about the model, for `signorini check`.
 #[derive(Clone, Debug, Serialize)]

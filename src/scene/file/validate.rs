@@ -65,6 +65,7 @@ impl Scene {
                 (!self.obstacles.is_empty(), "obstacles"),
                 (!self.contacts.is_empty(), "contacts"),
                 (!self.forces.is_empty(), "forces"),
+                (!self.pressures.is_empty(), "pressures"),
                 (!self.prescribed.is_empty(), "prescribed"),
                 (!self.probes.is_empty(), "probes"),
                 (self.loads.gravity.is_some(), "loads"),
@@ -264,6 +265,7 @@ impl Scene {
             let at = format!("forces[{i}]");
             self.driven_body(&at, &f.body, ("total", &f.total, "N"), &f.time)?;
         }
+        self.validate_pressures()?;
         self.validate_probes()
     }
 
@@ -487,7 +489,12 @@ pub(super) fn generator_checks(
 pub const MAX_LOAD_MAGNITUDE: f64 = 1e150;
 
 /// `values` (of key `key`, peak magnitude `peak`) within [`MAX_LOAD_MAGNITUDE`].
-fn within_magnitude(key: &str, values: &[f64], peak: f64, unit: &str) -> Result<(), Error> {
+pub(super) fn within_magnitude(
+    key: &str,
+    values: &[f64],
+    peak: f64,
+    unit: &str,
+) -> Result<(), Error> {
     if peak <= MAX_LOAD_MAGNITUDE {
         return Ok(());
     }

@@ -1,0 +1,188 @@
+//! The contact patch test (issue 51 §3): a block pressed on a rigid frictionless plane by
+//! a uniform pressure `p` on its top face. The exact solution is a uniform uniaxial
+//! stress `σ = −p` along the plane's normal (the sides free, the base sliding freely):
+//! a displacement field linear in the coordinates, which every element kind represents
+//! exactly, and a uniform contact pressure `p` on the base. A contact discretization
+//! passes when that state is an equilibrium of the discrete system: started there at
+//! rest (`initial_displacement` = the exact field, `v = 0`) under the default scheme
+//! (Algorithm 2), the block stays there, its contact rows carrying exactly the
+//! consistent nodal forces of the pressure.
+//!
+//! Measured: the largest departure of the displacement from the exact field over the
+//! run, relative to the exact field's largest displacement, and the total contact
+//! impulse of each step against `p A h`. Tolerance 1e-8: the state is exact, so what is
+//! left is the round-off of the factorization and of the contact solvers' residuals
+//! (1e-12 and below where it passes, measured), while a rule that cannot carry the
+//! consistent forces departs by the forces it misses (the node rule on hex20's quad8
+//! faces, whose corners would have to pull: −A/12 each) — 1e-3 and more.
+
+use signorini::scene::file::{NodalField, Rows, Scene};
+
+const E: f64 = 1e8;
+const NU: f64 = 0.3;
+const P: f64 = 1e5;
+const STEPS: usize = 40;
+
+/// The scene: a block of `cell`s on the plane through the origin normal to the last
+/// axis, the pressure on its top face set `top`, the base set `base` in contact with
+/// `rule`.
+fn scene(dim_body: &str, cell: &str, cells: &str, rule: &str) -> Scene {
+    let (mesh, obstacle, base, top, formulation) = match dim_body {
+        "solid" => (
+            format!(
+                "{{ generator = \"box\", cell = \"{cell}\", cells = {cells}, size = [0.1, 0.08, 0.05] }}"
+            ),
+            "point = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]",
+            "z0",
+            "z1",
+            "\"solid\"".to_string(),
+        ),
+        f => (
+            format!(
+                "{{ generator = \"rectangle\", cell = \"{cell}\", cells = {cells}, size = [0.1, 0.05] }}"
+            ),
+            "point = [0.0, 0.0]\nnormal = [0.0, 1.0]",
+            "y0",
+            "y1",
+            if f == "plane-stress" {
+                "{ plane-stress = { thickness = 0.01 } }".to_string()
+            } else {
+                format!("\"{f}\"")
+            },
+        ),
+    };
+    let text = format!(
+        r#"
+[time]
+dt = 1e-5
+t_end = {t_end}
+[[bodies]]
+name = "block"
+mesh = {mesh}
+formulation = {formulation}
+material = {{ young = {E}, poisson = {NU}, density = 1000.0 }}
+[[obstacles]]
+name = "floor"
+type = "plane"
+{obstacle}
+[[contacts]]
+body = "block"
+nodes = "{base}"
+obstacle = "floor"
+rule = "{rule}"
+[[pressures]]
+body = "block"
+faces = "{top}"
+pressure = {P}
+"#,
+        t_end = STEPS as f64 * 1e-5
+    );
+    Scene::from_toml(&text).unwrap()
+}
+
+/// The exact displacement at `x` (uniaxial stress `−p` along the last axis of the body,
+/// lateral expansion about the block's centre line; the axisymmetric body about its axis
+/// r = 0).
+fn exact(formulation: &str, x: &[f64]) -> Vec<f64> {
+    match formulation {
+        "solid" => vec![
+            NU * P * (x[0] - 0.05) / E,
+            NU * P * (x[1] - 0.04) / E,
+            -P * x[2] / E,
+        ],
+        "plane-strain" => vec![
+            NU * (1.0 + NU) * P * (x[0] - 0.05) / E,
+            -(1.0 - NU * NU) * P * x[1] / E,
+        ],
+        "plane-stress" => vec![NU * P * (x[0] - 0.05) / E, -P * x[1] / E],
+        _ => vec![NU * P * x[0] / E, -P * x[1] / E],
+    }
+}
+
+/// Runs the patch test; returns (largest displacement departure relative to the exact
+/// field's largest displacement, largest relative departure of a step's total contact
+/// impulse from `p A h`).
+fn patch(formulation: &str, cell: &str, cells: &str, rule: &str) -> (f64, f64) {
+    let mut s = scene(formulation, cell, cells, rule);
+    let (model, _) = s.build().unwrap();
+    let points = model.geometry.points.clone();
+    let dim = if formulation == "solid" { 3 } else { 2 };
+    let u: Vec<Vec<f64>> = points
+        .iter()
+        .map(|x| exact(formulation, &x[..dim]))
+        .collect();
+    s.bodies[0].initial_displacement = Some(NodalField::Rows(Rows::from_rows(u.clone())));
+    let (model, _) = s.build().unwrap();
+    let h = s.time.dt;
+    let mut integ = model.into_integrator(&s.scheme, h).unwrap();
+    let scale = u.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let area = match formulation {
+        "solid" => 0.1 * 0.08,
+        "axisymmetric" => std::f64::consts::PI * 0.1 * 0.1,
+        "plane-stress" => 0.1 * 0.01,
+        _ => 0.1,
+    };
+    let (mut worst_u, mut worst_p) = (0.0f64, 0.0f64);
+    for _ in 0..STEPS {
+        integ.prepare().unwrap();
+        let st = integ.step().unwrap();
+        assert_eq!(st.caps_hit, 0, "{formulation} {cell} {rule}");
+        let state = integ.state();
+        // every dof is free here (no support): q is the nodal displacement
+        for (a, b) in state.q.iter().zip(u.iter().flatten()) {
+            worst_u = worst_u.max((a - b).abs() / scale);
+        }
+        let total: f64 = state.impulse.iter().sum();
+        worst_p = worst_p.max((total / (P * area * h) - 1.0).abs());
+    }
+    (worst_u, worst_p)
+}
+
+/// With the surface rule every face kind it takes transmits the uniform pressure
+/// exactly: plane strain on quad4, tri3, quad8, quad9 and tri6 edges (2 and 3 nodes),
+/// plane stress, the axisymmetric cylinder (ring faces, `2πr`), and the solid's quad4
+/// and quad9 faces (hex8, hex27).
+#[test]
+fn the_surface_rule_passes_the_patch_test() {
+    for (f, cell, cells) in [
+        ("plane-strain", "quad4", "[4, 3]"),
+        ("plane-strain", "tri3", "[4, 3]"),
+        ("plane-strain", "quad8", "[3, 2]"),
+        ("plane-strain", "quad9", "[3, 2]"),
+        ("plane-strain", "tri6", "[3, 2]"),
+        ("plane-stress", "quad9", "[3, 2]"),
+        ("axisymmetric", "quad4", "[4, 3]"),
+        ("axisymmetric", "quad9", "[3, 2]"),
+        ("solid", "hex8", "[3, 2, 2]"),
+        ("solid", "hex27", "[2, 2, 1]"),
+    ] {
+        let (du, dp) = patch(f, cell, cells, "surface");
+        println!("surface {f} {cell}: displacement {du:.2e}, impulse {dp:.2e}");
+        assert!(du < 1e-8 && dp < 1e-8, "{f} {cell}: {du:e} {dp:e}");
+    }
+}
+
+/// The node rule passes where the consistent nodal forces of a uniform pressure are
+/// non-negative at every node (edges of 2 and 3 nodes, quad4, quad9 and tri3/tri6
+/// faces: tri6 corners carry 0), and fails on hex20's quad8 faces, whose corners would
+/// have to carry −A/12: the block leaves the uniform state by more than 1e-3 of its
+/// displacement within the run.
+#[test]
+fn the_node_rule_fails_only_where_a_corner_would_pull() {
+    for (f, cell, cells) in [
+        ("plane-strain", "quad4", "[4, 3]"),
+        ("plane-strain", "quad8", "[3, 2]"),
+        ("axisymmetric", "quad9", "[3, 2]"),
+        ("solid", "hex8", "[3, 2, 2]"),
+        ("solid", "tet4", "[2, 2, 1]"),
+        ("solid", "tet10", "[2, 2, 1]"),
+        ("solid", "hex27", "[2, 2, 1]"),
+    ] {
+        let (du, dp) = patch(f, cell, cells, "nodes");
+        println!("nodes {f} {cell}: displacement {du:.2e}, impulse {dp:.2e}");
+        assert!(du < 1e-8 && dp < 1e-8, "{f} {cell}: {du:e} {dp:e}");
+    }
+    let (du, dp) = patch("solid", "hex20", "[2, 2, 1]", "nodes");
+    println!("nodes solid hex20: displacement {du:.2e}, impulse {dp:.2e}");
+    assert!(du > 1e-3, "hex20 with the node rule: {du:e}");
+}
