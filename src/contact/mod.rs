@@ -20,6 +20,7 @@ pub mod block;
 pub mod bodies;
 pub mod frame;
 pub mod linear;
+pub mod mortar;
 pub mod plane;
 pub mod slider;
 pub mod sphere;

@@ -194,6 +194,22 @@ impl Sides<'_> {
             let bi = self.scene.body_index(&c.body);
             let mut nodes = std::mem::take(&mut nodes_of[ci]);
             let (set, against, target) = match &c.target {
+                Some(t) if c.rule == ContactRule::Surface => {
+                    let (set, rows) = self.mortar_set((ci, c), t, &nodes, dofs).map_err(at)?;
+                    interfaces.push(format!(
+                        "contacts[{ci}]: {} mortar rows of \"{}\" (rule = \"surface\", small \
+                         sliding: weights of the reference configuration, {} face nodes) \
+                         against body \"{}\" (surface `{}`)",
+                        rows.len(),
+                        c.body,
+                        nodes.len(),
+                        t.body,
+                        t.surface
+                    ));
+                    nodes = rows;
+                    let against = format!("body \"{}\" (surface `{}`)", t.body, t.surface);
+                    (set, against, t.body.clone())
+                }
                 Some(t) => {
                     let (set, line) = self.interface((ci, c), t, &nodes, dofs).map_err(at)?;
                     interfaces.push(line);
@@ -390,6 +406,87 @@ impl Sides<'_> {
                         if let Some(d) = dofs.of(bi, b, i) {
                             lc.dofs.push(d);
                             lc.normal.push(w * ni);
+                        }
+                    }
+                }
+                lc
+            })
+            .collect();
+        Ok((Box::new(LinearContacts::new(rows)?), labels))
+    }
+}
+
+impl Sides<'_> {
+    /// The surface rule's mortar rows of entry `ci` (`c`) between bodies
+    /// ([`crate::contact::mortar`]): the boundary facets of `c`'s body whose nodes all
+    /// lie in the kept `nodes` against the target's surface, on the kept `dofs`
+    /// (a fixed node's position enters the gap only); with the node each row is named
+    /// by.
+    fn mortar_set(
+        &self,
+        (ci, c): (usize, &ContactSpec),
+        t: &TargetSpec,
+        nodes: &[usize],
+        dofs: Dofs,
+    ) -> Result<(Box<dyn ContactSet>, Vec<usize>), Error> {
+        use crate::contact::linear::{LinearContact, LinearContacts};
+        if c.friction != 0.0 {
+            return Err(Error::invalid(
+                "rule",
+                "surface",
+                "takes frictionless contacts for now (friction = 0, or rule = \"nodes\")",
+            ));
+        }
+        if t.pairing != Pairing::NodeToSurface {
+            return Err(Error::invalid(
+                "target.pairing",
+                "node-to-node",
+                "pairs nodes; rule = \"surface\" integrates over the faces (leave one out)",
+            ));
+        }
+        let (bi, ti) = (
+            self.scene.body_index(&c.body),
+            self.scene.body_index(&t.body),
+        );
+        let (mesh, target) = (&self.meshes[bi], &self.meshes[ti]);
+        let facets = mesh.boundary_facets(nodes);
+        let rows = crate::contact::mortar::mortar_rows(
+            self.scene.bodies[bi].formulation,
+            (&facets, &mesh.points),
+            (&self.facets_of[ci], &target.points),
+        )?;
+        if rows.is_empty() {
+            return Err(Error::invalid(
+                "rule",
+                "surface",
+                &format!(
+                    "no face of `{}` has a face of body \"{}\" (surface `{}`) facing it",
+                    c.nodes, t.body, t.surface
+                ),
+            ));
+        }
+        let law = crate::contact::ContactLaw {
+            restitution: c.restitution,
+            friction: 0.0,
+        };
+        let labels = rows.iter().map(|r| r.node).collect();
+        let rows = rows
+            .into_iter()
+            .map(|r| {
+                let mut lc = LinearContact {
+                    dofs: Vec::new(),
+                    offset: r.gap,
+                    normal: Vec::new(),
+                    tangents: Vec::new(),
+                    law,
+                };
+                for (body, terms) in [(bi, &r.slave), (ti, &r.master)] {
+                    for (v, w) in terms {
+                        for (i, wi) in w.iter().enumerate().take(self.dim) {
+                            if let Some(d) = dofs.of(body, *v, i) {
+                                lc.dofs.push(d);
+                                lc.normal.push(*wi);
+                            }
                         }
                     }
                 }

@@ -291,6 +291,7 @@ pub(super) fn target_facets(
     mesh: &Mesh,
     body: &BodySpec,
     t: &TargetSpec,
+    rule: super::ContactRule,
 ) -> Result<(Vec<Vec<usize>>, usize), Error> {
     let set = node_set(mesh, &t.surface).map_err(|e| prefix("surface", e))?;
     let mut facets = if let MeshSpec::Rod { .. } = body.mesh {
@@ -303,19 +304,20 @@ pub(super) fn target_facets(
             .collect()
     } else {
         let facets = mesh.boundary_facets(&set);
-        // a quadratic facet is a curve or a curved face: the body–body contact's facets
-        // are straight segments, triangles and quadrilaterals
-        if let Some(f) = facets
-            .iter()
-            .find(|f| crate::model::element::facet_corners(body.dim(), f.len()) != Some(f.len()))
-        {
+        // a quadratic facet is a curve or a curved face: node-to-surface facets are
+        // straight segments, triangles and quadrilaterals; mortar rows take curves
+        if let Some(f) = facets.iter().find(|f| {
+            rule != super::ContactRule::Surface
+                && crate::model::element::facet_corners(body.dim(), f.len()) != Some(f.len())
+        }) {
             return Err(Error::invalid(
                 "surface",
                 &t.surface,
                 &format!(
                     "has a facet of {} nodes (a quadratic cell's): a body's contact target \
-                     takes linear cells (tri3, quad4, tet4, hex8) for now; contacts of its \
-                     nodes against an obstacle take any cell",
+                     takes linear cells (tri3, quad4, tet4, hex8) with rule = \"nodes\"; \
+                     rule = \"surface\" takes 2-D quadratic edges, and contacts of its nodes \
+                     against an obstacle take any cell",
                     f.len()
                 ),
             ));

@@ -81,8 +81,9 @@ impl Scene {
         for (ci, c) in self.contacts.iter().enumerate() {
             if let Some(t) = &c.target {
                 let ti = self.body_index(&t.body);
-                (facets_of[ci], axis_facets[ci]) = target_facets(&meshes[ti], &self.bodies[ti], t)
-                    .map_err(|e| prefix(&format!("contacts[{ci}].target"), e))?;
+                (facets_of[ci], axis_facets[ci]) =
+                    target_facets(&meshes[ti], &self.bodies[ti], t, c.rule)
+                        .map_err(|e| prefix(&format!("contacts[{ci}].target"), e))?;
             }
         }
         Ok((facets_of, axis_facets))

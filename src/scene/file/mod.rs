@@ -425,9 +425,9 @@ pub struct ContactSpec {
     /// Coulomb friction coefficient μ (default 0: frictionless, no friction solver).
     #[serde(default)]
     pub friction: f64,
-    /// `nodes` (default: one row per node, its own gap) or `surface` (rows at points of
-    /// the body's faces, [`crate::contact::surface`]): frictionless contacts with a plane
-    /// obstacle for now.
+    /// `nodes` (default: one row per node, its own gap) or `surface`: against a plane
+    /// obstacle, rows at points of the body's faces ([`crate::contact::surface`]); with a
+    /// `target`, mortar rows ([`crate::contact::mortar`], 2-D); frictionless for now.
     #[serde(default, skip_serializing_if = "ContactRule::is_nodes")]
     pub rule: ContactRule,
 }

@@ -9,8 +9,9 @@ pub enum ContactRule {
     /// One row per node: its own gap.
     #[default]
     Nodes,
-    /// Rows at points of the body's boundary faces, each the geometric gap of its point
-    /// ([`crate::contact::surface`]).
+    /// Against an obstacle, rows at points of the body's boundary faces, each the
+    /// geometric gap of its point ([`crate::contact::surface`]); against another body,
+    /// mortar rows, each a slave node's weighted gap ([`crate::contact::mortar`]).
     Surface,
 }
 
