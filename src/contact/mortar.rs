@@ -6,33 +6,32 @@
 //!
 //! **The rows.** With `n(ξ)` the normal of the slave face turned inwards (the master
 //! surface's outward direction when the faces touch), `x_m(ξ)` the point of the master
-//! face that the line through the slave point `x_s(ξ)` along `n` meets, and `N_a` the
-//! slave faces' shape functions, row `a` is the weighted gap
+//! face that the line through the slave point `x_s(ξ)` along `n` meets, `N_b` the slave
+//! faces' shape functions and `Φ_a` their multiplier basis, row `a` is the weighted gap
 //!
-//! `g̃_a = (1/A_a) ∫_Γs N_a (x_s − x_m)·n dΓ`,  `A_a = ∫_Γs N_a dΓ`,
+//! `g̃_a = (1/A_a) ∫_Γs Φ_a (x_s − x_m)·n dΓ`,  `A_a = ∫_Γs Φ_a dΓ`,
 //!
 //! over the part of the slave surface `Γs` that has master faces under it: its
-//! gradient is `(1/A_a) ∫ N_a N_b n` on slave node `b` and `−(1/A_a) ∫ N_a N_m(x_m) n` on
-//! master node `m` (the standard mortar matrices `D` and `M` of the segment-to-segment
+//! gradient is `(1/A_a) ∫ Φ_a N_b n` on slave node `b` and `−(1/A_a) ∫ Φ_a N_m(x_m) n` on
+//! master node `m` (the mortar matrices `D` and `M` of the segment-to-segment
 //! literature, Puso & Laursen, CMAME 193, 2004, row-scaled by `A_a` so that a row's gap
-//! is a length and its impulse a force times the step, as a node's are). Uniform impulses
-//! `P_a = p A_a h` give each slave node `p ∫ N_b n` and each master node `−p ∫ N_m n`
-//! (the shape functions sum to one): the consistent forces of a uniform pressure on both
-//! sides, however the two meshes' nodes fall — the contact patch test
+//! is a length and its impulse a force times the step, as a node's are). `Φ_a = N_a` on
+//! linear faces; on quadratic ones, the hat functions of the face split at its mid-side
+//! nodes (never negative, as the quadratic `N_a` are: with them a corner's weighted gap
+//! reads negative where every point of the face is open, and `∫ N_a 2πr` vanishes at a
+//! ring edge's corner on the axis). Any multiplier basis that sums to one transmits a
+//! uniform pressure exactly: uniform impulses `P_a = p A_a h` give each slave node
+//! `p ∫ N_b n` and each master node `−p ∫ N_m n`, the consistent forces of the pressure
+//! on both sides, however the two meshes' nodes fall — the contact patch test
 //! (`tests/analytic_contact_patch.rs`), which node-to-surface rows fail on non-matching
 //! meshes.
 //!
 //! **Segments.** Each master face's shadow on a slave face is the interval between the
-//! closest points of its two corners on the slave face; over each shadow the integrand
-//! is a polynomial on straight faces (degree ≤ 4 with 3-node edges), which 3 Gauss
-//! points integrate exactly. Edges of 2 and 3 nodes in 2-D (plane strain, plane stress
+//! closest points of its two corners on the slave face, split at a 3-node edge's middle
+//! where its `Φ_a` kink; over each piece the integrand is a polynomial on straight
+//! faces (degree ≤ 4 with a ring's `r`), which 3 Gauss points integrate exactly. Edges of 2 and 3 nodes in 2-D (plane strain, plane stress
 //! with its thickness, axisymmetric rings with `2πr`); faces in 3-D need the polygon
 //! clipping of the two meshes' faces and are refused with the reason for now.
-//!
-//! A row whose `A_a` vanishes — the corner of a 3-node ring edge on the axis `r = 0`,
-//! where `∫ N_a 2πr dΓ = 0` — is scaled by `∫ |N_a|` instead (its gap is then a
-//! weighted one, not a length): it cannot be left out, the other rows' shape functions
-//! would no longer sum to one and the patch test fails (0.22, measured).
 //!
 //! Hand-written: no crate offers mortar integrals on these element faces.
 
@@ -47,9 +46,9 @@ use crate::model::solid::Formulation;
 pub struct MortarRow {
     /// The slave node.
     pub node: usize,
-    /// `(1/A_a) ∫ N_a N_b n` per slave node `b`.
+    /// `(1/A_a) ∫ Φ_a N_b n` per slave node `b`.
     pub slave: Vec<(usize, [f64; 3])>,
-    /// `−(1/A_a) ∫ N_a N_m n` per master node `m`.
+    /// `−(1/A_a) ∫ Φ_a N_m n` per master node `m`.
     pub master: Vec<(usize, [f64; 3])>,
     /// `g̃_a` at the reference positions.
     pub gap: f64,
@@ -155,10 +154,7 @@ pub fn mortar_rows(
         Formulation::Axisymmetric => std::f64::consts::TAU * r,
         f => f.thickness(),
     };
-    // per slave node: A_a, the gap integral, and the two gradients (sorted by node)
-    type Terms = std::collections::BTreeMap<usize, [f64; 3]>;
-    let mut acc: std::collections::BTreeMap<usize, (f64, f64, f64, Terms, Terms)> =
-        Default::default();
+    let mut acc = Rows::default();
     for fs in slave {
         let (_, _, ts) = edge(fs, slave_points, 0.0);
         for fm in master {
@@ -173,70 +169,129 @@ pub fn mortar_rows(
                 closest(fs, slave_points, p(1)),
             );
             let (lo, hi) = (a.min(b).max(-1.0), a.max(b).min(1.0));
-            if hi - lo <= 1e-12 {
-                continue;
-            }
-            let (mid, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
-            for &(g, w) in &G3 {
-                let xi = mid + half * g;
-                let (ns, xs, t) = edge(fs, slave_points, xi);
-                let len = t[0].hypot(t[1]);
-                // the slave's outward normal is t turned by −90°; n points into the slave
-                let n = [-t[1] / len, t[0] / len];
-                let eta = along(fm, master_points, xs, n);
-                if !(-1.0 - 1e-9..=1.0 + 1e-9).contains(&eta) {
+            // a 3-node edge's multiplier basis kinks at its middle: integrate each half
+            let pieces: &[(f64, f64)] = if fs.len() == 3 {
+                &[(lo, hi.min(0.0)), (lo.max(0.0), hi)]
+            } else {
+                &[(lo, hi)]
+            };
+            for &(lo, hi) in pieces {
+                if hi - lo <= 1e-12 {
                     continue;
                 }
-                let (nm, xm, _) = edge(fm, master_points, eta);
-                let gap = (xs[0] - xm[0]) * n[0] + (xs[1] - xm[1]) * n[1];
-                let dw = w * half * len * ring(xs[0]);
-                for (ai, &a) in fs.iter().enumerate() {
-                    let e = acc.entry(a).or_default();
-                    e.0 += dw * ns[ai];
-                    e.1 += dw * ns[ai].abs();
-                    e.2 += dw * ns[ai] * gap;
-                    for (bi, &b) in fs.iter().enumerate() {
-                        let v = e.3.entry(b).or_default();
-                        for i in 0..2 {
-                            v[i] += dw * ns[ai] * ns[bi] * n[i];
-                        }
+                let (mid, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+                for &(g, w) in &G3 {
+                    let xi = mid + half * g;
+                    let (ns, xs, t) = edge(fs, slave_points, xi);
+                    let len = t[0].hypot(t[1]);
+                    // the slave's outward normal is t turned by −90°; n points into the
+                    // slave
+                    let n = [-t[1] / len, t[0] / len, 0.0];
+                    let eta = along(fm, master_points, xs, [n[0], n[1]]);
+                    if !(-1.0 - 1e-9..=1.0 + 1e-9).contains(&eta) {
+                        continue;
                     }
-                    for (mi, &m) in fm.iter().enumerate() {
-                        let v = e.4.entry(m).or_default();
-                        for i in 0..2 {
-                            v[i] -= dw * ns[ai] * nm[mi] * n[i];
-                        }
-                    }
+                    let (nm, xm, _) = edge(fm, master_points, eta);
+                    let gap = (xs[0] - xm[0]) * n[0] + (xs[1] - xm[1]) * n[1];
+                    let phi = hats(fs.len(), xi);
+                    let k = fs.len();
+                    acc.add(
+                        w * half * len * ring(xs[0]),
+                        (fs, &phi[..k], &ns[..k]),
+                        (fm, &nm[..fm.len()]),
+                        n,
+                        gap,
+                    );
                 }
             }
         }
     }
-    let scale = |terms: Terms, area: f64| -> Vec<(usize, [f64; 3])> {
-        terms
+    Ok(acc.finish())
+}
+
+/// The multiplier basis `Φ_a` of a 2-D slave edge at `xi`: its shape functions on an
+/// edge of 2 nodes; on an edge of 3 nodes the hat functions of its two halves (corners
+/// at ξ = ∓1, the mid-side node at 0), which are never negative — the quadratic shape
+/// functions are (`∫ N_a N_c < 0` for the two corners), and a weighted gap with them
+/// reads negative where every point of the edge is open.
+fn hats(k: usize, xi: f64) -> [f64; 3] {
+    if k == 2 {
+        [0.5 * (1.0 - xi), 0.5 * (1.0 + xi), 0.0]
+    } else {
+        [(-xi).max(0.0), xi.max(0.0), 1.0 - xi.abs()]
+    }
+}
+
+/// The mortar integrals as they are summed, per slave node: `A_a`, `∫ Φ_a g`, and the
+/// two gradients (sorted by node).
+#[derive(Default)]
+struct Rows(std::collections::BTreeMap<usize, Acc>);
+
+type Terms = std::collections::BTreeMap<usize, [f64; 3]>;
+
+#[derive(Default)]
+struct Acc {
+    area: f64,
+    gap: f64,
+    slave: Terms,
+    master: Terms,
+}
+
+impl Rows {
+    /// Adds one integration point of weight `dw`: the slave face's nodes with their
+    /// multiplier basis `Φ` and shape functions `N` there, the master face's nodes with
+    /// their shape functions at the point under it, the normal `n` into the slave and the
+    /// gap.
+    fn add(
+        &mut self,
+        dw: f64,
+        (fs, phi, ns): (&[usize], &[f64], &[f64]),
+        (fm, nm): (&[usize], &[f64]),
+        n: [f64; 3],
+        gap: f64,
+    ) {
+        for (&a, &pa) in fs.iter().zip(phi) {
+            if pa == 0.0 {
+                continue;
+            }
+            let e = self.0.entry(a).or_default();
+            e.area += dw * pa;
+            e.gap += dw * pa * gap;
+            for (&b, &nb) in fs.iter().zip(ns) {
+                let v = e.slave.entry(b).or_default();
+                for i in 0..3 {
+                    v[i] += dw * pa * nb * n[i];
+                }
+            }
+            for (&m, &nmm) in fm.iter().zip(nm) {
+                let v = e.master.entry(m).or_default();
+                for i in 0..3 {
+                    v[i] -= dw * pa * nmm * n[i];
+                }
+            }
+        }
+    }
+
+    /// The rows, each divided by its `A_a` (rows with no master face under them, `A_a =
+    /// 0`, are left out).
+    fn finish(self) -> Vec<MortarRow> {
+        let scale = |terms: Terms, area: f64| -> Vec<(usize, [f64; 3])> {
+            terms
+                .into_iter()
+                .map(|(k, v)| (k, v.map(|x| x / area)))
+                .collect()
+        };
+        self.0
             .into_iter()
-            .map(|(k, v)| (k, v.map(|x| x / area)))
-            .collect()
-    };
-    Ok(acc
-        .into_iter()
-        .filter(|(_, (_, abs, ..))| *abs > 0.0)
-        .map(|(node, (area, abs, gap, s, m))| (node, (area.max(0.0), abs, gap, s, m)))
-        // a row whose `A_a` vanishes (the corner of a 3-node ring edge on the axis r = 0:
-        // `∫ N_a 2πr = 0`) is scaled by `∫ |N_a|` instead, its gap a weighted one: it
-        // cannot be left out, the other rows' weights would no longer sum to one
-        .map(|(node, (area, abs, gap, s, m))| {
-            (
+            .filter(|(_, e)| e.area > 0.0)
+            .map(|(node, e)| MortarRow {
                 node,
-                (if area > 1e-3 * abs { area } else { abs }, gap, s, m),
-            )
-        })
-        .map(|(node, (area, gap, s, m))| MortarRow {
-            node,
-            slave: scale(s, area),
-            master: scale(m, area),
-            gap: gap / area,
-        })
-        .collect())
+                slave: scale(e.slave, e.area),
+                master: scale(e.master, e.area),
+                gap: e.gap / e.area,
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]
@@ -270,6 +325,35 @@ mod tests {
         }
         for (k, want) in [0.75, 1.5, 0.75].iter().enumerate() {
             assert!((master[k] - want).abs() < 1e-14, "master {k}: {master:?}");
+        }
+    }
+
+    /// A straight 3-node slave edge at 45° over a flat master, touching it at one corner
+    /// (height 0 at x = 0, 1 at x = 1): with the hat basis the touching corner's weighted
+    /// height is `∫₀^½ (1 − 2x)·x dx / ¼ = 1/6`, open as the edge is; the quadratic `N_a`
+    /// would give `∫ N_a g = 0` there, a contact read closed while every point but one is
+    /// open. The mid-side row reads ½, the far corner 5/6.
+    #[test]
+    fn a_tilted_quadratic_edge_reads_open() {
+        let sp = [[0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.5, 0.5, 0.0]];
+        let mp = [[-1.0, 0.0, 0.0], [2.0, 0.0, 0.0]];
+        // the slave's body on the left of 0 → 1 (above the line); the master's below
+        let rows = mortar_rows(
+            Formulation::PlaneStrain,
+            (&[vec![0, 1, 2]], &sp),
+            (&[vec![1, 0]], &mp),
+        )
+        .unwrap();
+        let gap = |node: usize| rows.iter().find(|r| r.node == node).unwrap().gap;
+        // measured along the slave's inward normal (−1, 1)/√2, the gap at height y is
+        // √2·y (the line through x_s along n meets y = 0 at x = 2y)
+        let s2 = 2f64.sqrt();
+        for (node, want) in [(0, 1.0 / 6.0), (2, 0.5), (1, 5.0 / 6.0)] {
+            assert!(
+                (gap(node) - want * s2).abs() < 1e-12,
+                "node {node}: {}",
+                gap(node)
+            );
         }
     }
 }
