@@ -26,18 +26,25 @@
 //! (`tests/analytic_contact_patch.rs`), which node-to-surface rows fail on non-matching
 //! meshes.
 //!
-//! **Segments.** Each master face's shadow on a slave face is the interval between the
-//! closest points of its two corners on the slave face, split at a 3-node edge's middle
-//! where its `Φ_a` kink; over each piece the integrand is a polynomial on straight
-//! faces (degree ≤ 4 with a ring's `r`), which 3 Gauss points integrate exactly. Edges of 2 and 3 nodes in 2-D (plane strain, plane stress
-//! with its thickness, axisymmetric rings with `2πr`); faces in 3-D need the polygon
-//! clipping of the two meshes' faces and are refused with the reason for now.
+//! **Segments.** In 2-D (`edges.rs`) each master edge's shadow on a slave edge is the
+//! interval between the closest points of its two corners, split at a 3-node edge's
+//! middle where its `Φ_a` kink; 3 Gauss points a piece integrate the polynomial
+//! integrand exactly on straight edges (degree ≤ 4 with a ring's `r`). Edges of 2 and 3
+//! nodes; plane strain, plane stress with its thickness, axisymmetric rings with `2πr`.
+//! In 3-D (`faces.rs`) each master face's corners are projected into the slave face's
+//! reference plane and the polygon is clipped against the pieces of the slave face on
+//! which `Φ_a` is polynomial, then integrated by triangles. Slave faces tri3, quad4, tri6,
+//! quad9; master faces those and quad8 (a quad8 slave face is refused: its `N_a` are
+//! negative at the corners' insides and no never-negative basis is built for it yet —
+//! put the hex20 body on the target side).
 //!
 //! Hand-written: no crate offers mortar integrals on these element faces.
 
 use crate::error::Error;
-use crate::model::element::{G3, lagrange2};
 use crate::model::solid::Formulation;
+
+mod edges;
+mod faces;
 
 /// One mortar row: the slave node it belongs to (the node the outputs name it by), its
 /// gradient on slave nodes and on master nodes (`(node, vector)`, a vector per node),
@@ -54,172 +61,46 @@ pub struct MortarRow {
     pub gap: f64,
 }
 
-/// A 2-D edge of 2 or 3 nodes (corners at ξ = ∓1, a mid-side node at 0) at `xi`: shape
-/// values, position and tangent `dx/dξ`.
-fn edge(f: &[usize], points: &[[f64; 3]], xi: f64) -> ([f64; 3], [f64; 2], [f64; 2]) {
-    let mut n = [0.0; 3];
-    let (mut x, mut t) = ([0.0; 2], [0.0; 2]);
-    for (b, &node) in [-1.0, 1.0, 0.0].iter().enumerate().take(f.len()) {
-        let (nb, db) = if f.len() == 2 {
-            (0.5 * (1.0 + node * xi), 0.5 * node)
-        } else {
-            lagrange2(node, xi)
-        };
-        n[b] = nb;
-        for i in 0..2 {
-            x[i] += nb * points[f[b]][i];
-            t[i] += db * points[f[b]][i];
-        }
-    }
-    (n, x, t)
-}
-
-fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
-    a[0] * b[1] - a[1] * b[0]
-}
-
-/// The parameter of the point of edge `f` closest to `p` (Newton from the straight
-/// chord's answer; not clamped).
-fn closest(f: &[usize], points: &[[f64; 3]], p: [f64; 2]) -> f64 {
-    let (a, b) = (points[f[0]], points[f[1]]);
-    let c = [b[0] - a[0], b[1] - a[1]];
-    let mut xi =
-        2.0 * ((p[0] - a[0]) * c[0] + (p[1] - a[1]) * c[1]) / (c[0] * c[0] + c[1] * c[1]) - 1.0;
-    if f.len() == 3 {
-        for _ in 0..20 {
-            let (_, x, t) = edge(f, points, xi);
-            let h = 1e-7;
-            let (_, _, t2) = edge(f, points, xi + h);
-            let r = (x[0] - p[0]) * t[0] + (x[1] - p[1]) * t[1];
-            // d/dξ of (x − p)·t = |t|² + (x − p)·t'
-            let dt = [(t2[0] - t[0]) / h, (t2[1] - t[1]) / h];
-            let dr = t[0] * t[0] + t[1] * t[1] + (x[0] - p[0]) * dt[0] + (x[1] - p[1]) * dt[1];
-            let step = r / dr;
-            xi -= step;
-            if step.abs() < 1e-14 {
-                break;
-            }
-        }
-    }
-    xi
-}
-
-/// Where the line through `p` along `n` meets edge `f`: its parameter (Newton from the
-/// chord's answer on a 3-node edge; not clamped).
-fn along(f: &[usize], points: &[[f64; 3]], p: [f64; 2], n: [f64; 2]) -> f64 {
-    // (x(η) − p) × n = 0
-    let mut eta = 0.0;
-    for _ in 0..30 {
-        let (_, x, t) = edge(f, points, eta);
-        let r = cross([x[0] - p[0], x[1] - p[1]], n);
-        let dr = cross(t, n);
-        if dr == 0.0 {
-            break;
-        }
-        let step = r / dr;
-        eta -= step;
-        if step.abs() < 1e-14 {
-            break;
-        }
-    }
-    eta
-}
-
 /// The mortar rows of the slave `facets` (outward, [`crate::model::solid::Mesh::boundary_facets`])
 /// against the master facets, each side with its node coordinates, for bodies of
 /// `formulation`. Rows of slave nodes with no master face under them are left out.
 pub fn mortar_rows(
     formulation: Formulation,
-    (slave, slave_points): (&[Vec<usize>], &[[f64; 3]]),
-    (master, master_points): (&[Vec<usize>], &[[f64; 3]]),
+    slave: (&[Vec<usize>], &[[f64; 3]]),
+    master: (&[Vec<usize>], &[[f64; 3]]),
 ) -> Result<Vec<MortarRow>, Error> {
-    if formulation.dim() != 2 {
-        return Err(Error::invalid(
-            "rule",
-            "surface",
-            "between two bodies takes 2-D bodies (edges) for now: 3-D faces need the \
-             clipping of the two meshes' faces (rule = \"nodes\" takes them)",
-        ));
-    }
-    for f in slave.iter().chain(master) {
-        if !(2..=3).contains(&f.len()) {
+    let dim = formulation.dim();
+    for f in slave.0.iter().chain(master.0) {
+        if crate::model::element::facet_corners(dim, f.len()).is_none() {
             return Err(Error::invalid(
                 "rule",
                 "surface",
-                &format!("takes edges of 2 or 3 nodes; a facet has {}", f.len()),
+                &format!(
+                    "takes facets of the element kinds; a facet has {} nodes",
+                    f.len()
+                ),
             ));
         }
     }
-    let ring = |r: f64| match formulation {
-        Formulation::Axisymmetric => std::f64::consts::TAU * r,
-        f => f.thickness(),
-    };
     let mut acc = Rows::default();
-    for fs in slave {
-        let (_, _, ts) = edge(fs, slave_points, 0.0);
-        for fm in master {
-            let (_, _, tm) = edge(fm, master_points, 0.0);
-            // facing faces only (outward normals against each other: the tangents too)
-            if ts[0] * tm[0] + ts[1] * tm[1] >= 0.0 {
-                continue;
-            }
-            let p = |k: usize| [master_points[fm[k]][0], master_points[fm[k]][1]];
-            let (a, b) = (
-                closest(fs, slave_points, p(0)),
-                closest(fs, slave_points, p(1)),
-            );
-            let (lo, hi) = (a.min(b).max(-1.0), a.max(b).min(1.0));
-            // a 3-node edge's multiplier basis kinks at its middle: integrate each half
-            let pieces: &[(f64, f64)] = if fs.len() == 3 {
-                &[(lo, hi.min(0.0)), (lo.max(0.0), hi)]
-            } else {
-                &[(lo, hi)]
-            };
-            for &(lo, hi) in pieces {
-                if hi - lo <= 1e-12 {
-                    continue;
-                }
-                let (mid, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
-                for &(g, w) in &G3 {
-                    let xi = mid + half * g;
-                    let (ns, xs, t) = edge(fs, slave_points, xi);
-                    let len = t[0].hypot(t[1]);
-                    // the slave's outward normal is t turned by −90°; n points into the
-                    // slave
-                    let n = [-t[1] / len, t[0] / len, 0.0];
-                    let eta = along(fm, master_points, xs, [n[0], n[1]]);
-                    if !(-1.0 - 1e-9..=1.0 + 1e-9).contains(&eta) {
-                        continue;
-                    }
-                    let (nm, xm, _) = edge(fm, master_points, eta);
-                    let gap = (xs[0] - xm[0]) * n[0] + (xs[1] - xm[1]) * n[1];
-                    let phi = hats(fs.len(), xi);
-                    let k = fs.len();
-                    acc.add(
-                        w * half * len * ring(xs[0]),
-                        (fs, &phi[..k], &ns[..k]),
-                        (fm, &nm[..fm.len()]),
-                        n,
-                        gap,
-                    );
-                }
-            }
+    if dim == 2 {
+        edges::edge_rows(&mut acc, formulation, slave, master);
+    } else {
+        if let Some(f) = slave.0.iter().find(|f| f.len() == 8) {
+            return Err(Error::invalid(
+                "rule",
+                "surface",
+                &format!(
+                    "takes quad8 faces as the target's only: a slave face of {} nodes \
+                     (hex20) has no never-negative multiplier basis here yet; put the hex20 \
+                     body on the target side",
+                    f.len()
+                ),
+            ));
         }
+        faces::face_rows(&mut acc, slave, master);
     }
     Ok(acc.finish())
-}
-
-/// The multiplier basis `Φ_a` of a 2-D slave edge at `xi`: its shape functions on an
-/// edge of 2 nodes; on an edge of 3 nodes the hat functions of its two halves (corners
-/// at ξ = ∓1, the mid-side node at 0), which are never negative — the quadratic shape
-/// functions are (`∫ N_a N_c < 0` for the two corners), and a weighted gap with them
-/// reads negative where every point of the edge is open.
-fn hats(k: usize, xi: f64) -> [f64; 3] {
-    if k == 2 {
-        [0.5 * (1.0 - xi), 0.5 * (1.0 + xi), 0.0]
-    } else {
-        [(-xi).max(0.0), xi.max(0.0), 1.0 - xi.abs()]
-    }
 }
 
 /// The mortar integrals as they are summed, per slave node: `A_a`, `∫ Φ_a g`, and the
