@@ -137,7 +137,7 @@ fn run_patch(mut s: Scene, formulation: &str, area: f64) -> (f64, f64) {
     let mut integ = model.into_integrator(&s.scheme, h).unwrap();
     let scale = u.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     let (mut worst_u, mut worst_p) = (0.0f64, 0.0f64);
-    for _ in 0..STEPS {
+    for step in 0..STEPS {
         integ.prepare().unwrap();
         let st = integ.step().unwrap();
         assert_eq!(st.caps_hit, 0, "{formulation}");
@@ -156,7 +156,13 @@ fn run_patch(mut s: Scene, formulation: &str, area: f64) -> (f64, f64) {
             .filter(|(_, on)| **on)
             .map(|(p, _)| p)
             .sum();
-        if on_plane.iter().any(|&on| on) {
+        // Schatzman–Paoli starts its two-step recurrence from `q₋₁ = q₀ − h v₀ + ½h²a₀`,
+        // `a₀` without the contact force (unknown before the first step): started in a
+        // loaded contact, its first step carries half the impulse, the state exact
+        // (measured: 0.5, then 1e-14)
+        let first_sp =
+            step == 0 && s.scheme.kind == signorini::integrators::SchemeKind::SchatzmanPaoli;
+        if on_plane.iter().any(|&on| on) && !first_sp {
             worst_p = worst_p.max((total / (P * area * h) - 1.0).abs());
         }
     }
@@ -429,6 +435,31 @@ fn non_matching_boxes_pass_with_mortar_rows() {
         assert!(
             du > 1e-4,
             "{lower:?} {upper:?} with node-to-surface rows: {du:e}"
+        );
+    }
+}
+
+/// The patch tests under each of the five schemes (the rows feed every scheme as nodal
+/// rows do): the 2-D quad9 block on the plane with the surface rule, and the 3-D
+/// non-matching boxes with mortar rows, each within 1e-8 of the uniform state.
+#[test]
+fn the_patch_tests_pass_under_every_scheme() {
+    use signorini::integrators::SchemeKind;
+    for kind in SchemeKind::ALL {
+        let mut plane = scene("plane-strain", "quad9", "[3, 2]", "surface");
+        plane.scheme.kind = kind;
+        let (du, dp) = run_patch(plane, "plane-strain", area("plane-strain"));
+        let mut boxes = stacked3(("hex8", "[3, 3, 2]"), ("hex8", "[2, 2, 2]"), "surface").unwrap();
+        boxes.scheme.kind = kind;
+        let (bu, bp) = run_patch(boxes, "solid", area("solid"));
+        println!(
+            "{}: plane {du:.2e} {dp:.2e}, boxes {bu:.2e} {bp:.2e}",
+            kind.name()
+        );
+        assert!(
+            du < 1e-8 && dp < 1e-8 && bu < 1e-8 && bp < 1e-8,
+            "{}: {du:e} {dp:e} {bu:e} {bp:e}",
+            kind.name()
         );
     }
 }
