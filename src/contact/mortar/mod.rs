@@ -57,6 +57,11 @@ pub struct MortarRow {
     pub slave: Vec<(usize, [f64; 3])>,
     /// `−(1/A_a) ∫ Φ_a N_m n` per master node `m`.
     pub master: Vec<(usize, [f64; 3])>,
+    /// `(1/A_a) ∫ Φ_a N_b` per slave node, in the order of `slave`: with the row's
+    /// tangents, its tangential rows (friction).
+    pub slave_weights: Vec<f64>,
+    /// `−(1/A_a) ∫ Φ_a N_m` per master node, in the order of `master`.
+    pub master_weights: Vec<f64>,
     /// `g̃_a` at the reference positions.
     pub gap: f64,
 }
@@ -108,7 +113,8 @@ pub fn mortar_rows(
 #[derive(Default)]
 struct Rows(std::collections::BTreeMap<usize, Acc>);
 
-type Terms = std::collections::BTreeMap<usize, [f64; 3]>;
+/// Per node: the normal-weighted integral's three components, then the scalar one.
+type Terms = std::collections::BTreeMap<usize, [f64; 4]>;
 
 #[derive(Default)]
 struct Acc {
@@ -143,12 +149,14 @@ impl Rows {
                 for i in 0..3 {
                     v[i] += dw * pa * nb * n[i];
                 }
+                v[3] += dw * pa * nb;
             }
             for (&m, &nmm) in fm.iter().zip(nm) {
                 let v = e.master.entry(m).or_default();
                 for i in 0..3 {
                     v[i] -= dw * pa * nmm * n[i];
                 }
+                v[3] -= dw * pa * nmm;
             }
         }
     }
@@ -156,20 +164,27 @@ impl Rows {
     /// The rows, each divided by its `A_a` (rows with no master face under them, `A_a =
     /// 0`, are left out).
     fn finish(self) -> Vec<MortarRow> {
-        let scale = |terms: Terms, area: f64| -> Vec<(usize, [f64; 3])> {
+        type Scaled = (Vec<(usize, [f64; 3])>, Vec<f64>);
+        let scale = |terms: Terms, area: f64| -> Scaled {
             terms
                 .into_iter()
-                .map(|(k, v)| (k, v.map(|x| x / area)))
-                .collect()
+                .map(|(k, v)| ((k, [v[0] / area, v[1] / area, v[2] / area]), v[3] / area))
+                .unzip()
         };
         self.0
             .into_iter()
             .filter(|(_, e)| e.area > 0.0)
-            .map(|(node, e)| MortarRow {
-                node,
-                slave: scale(e.slave, e.area),
-                master: scale(e.master, e.area),
-                gap: e.gap / e.area,
+            .map(|(node, e)| {
+                let (slave, slave_weights) = scale(e.slave, e.area);
+                let (master, master_weights) = scale(e.master, e.area);
+                MortarRow {
+                    node,
+                    slave,
+                    master,
+                    slave_weights,
+                    master_weights,
+                    gap: e.gap / e.area,
+                }
             })
             .collect()
     }

@@ -373,20 +373,17 @@ impl Sides<'_> {
                 "takes a plane obstacle for now (curved obstacles: rule = \"nodes\")",
             ));
         };
-        if c.friction != 0.0 {
-            return Err(Error::invalid(
-                "rule",
-                "surface",
-                "takes frictionless contacts for now (friction = 0, or rule = \"nodes\")",
-            ));
-        }
         let mesh = &self.meshes[bi];
         let facets = mesh.boundary_facets(nodes);
         let rows = crate::contact::surface::collocation_rows(self.dim, &facets, &mesh.points)?;
         let law = crate::contact::ContactLaw {
             restitution: c.restitution,
-            friction: 0.0,
+            friction: c.friction,
         };
+        // the plane's frame: its tangential rows weigh the face point's velocity as its
+        // normal row does
+        let t = crate::contact::frame::tangents(&normal[..self.dim]);
+        let k = if law.friction > 0.0 { self.dim - 1 } else { 0 };
         let labels = rows.iter().map(|r| r.0).collect();
         let rows = rows
             .into_iter()
@@ -395,7 +392,7 @@ impl Sides<'_> {
                     dofs: Vec::new(),
                     offset: 0.0,
                     normal: Vec::new(),
-                    tangents: Vec::new(),
+                    tangents: vec![Vec::new(); k],
                     law,
                 };
                 for (b, w) in row {
@@ -406,6 +403,9 @@ impl Sides<'_> {
                         if let Some(d) = dofs.of(bi, b, i) {
                             lc.dofs.push(d);
                             lc.normal.push(w * ni);
+                            for (row, tj) in lc.tangents.iter_mut().zip(&t) {
+                                row.push(w * tj[i]);
+                            }
                         }
                     }
                 }
@@ -430,13 +430,6 @@ impl Sides<'_> {
         dofs: Dofs,
     ) -> Result<(Box<dyn ContactSet>, Vec<usize>), Error> {
         use crate::contact::linear::{LinearContact, LinearContacts};
-        if c.friction != 0.0 {
-            return Err(Error::invalid(
-                "rule",
-                "surface",
-                "takes frictionless contacts for now (friction = 0, or rule = \"nodes\")",
-            ));
-        }
         if t.pairing != Pairing::NodeToSurface {
             return Err(Error::invalid(
                 "target.pairing",
@@ -467,25 +460,44 @@ impl Sides<'_> {
         }
         let law = crate::contact::ContactLaw {
             restitution: c.restitution,
-            friction: 0.0,
+            friction: c.friction,
         };
         let labels = rows.iter().map(|r| r.node).collect();
+        let dim = self.dim;
         let rows = rows
             .into_iter()
             .map(|r| {
+                // the row's frame: its normal the direction of its slave gradient (the
+                // faces' mean inward normal under `Φ_a`), the tangents of that normal;
+                // the tangential rows weigh the relative velocity as the normal row does
+                let mut n = [0.0; 3];
+                for (_, w) in &r.slave {
+                    for i in 0..3 {
+                        n[i] += w[i];
+                    }
+                }
+                let len = n.iter().map(|x| x * x).sum::<f64>().sqrt();
+                let t = crate::contact::frame::tangents(&n.map(|x| x / len)[..dim]);
+                let k = if law.friction > 0.0 { dim - 1 } else { 0 };
                 let mut lc = LinearContact {
                     dofs: Vec::new(),
                     offset: r.gap,
                     normal: Vec::new(),
-                    tangents: Vec::new(),
+                    tangents: vec![Vec::new(); k],
                     law,
                 };
-                for (body, terms) in [(bi, &r.slave), (ti, &r.master)] {
-                    for (v, w) in terms {
-                        for (i, wi) in w.iter().enumerate().take(self.dim) {
+                for (body, terms, weights) in [
+                    (bi, &r.slave, &r.slave_weights),
+                    (ti, &r.master, &r.master_weights),
+                ] {
+                    for ((v, w), s) in terms.iter().zip(weights) {
+                        for (i, wi) in w.iter().enumerate().take(dim) {
                             if let Some(d) = dofs.of(body, *v, i) {
                                 lc.dofs.push(d);
                                 lc.normal.push(*wi);
+                                for (row, tj) in lc.tangents.iter_mut().zip(&t) {
+                                    row.push(s * tj[i]);
+                                }
                             }
                         }
                     }

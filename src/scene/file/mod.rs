@@ -427,7 +427,7 @@ pub struct ContactSpec {
     pub friction: f64,
     /// `nodes` (default: one row per node, its own gap) or `surface`: against a plane
     /// obstacle, rows at points of the body's faces ([`crate::contact::surface`]); with a
-    /// `target`, mortar rows ([`crate::contact::mortar`], 2-D); frictionless for now.
+    /// `target`, mortar rows ([`crate::contact::mortar`]); both with or without friction.
     #[serde(default, skip_serializing_if = "ContactRule::is_nodes")]
     pub rule: ContactRule,
 }
