@@ -191,7 +191,8 @@ fn patch(formulation: &str, cell: &str, cells: &str, rule: &str) -> (f64, f64) {
 /// With the surface rule every face kind it takes transmits the uniform pressure
 /// exactly: plane strain on quad4, tri3, quad8, quad9 and tri6 edges (2 and 3 nodes),
 /// plane stress, the axisymmetric cylinder (ring faces, `2πr`), and the solid's quad4
-/// and quad9 faces (hex8, hex27).
+/// and quad9 faces (hex8, hex27, rows at face points) and tri3 and tri6 faces (tet4,
+/// tet10, rows per face node weighted by their mortar multipliers).
 #[test]
 fn the_surface_rule_passes_the_patch_test() {
     for (f, cell, cells) in [
@@ -205,6 +206,8 @@ fn the_surface_rule_passes_the_patch_test() {
         ("axisymmetric", "quad9", "[3, 2]"),
         ("solid", "hex8", "[3, 2, 2]"),
         ("solid", "hex27", "[2, 2, 1]"),
+        ("solid", "tet4", "[2, 2, 1]"),
+        ("solid", "tet10", "[2, 2, 1]"),
     ] {
         let (du, dp) = patch(f, cell, cells, "surface");
         println!("surface {f} {cell}: displacement {du:.2e}, impulse {dp:.2e}");

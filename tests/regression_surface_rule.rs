@@ -2,7 +2,7 @@
 //! the points of the body's faces. Its starting gaps are the faces' geometric gaps, and
 //! a dropped block neither penetrates at its rows nor gains energy; with friction a
 //! sliding block loses exactly the momentum its normal impulses allow; curved obstacles
-//! and triangle faces are refused with the reason. Mortar rows between bodies likewise.
+//! and quad8 faces are refused with the reason. Mortar rows between bodies likewise.
 
 use signorini::integrators::Integrator;
 use signorini::model::{BodyMeasures, BodyState};
@@ -70,12 +70,18 @@ fn surface_rows_start_at_the_faces_geometric_gaps() {
     }
 }
 
-/// The block dropped at 2 m/s on the plane under Algorithm 2 with the surface rule, hex27
-/// and hex8: no row ends a step inside (the projection holds each row's gap at ≥ 0 to
-/// 1e-12 m), and the energy never grows (1e-9 of the start: e = 0 dissipates).
+/// The block dropped at 2 m/s on the plane under Algorithm 2 with the surface rule,
+/// hex27, hex8, tet10 and tet4 (rows per face node): no row ends a step inside (the
+/// projection holds each row's gap at ≥ 0 to 1e-12 m), and the energy never grows (1e-9
+/// of the start: e = 0 dissipates).
 #[test]
 fn a_block_dropped_with_the_surface_rule_never_penetrates_its_rows() {
-    for (cell, cells) in [("hex27", "[2, 2, 1]"), ("hex8", "[4, 4, 2]")] {
+    for (cell, cells) in [
+        ("hex27", "[2, 2, 1]"),
+        ("hex8", "[4, 4, 2]"),
+        ("tet10", "[2, 2, 1]"),
+        ("tet4", "[4, 4, 2]"),
+    ] {
         let scene = Scene::from_toml(&block(cell, cells, "surface", "")).unwrap();
         let (model, _) = scene.build().unwrap();
         let mut integ = model.into_integrator(&scene.scheme, scene.time.dt).unwrap();
@@ -102,16 +108,16 @@ fn a_block_dropped_with_the_surface_rule_never_penetrates_its_rows() {
     }
 }
 
-/// What the surface rule does not take yet is refused by key: a curved obstacle,
-/// triangle faces.
+/// What the surface rule does not take yet is refused by key: a curved obstacle, quad8
+/// faces.
 #[test]
 fn the_surface_rule_refuses_what_it_does_not_take() {
     let sphere = block("hex8", "[2, 2, 1]", "surface", "").replace(
         "type = \"plane\"\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.3, 1.0]",
         "type = \"sphere\"\ncenter = [0.05, 0.05, -1.0]\nradius = 1.0",
     );
-    let tets = block("tet4", "[2, 2, 1]", "surface", "");
-    for (text, needle) in [(sphere, "plane obstacle"), (tets, "face of 3 nodes")] {
+    let quad8 = block("hex20", "[2, 2, 1]", "surface", "");
+    for (text, needle) in [(sphere, "plane obstacle"), (quad8, "face of 8 nodes")] {
         let e = match Scene::from_toml(&text).unwrap().build() {
             Ok(_) => panic!("accepted: {needle}"),
             Err(e) => e.to_string(),

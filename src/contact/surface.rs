@@ -9,9 +9,13 @@
 //! Points per face, as many as the face's nodes count once the faces are joined (so
 //! that the rows do not outnumber the unknowns they constrain and the Delassus operator
 //! keeps full rank): an edge of 2 nodes its middle, of 3 nodes its 2 Gauss points; a
-//! quadrilateral of 4 nodes its centre, of 9 nodes its 2 × 2 Gauss points. Triangles and
-//! quad8 faces (more points than amortized nodes with any rule that integrates them) are
-//! refused with the reason.
+//! quadrilateral of 4 nodes its centre, of 9 nodes its 2 × 2 Gauss points. Triangles
+//! (tri3, tri6), which have more points per face than amortized nodes under any rule
+//! that integrates them, get one row per face node instead, its gap the faces' gap
+//! weighted by the node's mortar multiplier (`Σ_b w_ab g_b`, `w_ab = ∫ Φ_a N_b / ∫ Φ_a`,
+//! [`crate::contact::mortar::plane_weights`]: never-negative multipliers, so an open
+//! face never reads closed). Quad8 faces (hex20) are refused with the reason: they have
+//! neither.
 //!
 //! Hand-written: the rows are this project's face kinds and rules, not a crate's.
 
@@ -42,6 +46,12 @@ pub fn collocation_rows(
                     G2.iter().map(|&g| [g, 0.0, 0.0]).collect()
                 },
             ),
+            (3, 3) | (3, 6) => {
+                // triangles: more points per face than the joined faces have nodes under
+                // any rule that integrates them; rows per face node instead, weighted
+                // by the mortar multipliers over the faces (once, for all the faces)
+                return Ok(crate::contact::mortar::plane_weights(facets, points));
+            }
             (3, 4) => (Some(CellKind::Quad4), vec![[0.0; 3]]),
             (3, 9) => (
                 Some(CellKind::Quad9),
@@ -54,9 +64,9 @@ pub fn collocation_rows(
                     "rule",
                     "surface",
                     &format!(
-                        "takes faces of 2 or 3 nodes in 2-D and quadrilaterals of 4 or 9 nodes in \
-                         3-D for now; this body has a face of {k} nodes (rule = \"nodes\" takes \
-                         any)"
+                        "takes faces of 2 or 3 nodes in 2-D and of 3, 4, 6 or 9 nodes in 3-D; \
+                         this body has a face of {k} nodes (hex20's quad8 faces: rule = \
+                         \"nodes\" takes them, exactly where no corner would pull)"
                     ),
                 ));
             }

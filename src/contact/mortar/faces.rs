@@ -240,6 +240,35 @@ fn reach(f: &[usize], points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
     (lo.map(|x| x - size), hi.map(|x| x + size))
 }
 
+/// Adds each face node's multiplier weights `∫ Φ_a N_b dΓ` over `facets` (no master:
+/// the rows of a rigid plane, whose gap is affine in the face's position) to `acc`.
+pub(super) fn face_weights(acc: &mut Rows, facets: &[Vec<usize>], points: &[[f64; 3]]) {
+    for f in facets {
+        let k = f.len();
+        for piece in pieces(k) {
+            for i in 1..piece.len() - 1 {
+                let (a, b, d) = (piece[0], piece[i], piece[i + 1]);
+                let area2 = (b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]);
+                for &(u, wu) in &G4 {
+                    for &(v, wv) in &G4 {
+                        let (s, t) = (u, (1.0 - u) * v);
+                        let xi = [
+                            a[0] + s * (b[0] - a[0]) + t * (d[0] - a[0]),
+                            a[1] + s * (b[1] - a[1]) + t * (d[1] - a[1]),
+                        ];
+                        let p = at(f, points, xi);
+                        let normal = cross(p.t[0], p.t[1]);
+                        let len = dot(normal, normal).sqrt();
+                        let phi = basis(k, xi, &p.n);
+                        let w = wu * wv * (1.0 - u) * area2 * len;
+                        acc.add(w, (f, &phi[..k], &p.n[..k]), (&[], &[]), [0.0; 3], 0.0);
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// Adds the mortar integrals of the slave faces against the master faces to `acc`.
 pub(super) fn face_rows(
     acc: &mut Rows,

@@ -113,6 +113,26 @@ pub fn mortar_rows(
 #[derive(Default)]
 struct Rows(std::collections::BTreeMap<usize, Acc>);
 
+/// The multiplier weights of a surface against a rigid plane (the surface rule of a
+/// body's triangle faces, [`crate::contact::surface`]): per face node `a`, the weights
+/// `(1/A_a) ∫ Φ_a N_b dΓ` of the face nodes `b` (they sum to one), so that its row's gap
+/// is `Σ_b w_ab g_b`, the weighted gap of the faces, exact for the affine gap of a
+/// plane. 3-D faces of 3, 4, 6 or 9 nodes.
+pub fn plane_weights(
+    facets: &[Vec<usize>],
+    points: &[[f64; 3]],
+) -> Vec<(usize, Vec<(usize, f64)>)> {
+    let mut acc = Rows::default();
+    faces::face_weights(&mut acc, facets, points);
+    acc.finish()
+        .into_iter()
+        .map(|r| {
+            let w = r.slave.iter().map(|s| s.0).zip(r.slave_weights).collect();
+            (r.node, w)
+        })
+        .collect()
+}
+
 /// Per node: the normal-weighted integral's three components, then the scalar one.
 type Terms = std::collections::BTreeMap<usize, [f64; 4]>;
 
