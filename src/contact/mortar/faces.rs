@@ -246,24 +246,18 @@ pub(super) fn face_weights(acc: &mut Rows, facets: &[Vec<usize>], points: &[[f64
     for f in facets {
         let k = f.len();
         for piece in pieces(k) {
-            for i in 1..piece.len() - 1 {
-                let (a, b, d) = (piece[0], piece[i], piece[i + 1]);
-                let area2 = (b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]);
-                for &(u, wu) in &G4 {
-                    for &(v, wv) in &G4 {
-                        let (s, t) = (u, (1.0 - u) * v);
-                        let xi = [
-                            a[0] + s * (b[0] - a[0]) + t * (d[0] - a[0]),
-                            a[1] + s * (b[1] - a[1]) + t * (d[1] - a[1]),
-                        ];
-                        let p = at(f, points, xi);
-                        let normal = cross(p.t[0], p.t[1]);
-                        let len = dot(normal, normal).sqrt();
-                        let phi = basis(k, xi, &p.n);
-                        let w = wu * wv * (1.0 - u) * area2 * len;
-                        acc.add(w, (f, &phi[..k], &p.n[..k]), (&[], &[]), [0.0; 3], 0.0);
-                    }
-                }
+            for (xi, w) in fan_points(&piece) {
+                let p = at(f, points, xi);
+                let normal = cross(p.t[0], p.t[1]);
+                let len = dot(normal, normal).sqrt();
+                let phi = basis(k, xi, &p.n);
+                acc.add(
+                    w * len,
+                    (f, &phi[..k], &p.n[..k]),
+                    (&[], &[]),
+                    [0.0; 3],
+                    0.0,
+                );
             }
         }
     }
@@ -301,42 +295,49 @@ pub(super) fn face_rows(
             }
             for piece in pieces(k) {
                 let cut = clip(poly.clone(), &piece);
-                for i in 1..cut.len().saturating_sub(1) {
-                    let (a, b, d) = (cut[0], cut[i], cut[i + 1]);
-                    let area2 = (b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]);
-                    if area2 <= 0.0 {
+                for (xi, w) in fan_points(&cut) {
+                    let sp = at(fs, slave_points, xi);
+                    let normal = cross(sp.t[0], sp.t[1]);
+                    let len = dot(normal, normal).sqrt();
+                    let n = normal.map(|x| -x / len);
+                    let eta = along(fm, master_points, sp.x, n);
+                    if !inside(fm.len(), eta, 1e-9) {
                         continue;
                     }
-                    for &(u, wu) in &G4 {
-                        for &(v, wv) in &G4 {
-                            let (s, t) = (u, (1.0 - u) * v);
-                            let xi = [
-                                a[0] + s * (b[0] - a[0]) + t * (d[0] - a[0]),
-                                a[1] + s * (b[1] - a[1]) + t * (d[1] - a[1]),
-                            ];
-                            let w = wu * wv * (1.0 - u) * area2;
-                            let sp = at(fs, slave_points, xi);
-                            let normal = cross(sp.t[0], sp.t[1]);
-                            let len = dot(normal, normal).sqrt();
-                            let n = normal.map(|x| -x / len);
-                            let eta = along(fm, master_points, sp.x, n);
-                            if !inside(fm.len(), eta, 1e-9) {
-                                continue;
-                            }
-                            let mp = at(fm, master_points, eta);
-                            let gap = dot(sub(sp.x, mp.x), n);
-                            let phi = basis(k, xi, &sp.n);
-                            acc.add(
-                                w * len,
-                                (fs, &phi[..k], &sp.n[..k]),
-                                (fm, &mp.n[..fm.len()]),
-                                n,
-                                gap,
-                            );
-                        }
-                    }
+                    let mp = at(fm, master_points, eta);
+                    let gap = dot(sub(sp.x, mp.x), n);
+                    let phi = basis(k, xi, &sp.n);
+                    acc.add(
+                        w * len,
+                        (fs, &phi[..k], &sp.n[..k]),
+                        (fm, &mp.n[..fm.len()]),
+                        n,
+                        gap,
+                    );
                 }
             }
         }
     }
+}
+
+/// The integration points of a convex polygon of the reference plane (a fan of
+/// triangles from its first corner, each with the collapsed 4 × 4 Gauss rule, exact to
+/// total degree 6): reference point and weight.
+fn fan_points(poly: &[[f64; 2]]) -> impl Iterator<Item = ([f64; 2], f64)> + '_ {
+    (1..poly.len().saturating_sub(1)).flat_map(move |i| {
+        let (a, b, d) = (poly[0], poly[i], poly[i + 1]);
+        let area2 = (b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]);
+        // a degenerate sliver of the clipping carries nothing
+        let area2 = area2.max(0.0);
+        G4.iter().flat_map(move |&(u, wu)| {
+            G4.iter().map(move |&(v, wv)| {
+                let (s, t) = (u, (1.0 - u) * v);
+                let xi = [
+                    a[0] + s * (b[0] - a[0]) + t * (d[0] - a[0]),
+                    a[1] + s * (b[1] - a[1]) + t * (d[1] - a[1]),
+                ];
+                (xi, wu * wv * (1.0 - u) * area2)
+            })
+        })
+    })
 }

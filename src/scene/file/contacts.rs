@@ -219,11 +219,24 @@ impl Sides<'_> {
                 None if c.rule == ContactRule::Surface => {
                     let name = self.scene.obstacle(c).name().to_string();
                     let (set, rows) = self.surface_set(c, bi, &nodes, dofs).map_err(at)?;
+                    // triangle faces take rows per face node (contact::surface)
+                    let triangles = self.meshes[bi].cells.first().is_some_and(|(k, _)| {
+                        matches!(
+                            k,
+                            crate::model::element::CellKind::Tet4
+                                | crate::model::element::CellKind::Tet10
+                        )
+                    });
                     interfaces.push(format!(
-                        "contacts[{ci}]: {} rows of \"{}\" at points of its faces (rule = \"surface\", \
-                         {} face nodes) against obstacle \"{name}\"",
+                        "contacts[{ci}]: {} rows of \"{}\" {} (rule = \"surface\", {} face nodes) \
+                         against obstacle \"{name}\"",
                         rows.len(),
                         c.body,
+                        if triangles {
+                            "at its face nodes, weighted over its faces"
+                        } else {
+                            "at points of its faces"
+                        },
                         nodes.len(),
                     ));
                     // the outputs name each row by its nearest face node
