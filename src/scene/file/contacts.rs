@@ -345,6 +345,12 @@ impl Sides<'_> {
     ) -> Result<Box<dyn ContactSet>, Error> {
         let obstacle = self.scene.obstacle(c);
         let mesh = &self.meshes[bi];
+        let held = |v: usize| (0..self.dim).any(|i| dofs.of(bi, v, i).is_none());
+        if let (true, Some((normal, offset))) =
+            (nodes.iter().any(|&v| held(v)), obstacle.shape().plane())
+        {
+            return self.held_nodes_on_plane(c, bi, nodes, dofs, (&normal, offset));
+        }
         let mut node_dofs = Vec::new();
         let mut refs = Vec::new();
         for &v in nodes {
@@ -366,6 +372,103 @@ impl Sides<'_> {
 }
 
 impl Sides<'_> {
+    /// The node rule's rows of `c`'s `nodes` (of body `bi`) against a plane when some
+    /// of them have a held component (a node on a symmetry plane: `fixed` or
+    /// `[[prescribed]]` components): one row per node on its free dofs, its gap the
+    /// node's distance to the plane, as [`crate::contact::plane::NodesOnPlane`]'s; the
+    /// tangential rows leave the held components out (their velocity is the held one,
+    /// zero on a symmetry plane). A held component along which the plane's normal has a
+    /// part, or one that `[[prescribed]]` moves along a tangent of a frictional contact,
+    /// would move the gap or the slip with a motion these rows do not follow: refused,
+    /// naming the node.
+    fn held_nodes_on_plane(
+        &self,
+        c: &ContactSpec,
+        bi: usize,
+        nodes: &[usize],
+        dofs: Dofs,
+        (normal, offset): (&[f64], f64),
+    ) -> Result<Box<dyn ContactSet>, Error> {
+        use crate::contact::linear::{LinearContact, LinearContacts};
+        let mesh = &self.meshes[bi];
+        let t = crate::contact::frame::tangents(&normal[..self.dim]);
+        let k = if c.friction > 0.0 { self.dim - 1 } else { 0 };
+        let law = crate::contact::ContactLaw {
+            restitution: c.restitution,
+            friction: c.friction,
+        };
+        // the components of this body's nodes that a `[[prescribed]]` entry moves
+        let mut moving = std::collections::BTreeSet::new();
+        for p in &self.scene.prescribed {
+            if self.scene.body_index(&p.body) != bi || p.velocity.iter().all(|&x| x == 0.0) {
+                continue;
+            }
+            let comps: Vec<usize> = p.components.clone().unwrap_or((0..self.dim).collect());
+            for w in node_set(mesh, &p.nodes)? {
+                moving.extend(
+                    comps
+                        .iter()
+                        .filter(|&&i| p.velocity[i] != 0.0)
+                        .map(|&i| (w, i)),
+                );
+            }
+        }
+        let mut rows = Vec::with_capacity(nodes.len());
+        for &v in nodes {
+            let x = &mesh.points[v];
+            let mut lc = LinearContact {
+                dofs: Vec::new(),
+                offset: (0..self.dim).map(|i| normal[i] * x[i]).sum::<f64>() - offset,
+                normal: Vec::new(),
+                tangents: vec![Vec::new(); k],
+                law,
+            };
+            for i in 0..self.dim {
+                match dofs.of(bi, v, i) {
+                    Some(d) => {
+                        lc.dofs.push(d);
+                        lc.normal.push(normal[i]);
+                        for (row, tj) in lc.tangents.iter_mut().zip(&t) {
+                            row.push(tj[i]);
+                        }
+                    }
+                    None if normal[i].abs() > 1e-12
+                        || (moving.contains(&(v, i))
+                            && t[..k].iter().any(|tj| tj[i].abs() > 1e-12)) =>
+                    {
+                        return Err(Error::invalid(
+                            "nodes",
+                            mesh.node_label(v),
+                            &format!(
+                                "holds component {i}, along which the obstacle's normal (or, \
+                                 moved by [[prescribed]], a tangent) has a part: a held contact \
+                                 node must be free across the plane (a symmetry plane normal to \
+                                 it is)"
+                            ),
+                        ));
+                    }
+                    None => {}
+                }
+            }
+            if lc.dofs.is_empty() {
+                return Err(Error::invalid(
+                    "nodes",
+                    mesh.node_label(v),
+                    "is fixed and cannot be a contact node",
+                ));
+            }
+            // a tangent along held components only has no row: the node cannot slip that
+            // way (the symmetry plane's own reaction holds it); with no tangent left the
+            // node's block is frictionless
+            lc.tangents.retain(|row| row.iter().any(|x| x.abs() > 1e-12));
+            if lc.tangents.is_empty() {
+                lc.law.friction = 0.0;
+            }
+            rows.push(lc);
+        }
+        Ok(Box::new(LinearContacts::new(rows)?))
+    }
+
     /// The surface rule's rows of `c` (of body `bi`) against its plane obstacle
     /// ([`crate::contact::surface`]): at the points of the boundary facets whose nodes
     /// all lie in the kept `nodes`, on the kept `dofs` (a fixed node's position only
