@@ -246,53 +246,7 @@ fn stacked3(
     upper: (&str, &str),
     rule: &str,
 ) -> Result<Scene, signorini::Error> {
-    let text = format!(
-        r#"
-[time]
-dt = 1e-5
-t_end = {t_end}
-[[bodies]]
-name = "lower"
-mesh = {{ generator = "box", cell = "{lc}", cells = {lcs}, size = [0.1, 0.08, 0.05] }}
-material = {{ young = {E}, poisson = {NU}, density = 1000.0 }}
-[[bodies]]
-name = "upper"
-mesh = {{ generator = "box", cell = "{uc}", cells = {ucs}, size = [0.1, 0.08, 0.04], origin = [0.0, 0.0, 0.05] }}
-material = {{ young = {E}, poisson = {NU}, density = 1000.0 }}
-[[obstacles]]
-name = "floor"
-type = "plane"
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-{floor}
-[[contacts]]
-body = "upper"
-nodes = "z0"
-target = {{ body = "lower", surface = "z1" }}
-rule = "{rule}"
-[[pressures]]
-body = "upper"
-faces = "z1"
-pressure = {P}
-"#,
-        t_end = STEPS as f64 * 1e-5,
-        lc = lower.0,
-        lcs = lower.1,
-        uc = upper.0,
-        ucs = upper.1,
-        // the lower block on the plane with the surface rule, or the node rule on
-        // triangles (both exact there, above); hex20's quad8 faces take neither exactly:
-        // its base slides on prescribed u_z = 0 instead
-        floor = match lower.0 {
-            "hex20" =>
-                "[[prescribed]]\nbody = \"lower\"\nnodes = \"z0\"\nvelocity = [0.0, 0.0, 0.0]\ncomponents = [2]",
-            "tet4" | "tet10" =>
-                "[[contacts]]\nbody = \"lower\"\nnodes = \"z0\"\nobstacle = \"floor\"",
-            _ =>
-                "[[contacts]]\nbody = \"lower\"\nnodes = \"z0\"\nobstacle = \"floor\"\nrule = \"surface\"",
-        },
-    );
-    Scene::from_toml(&text)
+    two_blocks(None, lower, upper, rule)
 }
 
 /// Two blocks of one material stacked on the plane (2-D), their interface non-matching
@@ -305,10 +259,53 @@ fn stacked(
     upper: (&str, &str),
     rule: &str,
 ) -> Result<Scene, signorini::error::Error> {
-    let form = if formulation == "plane-stress" {
-        "{ plane-stress = { thickness = 0.01 } }".to_string()
-    } else {
-        format!("\"{formulation}\"")
+    two_blocks(Some(formulation), lower, upper, rule)
+}
+
+/// The two stacked blocks of [`stacked`] (a 2-D `formulation`) and [`stacked3`]
+/// (`None`: solid).
+fn two_blocks(
+    formulation: Option<&str>,
+    lower: (&str, &str),
+    upper: (&str, &str),
+    rule: &str,
+) -> Result<Scene, signorini::error::Error> {
+    // generator, the lower and upper sizes and origin, the vertical axis's sets, the plane
+    let (generator, sizes, up, (base, top), plane, form) = match formulation {
+        None => (
+            "box",
+            ("[0.1, 0.08, 0.05]", "[0.1, 0.08, 0.04]"),
+            "[0.0, 0.0, 0.05]",
+            ("z0", "z1"),
+            "point = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]",
+            String::new(),
+        ),
+        Some(f) => (
+            "rectangle",
+            ("[0.1, 0.05]", "[0.1, 0.04]"),
+            "[0.0, 0.05]",
+            ("y0", "y1"),
+            "point = [0.0, 0.0]\nnormal = [0.0, 1.0]",
+            if f == "plane-stress" {
+                "formulation = { plane-stress = { thickness = 0.01 } }".to_string()
+            } else {
+                format!("formulation = \"{f}\"")
+            },
+        ),
+    };
+    // the lower block on the plane with the surface rule, or the node rule on
+    // triangles (both exact there, above); hex20's quad8 faces take neither exactly:
+    // its base slides on prescribed u_z = 0 instead
+    let floor = match lower.0 {
+        "hex20" => format!(
+            "[[prescribed]]\nbody = \"lower\"\nnodes = \"{base}\"\nvelocity = [0.0, 0.0, 0.0]\ncomponents = [2]"
+        ),
+        "tet4" | "tet10" => {
+            format!("[[contacts]]\nbody = \"lower\"\nnodes = \"{base}\"\nobstacle = \"floor\"")
+        }
+        _ => format!(
+            "[[contacts]]\nbody = \"lower\"\nnodes = \"{base}\"\nobstacle = \"floor\"\nrule = \"surface\""
+        ),
     };
     let text = format!(
         r#"
@@ -317,32 +314,27 @@ dt = 1e-5
 t_end = {t_end}
 [[bodies]]
 name = "lower"
-mesh = {{ generator = "rectangle", cell = "{lc}", cells = {lcs}, size = [0.1, 0.05] }}
-formulation = {form}
+mesh = {{ generator = "{generator}", cell = "{lc}", cells = {lcs}, size = {ls} }}
+{form}
 material = {{ young = {E}, poisson = {NU}, density = 1000.0 }}
 [[bodies]]
 name = "upper"
-mesh = {{ generator = "rectangle", cell = "{uc}", cells = {ucs}, size = [0.1, 0.04], origin = [0.0, 0.05] }}
-formulation = {form}
+mesh = {{ generator = "{generator}", cell = "{uc}", cells = {ucs}, size = {us}, origin = {up} }}
+{form}
 material = {{ young = {E}, poisson = {NU}, density = 1000.0 }}
 [[obstacles]]
 name = "floor"
 type = "plane"
-point = [0.0, 0.0]
-normal = [0.0, 1.0]
-[[contacts]]
-body = "lower"
-nodes = "y0"
-obstacle = "floor"
-rule = "surface"
+{plane}
+{floor}
 [[contacts]]
 body = "upper"
-nodes = "y0"
-target = {{ body = "lower", surface = "y1" }}
+nodes = "{base}"
+target = {{ body = "lower", surface = "{top}" }}
 rule = "{rule}"
 [[pressures]]
 body = "upper"
-faces = "y1"
+faces = "{top}"
 pressure = {P}
 "#,
         t_end = STEPS as f64 * 1e-5,
@@ -350,6 +342,8 @@ pressure = {P}
         lcs = lower.1,
         uc = upper.0,
         ucs = upper.1,
+        ls = sizes.0,
+        us = sizes.1,
     );
     Scene::from_toml(&text)
 }

@@ -460,7 +460,8 @@ impl Sides<'_> {
             // a tangent along held components only has no row: the node cannot slip that
             // way (the symmetry plane's own reaction holds it); with no tangent left the
             // node's block is frictionless
-            lc.tangents.retain(|row| row.iter().any(|x| x.abs() > 1e-12));
+            lc.tangents
+                .retain(|row| row.iter().any(|x| x.abs() > 1e-12));
             if lc.tangents.is_empty() {
                 lc.law.friction = 0.0;
             }
