@@ -206,6 +206,18 @@ const CASES: &[Case] = &[
         &["contacts[0].nodes", "is fixed"],
     ),
     (
+        "contact nodes held across the plane",
+        &[(
+            "[[obstacles]]",
+            "[[prescribed]]\nbody = \"b\"\nnodes = \"z0\"\nvelocity = [0.0, 0.0, 0.0]\ncomponents = [2]\n[[obstacles]]",
+        )],
+        &[
+            "contacts[0].nodes",
+            "holds component 2",
+            "free across the plane",
+        ],
+    ),
+    (
         "every node fixed",
         &[
             ("material = {", "fixed = [\"x0\", \"x1\"]\nmaterial = {"),

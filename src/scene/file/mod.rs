@@ -51,6 +51,7 @@
 
 mod arrays;
 mod build;
+mod contact_rows;
 mod contacts;
 mod rule;
 pub use rule::ContactRule;
