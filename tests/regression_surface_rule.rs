@@ -121,6 +121,10 @@ fn a_block_dropped_with_the_surface_rule_never_penetrates_its_rows() {
         ("tet4", "[4, 4, 2]"),
     ] {
         let scene = Scene::from_toml(&block(cell, cells, "surface", "")).unwrap();
+        // `check` says how the rows are made: per face node on triangles
+        let line = &scene.check().unwrap().interfaces[0];
+        let per_node = line.contains("at its face nodes, weighted over its faces");
+        assert_eq!(per_node, cell.starts_with("tet"), "{line}");
         drop_never_penetrates(&scene, None, cell);
     }
 }
