@@ -10,12 +10,12 @@
 //! that the rows do not outnumber the unknowns they constrain and the Delassus operator
 //! keeps full rank): an edge of 2 nodes its middle, of 3 nodes its 2 Gauss points; a
 //! quadrilateral of 4 nodes its centre, of 9 nodes its 2 × 2 Gauss points. Triangles
-//! (tri3, tri6), which have more points per face than amortized nodes under any rule
-//! that integrates them, get one row per face node instead, its gap the faces' gap
-//! weighted by the node's mortar multiplier (`Σ_b w_ab g_b`, `w_ab = ∫ Φ_a N_b / ∫ Φ_a`,
-//! [`crate::contact::mortar::plane_weights`]: never-negative multipliers, so an open
-//! face never reads closed). Quad8 faces (hex20) are refused with the reason: they have
-//! neither.
+//! (tri3, tri6) and quad8 faces, which have more points per face than amortized nodes
+//! under any rule that integrates them, get one row per face node instead, its gap the
+//! faces' gap weighted by the node's mortar multiplier (`Σ_b w_ab g_b`, `w_ab = ∫ Φ_a N_b
+//! / ∫ Φ_a`, [`crate::contact::mortar::plane_weights`]: never-negative multipliers, so an
+//! open face never reads closed, and a quad8 corner's tensile share of a pressure, −A/12,
+//! is carried by its neighbours' rows).
 //!
 //! Hand-written: the rows are this project's face kinds and rules, not a crate's.
 
@@ -46,10 +46,10 @@ pub fn collocation_rows(
                     G2.iter().map(|&g| [g, 0.0, 0.0]).collect()
                 },
             ),
-            (3, 3) | (3, 6) => {
-                // triangles: more points per face than the joined faces have nodes under
-                // any rule that integrates them; rows per face node instead, weighted
-                // by the mortar multipliers over the faces (once, for all the faces)
+            (3, 3) | (3, 6) | (3, 8) => {
+                // triangles and quad8: more points per face than the joined faces have
+                // nodes under any rule that integrates them; rows per face node instead,
+                // weighted by the mortar multipliers over the faces (once, for all)
                 return Ok(crate::contact::mortar::plane_weights(facets, points));
             }
             (3, 4) => (Some(CellKind::Quad4), vec![[0.0; 3]]),
@@ -64,9 +64,8 @@ pub fn collocation_rows(
                     "rule",
                     "surface",
                     &format!(
-                        "takes faces of 2 or 3 nodes in 2-D and of 3, 4, 6 or 9 nodes in 3-D; \
-                         this body has a face of {k} nodes (hex20's quad8 faces: rule = \
-                         \"nodes\" takes them, exactly where no corner would pull)"
+                        "takes faces of 2 or 3 nodes in 2-D and of 3, 4, 6, 8 or 9 nodes in \
+                         3-D; this body has a face of {k} nodes"
                     ),
                 ));
             }

@@ -155,6 +155,15 @@ fn pieces(k: usize) -> Vec<Vec<[f64; 2]>> {
             vec![[0.5, 0.0], [0.5, 0.5], [0.0, 0.5]],
         ],
         4 => vec![vec![[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]],
+        // quad8: the four corner triangles cut off by the mid-side nodes, and the diamond
+        // between the mid-side nodes
+        8 => vec![
+            vec![[-1.0, -1.0], [0.0, -1.0], [-1.0, 0.0]],
+            vec![[1.0, -1.0], [1.0, 0.0], [0.0, -1.0]],
+            vec![[1.0, 1.0], [0.0, 1.0], [1.0, 0.0]],
+            vec![[-1.0, 1.0], [-1.0, 0.0], [0.0, 1.0]],
+            vec![[0.0, -1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0]],
+        ],
         _ => [[-1.0, -1.0], [0.0, -1.0], [-1.0, 0.0], [0.0, 0.0]]
             .iter()
             .map(|&[a, b]| vec![[a, b], [a + 1.0, b], [a + 1.0, b + 1.0], [a, b + 1.0]])
@@ -165,8 +174,9 @@ fn pieces(k: usize) -> Vec<Vec<[f64; 2]>> {
 /// The multiplier basis `Φ_a` of a slave face of `k` nodes at `xi`: its shape functions
 /// on tri3 and quad4; the hat functions of its split at the mid-side nodes on tri6
 /// (`max(0, 2L_i − 1)` at corner `i`, `max(0, min(2L_i, 2L_j, 1 − 2L_k))` at the middle
-/// of edge `ij`) and quad9 (products of the 1-D hats at −1, 0, 1); never negative, and
-/// they sum to one.
+/// of edge `ij`), quad9 (products of the 1-D hats at −1, 0, 1) and quad8 (the hats of its
+/// corner triangles and of the bilinear diamond between its mid-side nodes); never
+/// negative, and they sum to one.
 fn basis(k: usize, xi: [f64; 2], n: &[f64; MAX_NODES]) -> [f64; MAX_NODES] {
     let mut phi = [0.0; MAX_NODES];
     match k {
@@ -177,6 +187,38 @@ fn basis(k: usize, xi: [f64; 2], n: &[f64; MAX_NODES]) -> [f64; MAX_NODES] {
                 let (j, m) = ((i + 1) % 3, (i + 2) % 3);
                 // node 3 + i is the middle of edge (i, i + 1)
                 phi[3 + i] = (2.0 * l[i]).min(2.0 * l[j]).min(1.0 - 2.0 * l[m]).max(0.0);
+            }
+        }
+        8 => {
+            // corners 0–3 at (∓1, ∓1), mid-side node 4 + i between corners i and i + 1
+            if xi[0].abs() + xi[1].abs() <= 1.0 {
+                // the diamond: bilinear in (a, b), its corners the mid-side nodes
+                // (clamped: a point on the diamond's edge rounds either way)
+                let a = (0.5 * (1.0 + xi[0] - xi[1])).clamp(0.0, 1.0);
+                let b = (0.5 * (1.0 + xi[0] + xi[1])).clamp(0.0, 1.0);
+                phi[4] = a * (1.0 - b);
+                phi[5] = a * b;
+                phi[6] = (1.0 - a) * b;
+                phi[7] = (1.0 - a) * (1.0 - b);
+            } else {
+                // a corner triangle: the corner's hat and its two mid-side nodes'
+                let c = match (xi[0] < 0.0, xi[1] < 0.0) {
+                    (true, true) => 0,
+                    (false, true) => 1,
+                    (false, false) => 2,
+                    (true, false) => 3,
+                };
+                let (sx, sy) = (
+                    if c == 1 || c == 2 { 1.0 } else { -1.0 },
+                    if c >= 2 { 1.0 } else { -1.0 },
+                );
+                let (dx, dy) = (1.0 - sx * xi[0], 1.0 - sy * xi[1]);
+                phi[c] = (1.0 - dx - dy).max(0.0);
+                // the mid-side node at (0, sy) lies along x from the corner, (sx, 0) along y
+                let along_x = if sy < 0.0 { 4 } else { 6 };
+                let along_y = if sx > 0.0 { 5 } else { 7 };
+                phi[along_x] = dx;
+                phi[along_y] = dy;
             }
         }
         9 => {
@@ -340,4 +382,49 @@ fn fan_points(poly: &[[f64; 2]]) -> impl Iterator<Item = ([f64; 2], f64)> + '_ {
             })
         })
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The multiplier bases of tri6, quad8 and quad9 are never negative and sum to one
+    /// at every point of a fine grid of the reference face, and each node's is 1 at the
+    /// node (tri6 and quad9: the hats; quad8: corner triangles and the diamond).
+    #[test]
+    fn multiplier_bases_are_nonnegative_partitions_of_unity() {
+        for (k, kind) in [
+            (6, CellKind::Tri6),
+            (8, CellKind::Quad8),
+            (9, CellKind::Quad9),
+        ] {
+            let e = kind.element();
+            let n = [0.0; MAX_NODES];
+            for i in 0..=40 {
+                for j in 0..=40 {
+                    let (a, b) = (i as f64 / 40.0, j as f64 / 40.0);
+                    let xi = if k == 6 {
+                        if a + b > 1.0 {
+                            continue;
+                        }
+                        [a, b]
+                    } else {
+                        [2.0 * a - 1.0, 2.0 * b - 1.0]
+                    };
+                    let phi = basis(k, xi, &n);
+                    let s: f64 = phi[..k].iter().sum();
+                    assert!((s - 1.0).abs() < 1e-14, "{k} nodes at {xi:?}: {s}");
+                    assert!(
+                        phi[..k].iter().all(|&p| p >= 0.0),
+                        "{k} nodes at {xi:?}: {:?}",
+                        &phi[..k]
+                    );
+                }
+            }
+            for (a, r) in e.reference_nodes().iter().enumerate() {
+                let phi = basis(k, [r[0], r[1]], &n);
+                assert!((phi[a] - 1.0).abs() < 1e-14, "{k} nodes, node {a}: {phi:?}");
+            }
+        }
+    }
 }

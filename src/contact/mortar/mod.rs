@@ -33,10 +33,9 @@
 //! nodes; plane strain, plane stress with its thickness, axisymmetric rings with `2πr`.
 //! In 3-D (`faces.rs`) each master face's corners are projected into the slave face's
 //! reference plane and the polygon is clipped against the pieces of the slave face on
-//! which `Φ_a` is polynomial, then integrated by triangles. Slave faces tri3, quad4, tri6,
-//! quad9; master faces those and quad8 (a quad8 slave face is refused: its `N_a` are
-//! negative at the corners' insides and no never-negative basis is built for it yet —
-//! put the hex20 body on the target side).
+//! which `Φ_a` is polynomial, then integrated by triangles. Faces tri3, quad4, tri6, quad8
+//! and quad9 on either side (quad8's `Φ_a`: the hats of its four corner triangles and of
+//! the diamond between its mid-side nodes).
 //!
 //! Hand-written: no crate offers mortar integrals on these element faces.
 
@@ -91,18 +90,6 @@ pub fn mortar_rows(
     if dim == 2 {
         edges::edge_rows(&mut acc, formulation, slave, master);
     } else {
-        if let Some(f) = slave.0.iter().find(|f| f.len() == 8) {
-            return Err(Error::invalid(
-                "rule",
-                "surface",
-                &format!(
-                    "takes quad8 faces as the target's only: a slave face of {} nodes \
-                     (hex20) has no never-negative multiplier basis here yet; put the hex20 \
-                     body on the target side",
-                    f.len()
-                ),
-            ));
-        }
         faces::face_rows(&mut acc, slave, master);
     }
     Ok(acc.finish())

@@ -219,12 +219,13 @@ impl Sides<'_> {
                 None if c.rule == ContactRule::Surface => {
                     let name = self.scene.obstacle(c).name().to_string();
                     let (set, rows) = self.surface_set(c, bi, &nodes, dofs).map_err(at)?;
-                    // triangle faces take rows per face node (contact::surface)
-                    let triangles = self.meshes[bi].cells.first().is_some_and(|(k, _)| {
+                    // triangle and quad8 faces take rows per face node (contact::surface)
+                    let per_node = self.meshes[bi].cells.first().is_some_and(|(k, _)| {
                         matches!(
                             k,
                             crate::model::element::CellKind::Tet4
                                 | crate::model::element::CellKind::Tet10
+                                | crate::model::element::CellKind::Hex20
                         )
                     });
                     interfaces.push(format!(
@@ -232,7 +233,7 @@ impl Sides<'_> {
                          against obstacle \"{name}\"",
                         rows.len(),
                         c.body,
-                        if triangles {
+                        if per_node {
                             "at its face nodes, weighted over its faces"
                         } else {
                             "at points of its faces"
