@@ -22,7 +22,7 @@ import sys
 import gmsh
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from make_meshes import hertz_ball  # noqa: E402  (the Hertz ball's geometry, one place)
+from make_meshes import hertz_ball, sized_from_origin  # noqa: E402  (one place each)
 
 if len(sys.argv) != 2:
     sys.exit(__doc__)
@@ -60,19 +60,7 @@ def quarter_ball(path, pole, far):
     gmsh.model.addPhysicalGroup(2, xs, name="xsym")
     gmsh.model.addPhysicalGroup(2, ys, name="ysym")
     gmsh.model.addPhysicalGroup(2, sphere, name="surface")
-    origin = occ.addPoint(0, 0, 0)
-    occ.synchronize()
-    f = gmsh.model.mesh.field
-    f.add("Distance", 1)
-    f.setNumbers(1, "PointsList", [origin])
-    f.add("Threshold", 2)
-    f.setNumber(2, "InField", 1)
-    for k, v in zip(["SizeMin", "SizeMax", "DistMin", "DistMax"], [pole, far, 10 * pole, 6e-3]):
-        f.setNumber(2, k, v)
-    f.setAsBackgroundMesh(2)
-    for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
-              "Mesh.MeshSizeFromCurvature"]:
-        gmsh.option.setNumber(k, 0)
+    sized_from_origin((pole, far, 10 * pole, 6e-3))
     # gmsh's defaults, which the quadrilateral sections above changed
     gmsh.option.setNumber("Mesh.RecombineAll", 0)
     gmsh.option.setNumber("Mesh.Algorithm", 6)

@@ -28,12 +28,10 @@ import numpy as np
 
 
 
-def graded_quads(sizes, path, order=1, incomplete=0):
-    """Meshes the current 2-D model with quad4 (recombined) graded from the origin:
+def sized_from_origin(sizes):
+    """Makes the current model's mesh size grow with the distance from the origin:
     `sizes` = (size at the origin, size far away, distance where the grading starts,
-    distance where it ends); with `order` 2, quad9 (quad8 with `incomplete` 1) whose
-    mid-side nodes lie on the curves; writes Gmsh 4.1 ASCII to `path` and removes the
-    model."""
+    distance where it ends); the boundary's and the points' own sizes switched off."""
     origin = gmsh.model.occ.addPoint(0, 0, 0)
     gmsh.model.occ.synchronize()
     f = gmsh.model.mesh.field
@@ -47,6 +45,15 @@ def graded_quads(sizes, path, order=1, incomplete=0):
     for k in ["Mesh.MeshSizeExtendFromBoundary", "Mesh.MeshSizeFromPoints",
               "Mesh.MeshSizeFromCurvature"]:
         gmsh.option.setNumber(k, 0)
+
+
+def graded_quads(sizes, path, order=1, incomplete=0):
+    """Meshes the current 2-D model with quad4 (recombined) graded from the origin:
+    `sizes` = (size at the origin, size far away, distance where the grading starts,
+    distance where it ends); with `order` 2, quad9 (quad8 with `incomplete` 1) whose
+    mid-side nodes lie on the curves; writes Gmsh 4.1 ASCII to `path` and removes the
+    model."""
+    sized_from_origin(sizes)
     gmsh.option.setNumber("Mesh.RecombineAll", 1)
     gmsh.option.setNumber("Mesh.Algorithm", 8)
     gmsh.model.mesh.generate(2)

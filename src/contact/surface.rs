@@ -20,11 +20,17 @@
 //! Hand-written: the rows are this project's face kinds and rules, not a crate's.
 
 use crate::error::Error;
-use crate::model::element::{CellKind, G2, MAX_NODES, lagrange2};
+use crate::model::element::{CellKind, G2, MAX_NODES, edge_shape, face_kind};
 
 /// One row of the surface rule: the face node nearest its point (the node the outputs
 /// name it by) and its weights `(node, N_b(ξ_q))`.
 pub type SurfaceRow = (usize, Vec<(usize, f64)>);
+
+/// Whether faces of `k` nodes in `dim` dimensions get rows per face node (triangles and
+/// quad8: no collocation rule fits them) rather than rows at face points.
+pub fn per_node(dim: usize, k: usize) -> bool {
+    dim == 3 && matches!(k, 3 | 6 | 8)
+}
 
 /// The surface rule's rows on `facets` (corners first, then mid-side nodes, then a
 /// centre) of a body of dimension `dim` at reference `points`.
@@ -46,15 +52,15 @@ pub fn collocation_rows(
                     G2.iter().map(|&g| [g, 0.0, 0.0]).collect()
                 },
             ),
-            (3, 3) | (3, 6) | (3, 8) => {
+            (3, k) if per_node(3, k) => {
                 // triangles and quad8: more points per face than the joined faces have
                 // nodes under any rule that integrates them; rows per face node instead,
                 // weighted by the mortar multipliers over the faces (once, for all)
                 return Ok(crate::contact::mortar::plane_weights(facets, points));
             }
-            (3, 4) => (Some(CellKind::Quad4), vec![[0.0; 3]]),
+            (3, 4) => (face_kind(4), vec![[0.0; 3]]),
             (3, 9) => (
-                Some(CellKind::Quad9),
+                face_kind(9),
                 G2.iter()
                     .flat_map(|&a| G2.iter().map(move |&b| [a, b, 0.0]))
                     .collect(),
@@ -73,16 +79,7 @@ pub fn collocation_rows(
         for xi in xis {
             match kind {
                 Some(kind) => kind.element().shape(xi, &mut n),
-                None if k == 2 => {
-                    n[0] = 0.5 * (1.0 - xi[0]);
-                    n[1] = 0.5 * (1.0 + xi[0]);
-                }
-                None => {
-                    // edge nodes at −1, 1 and the middle 0
-                    for (n, node) in n.iter_mut().zip([-1.0, 1.0, 0.0]) {
-                        *n = lagrange2(node, xi[0]).0;
-                    }
-                }
+                None => n[..k].copy_from_slice(&edge_shape(k, xi[0]).0[..k]),
             }
             let at: [f64; 3] =
                 std::array::from_fn(|i| (0..k).map(|b| n[b] * points[f[b]][i]).sum());

@@ -20,7 +20,7 @@
 //! ([`crate::model::element`]).
 
 use crate::error::Error;
-use crate::model::element::{CellKind, G3, MAX_NODES, Rule, facet_corners, lagrange2};
+use crate::model::element::{G3, MAX_NODES, Rule, edge_shape, face_kind, facet_corners};
 use crate::model::solid::Formulation;
 
 /// The nodal forces of a unit pressure (`p = 1` Pa) on `facets` of a body of
@@ -34,7 +34,6 @@ pub fn unit_pressure_forces(
     points: &[[f64; 3]],
 ) -> Result<Vec<(usize, [f64; 3])>, Error> {
     let dim = formulation.dim();
-    let axisymmetric = matches!(formulation, Formulation::Axisymmetric);
     let mut out = Vec::new();
     let mut n = [0.0; MAX_NODES];
     let mut g = [[0.0; 3]; MAX_NODES];
@@ -43,49 +42,28 @@ pub fn unit_pressure_forces(
         let x = |b: usize| points[f[b]];
         match (dim, facet_corners(dim, k)) {
             (2, Some(_)) => {
-                // edge nodes at ξ = −1, 1 (and 0 on a 3-node edge)
-                let at: &[f64] = if k == 2 {
-                    &[-1.0, 1.0]
-                } else {
-                    &[-1.0, 1.0, 0.0]
-                };
                 let mut f_loc = [[0.0; 3]; 3];
                 for &(xi, w) in &G3 {
-                    let mut t = [0.0; 2];
-                    let mut r = 0.0;
-                    for (b, &node) in at.iter().enumerate() {
-                        let (nb, db) = if k == 2 {
-                            (0.5 * (1.0 + node * xi), 0.5 * node)
-                        } else {
-                            lagrange2(node, xi)
-                        };
-                        n[b] = nb;
-                        t[0] += db * x(b)[0];
-                        t[1] += db * x(b)[1];
-                        r += nb * x(b)[0];
+                    let (nb, db) = edge_shape(k, xi);
+                    let (mut t, mut r) = ([0.0; 2], 0.0);
+                    for b in 0..k {
+                        t[0] += db[b] * x(b)[0];
+                        t[1] += db[b] * x(b)[1];
+                        r += nb[b] * x(b)[0];
                     }
                     // the body on the edge's left: outward `t` turned by −90°
-                    let ring = if axisymmetric {
-                        std::f64::consts::TAU * r
-                    } else {
-                        formulation.thickness()
-                    };
+                    let ring = formulation.edge_weight(r);
                     for (b, fb) in f_loc.iter_mut().enumerate().take(k) {
-                        fb[0] -= w * ring * n[b] * t[1];
-                        fb[1] += w * ring * n[b] * t[0];
+                        fb[0] -= w * ring * nb[b] * t[1];
+                        fb[1] += w * ring * nb[b] * t[0];
                     }
                 }
                 out.extend((0..k).map(|b| (f[b], f_loc[b])));
             }
             (3, Some(_)) => {
-                let kind = match k {
-                    3 => CellKind::Tri3,
-                    6 => CellKind::Tri6,
-                    4 => CellKind::Quad4,
-                    8 => CellKind::Quad8,
-                    _ => CellKind::Quad9,
-                };
-                let e = kind.element();
+                let e = face_kind(k)
+                    .expect("a face kind of its corner count")
+                    .element();
                 let mut f_loc = [[0.0; 3]; 9];
                 for &(xi, w) in e.rule(Rule::Full) {
                     e.shape(xi, &mut n);

@@ -2,7 +2,7 @@
 //! segment (the module doc of [`super`]).
 
 use super::Rows;
-use crate::model::element::{G3, lagrange2};
+use crate::model::element::{G3, edge_shape};
 use crate::model::solid::Formulation;
 
 /// Adds the mortar integrals of the slave `facets` (edges) against the master edges to
@@ -13,10 +13,6 @@ pub(super) fn edge_rows(
     (slave, slave_points): (&[Vec<usize>], &[[f64; 3]]),
     (master, master_points): (&[Vec<usize>], &[[f64; 3]]),
 ) {
-    let ring = |r: f64| match formulation {
-        Formulation::Axisymmetric => std::f64::consts::TAU * r,
-        f => f.thickness(),
-    };
     for fs in slave {
         let (_, _, ts) = edge(fs, slave_points, 0.0);
         for fm in master {
@@ -58,7 +54,7 @@ pub(super) fn edge_rows(
                     let phi = hats(fs.len(), xi);
                     let k = fs.len();
                     acc.add(
-                        w * half * len * ring(xs[0]),
+                        w * half * len * formulation.edge_weight(xs[0]),
                         (fs, &phi[..k], &ns[..k]),
                         (fm, &nm[..fm.len()]),
                         n,
@@ -73,18 +69,12 @@ pub(super) fn edge_rows(
 /// A 2-D edge of 2 or 3 nodes (corners at ξ = ∓1, a mid-side node at 0) at `xi`: shape
 /// values, position and tangent `dx/dξ`.
 fn edge(f: &[usize], points: &[[f64; 3]], xi: f64) -> ([f64; 3], [f64; 2], [f64; 2]) {
-    let mut n = [0.0; 3];
+    let (n, d) = edge_shape(f.len(), xi);
     let (mut x, mut t) = ([0.0; 2], [0.0; 2]);
-    for (b, &node) in [-1.0, 1.0, 0.0].iter().enumerate().take(f.len()) {
-        let (nb, db) = if f.len() == 2 {
-            (0.5 * (1.0 + node * xi), 0.5 * node)
-        } else {
-            lagrange2(node, xi)
-        };
-        n[b] = nb;
+    for (b, &v) in f.iter().enumerate() {
         for i in 0..2 {
-            x[i] += nb * points[f[b]][i];
-            t[i] += db * points[f[b]][i];
+            x[i] += n[b] * points[v][i];
+            t[i] += d[b] * points[v][i];
         }
     }
     (n, x, t)

@@ -18,7 +18,7 @@
 //! (small sliding).
 
 use super::Rows;
-use crate::model::element::{CellKind, MAX_NODES};
+use crate::model::element::{CellKind, MAX_NODES, face_kind};
 
 /// 4-point Gauss abscissae and weights on `[0, 1]`.
 const G4: [(f64, f64); 4] = [
@@ -28,15 +28,10 @@ const G4: [(f64, f64); 4] = [
     (0.930_568_155_797_026_3, 0.173_927_422_568_726_9),
 ];
 
-/// A face of `k` nodes as the element kind whose shape functions it has.
+/// A face of `k` nodes as the element kind whose shape functions it has (the callers'
+/// facets are the boundary facets of 3-D cells).
 fn kind(k: usize) -> CellKind {
-    match k {
-        3 => CellKind::Tri3,
-        6 => CellKind::Tri6,
-        4 => CellKind::Quad4,
-        8 => CellKind::Quad8,
-        _ => CellKind::Quad9,
-    }
+    face_kind(k).expect("a 3-D boundary facet")
 }
 
 /// A face at `xi`: shape values, position and the two tangents `x_ξ`, `x_η`.

@@ -171,6 +171,36 @@ pub(crate) fn lagrange2(node: f64, x: f64) -> (f64, f64) {
     }
 }
 
+/// A boundary edge of a 2-D cell with `k` = 2 or 3 nodes (corners at ξ = −1 and 1, then
+/// a mid-side node at 0): its shape functions and their derivatives at `xi` (the third
+/// slot 0 on a 2-node edge). What contact rows, mortar integrals and pressures evaluate
+/// on edges.
+pub fn edge_shape(k: usize, xi: f64) -> ([f64; 3], [f64; 3]) {
+    let (mut n, mut d) = ([0.0; 3], [0.0; 3]);
+    for (b, node) in [-1.0, 1.0, 0.0].into_iter().enumerate().take(k) {
+        (n[b], d[b]) = if k == 2 {
+            (0.5 * (1.0 + node * xi), 0.5 * node)
+        } else {
+            lagrange2(node, xi)
+        };
+    }
+    (n, d)
+}
+
+/// The 2-D kind whose shape functions a boundary face of a 3-D cell with `k` nodes has
+/// (corners first, then mid-side nodes, then a centre): tri3, tri6, quad4, quad8, quad9;
+/// `None` for any other count.
+pub fn face_kind(k: usize) -> Option<CellKind> {
+    match k {
+        3 => Some(CellKind::Tri3),
+        6 => Some(CellKind::Tri6),
+        4 => Some(CellKind::Quad4),
+        8 => Some(CellKind::Quad8),
+        9 => Some(CellKind::Quad9),
+        _ => None,
+    }
+}
+
 /// Which quadrature rule a computation asks of an element.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Rule {

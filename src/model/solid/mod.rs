@@ -104,6 +104,15 @@ impl Formulation {
             _ => 2,
         }
     }
+    /// What a 2-D body's edge integrals carry at radius `r` (its x): `2πr` on an
+    /// axisymmetric body (the whole ring), the thickness in plane stress, 1 m otherwise.
+    pub fn edge_weight(self, r: f64) -> f64 {
+        match self {
+            Formulation::Axisymmetric => std::f64::consts::TAU * r,
+            f => f.thickness(),
+        }
+    }
+
     /// The depth a plane body's cells and faces are integrated over: the thickness of a
     /// plane-stress body, 1 m otherwise (per metre of depth in plane strain).
     pub fn thickness(self) -> f64 {

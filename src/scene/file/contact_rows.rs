@@ -6,8 +6,53 @@
 
 use super::contacts::{Dofs, Sides};
 use super::*;
+use crate::contact::ContactLaw;
+use crate::contact::linear::{LinearContact, LinearContacts};
+
+/// A surface rule's contact set, the node each row is named by, and whether the rows
+/// are per face node.
+pub(super) type SurfaceSet = (Box<dyn ContactSet>, Vec<usize>, bool);
 
 impl Sides<'_> {
+    /// One constant row ([`LinearContact`]) with `law`, its gap `offset` at `q = 0` and
+    /// its `terms` `(body, node, gradient, weight)`: the normal row puts `gradient` on
+    /// the node's kept dofs, the tangential rows (with friction) `weight · t` for the
+    /// tangents `t`; a held component is left out (its displacement enters `offset`
+    /// only). A tangential row left empty by held components is dropped (the node cannot
+    /// slip that way), and a row left with none is frictionless.
+    fn constant_row(
+        &self,
+        dofs: Dofs,
+        (law, offset, t): (ContactLaw, f64, &[[f64; 3]; 2]),
+        terms: impl IntoIterator<Item = (usize, usize, [f64; 3], f64)>,
+    ) -> LinearContact {
+        let k = if law.friction > 0.0 { self.dim - 1 } else { 0 };
+        let mut lc = LinearContact {
+            dofs: Vec::new(),
+            offset,
+            normal: Vec::new(),
+            tangents: vec![Vec::new(); k],
+            law,
+        };
+        for (body, v, g, s) in terms {
+            for (i, gi) in g.iter().enumerate().take(self.dim) {
+                if let Some(d) = dofs.of(body, v, i) {
+                    lc.dofs.push(d);
+                    lc.normal.push(*gi);
+                    for (row, tj) in lc.tangents.iter_mut().zip(t) {
+                        row.push(s * tj[i]);
+                    }
+                }
+            }
+        }
+        lc.tangents
+            .retain(|row| row.iter().any(|x| x.abs() > 1e-12));
+        if lc.tangents.is_empty() {
+            lc.law.friction = 0.0;
+        }
+        lc
+    }
+
     /// The node rule's rows of `c`'s `nodes` (of body `bi`) against a plane when some
     /// of them have a held component (a node on a symmetry plane: `fixed` or
     /// `[[prescribed]]` components): one row per node on its free dofs, its gap the
@@ -25,11 +70,10 @@ impl Sides<'_> {
         dofs: Dofs,
         (normal, offset): (&[f64], f64),
     ) -> Result<Box<dyn ContactSet>, Error> {
-        use crate::contact::linear::{LinearContact, LinearContacts};
         let mesh = &self.meshes[bi];
         let t = crate::contact::frame::tangents(&normal[..self.dim]);
         let k = if c.friction > 0.0 { self.dim - 1 } else { 0 };
-        let law = crate::contact::ContactLaw {
+        let law = ContactLaw {
             restitution: c.restitution,
             friction: c.friction,
         };
@@ -58,50 +102,26 @@ impl Sides<'_> {
                     "is fixed and cannot be a contact node",
                 ));
             }
-            let x = &mesh.points[v];
-            let mut lc = LinearContact {
-                dofs: Vec::new(),
-                offset: (0..self.dim).map(|i| normal[i] * x[i]).sum::<f64>() - offset,
-                normal: Vec::new(),
-                tangents: vec![Vec::new(); k],
-                law,
-            };
             for i in 0..self.dim {
-                match dofs.of(bi, v, i) {
-                    Some(d) => {
-                        lc.dofs.push(d);
-                        lc.normal.push(normal[i]);
-                        for (row, tj) in lc.tangents.iter_mut().zip(&t) {
-                            row.push(tj[i]);
-                        }
-                    }
-                    None if normal[i].abs() > 1e-12
-                        || (moving.contains(&(v, i))
-                            && t[..k].iter().any(|tj| tj[i].abs() > 1e-12)) =>
-                    {
-                        return Err(Error::invalid(
-                            "nodes",
-                            mesh.node_label(v),
-                            &format!(
-                                "holds component {i}, along which the obstacle's normal (or, \
-                                 moved by [[prescribed]], a tangent) has a part: a held contact \
-                                 node must be free across the plane (a symmetry plane normal to \
-                                 it is)"
-                            ),
-                        ));
-                    }
-                    None => {}
+                let moved_along_slip =
+                    moving.contains(&(v, i)) && t[..k].iter().any(|tj| tj[i].abs() > 1e-12);
+                if dofs.of(bi, v, i).is_none() && (normal[i].abs() > 1e-12 || moved_along_slip) {
+                    return Err(Error::invalid(
+                        "nodes",
+                        mesh.node_label(v),
+                        &format!(
+                            "holds component {i}, along which the obstacle's normal (or, \
+                             moved by [[prescribed]], a tangent) has a part: a held contact \
+                             node must be free across the plane (a symmetry plane normal to \
+                             it is)"
+                        ),
+                    ));
                 }
             }
-            // a tangent along held components only has no row: the node cannot slip that
-            // way (the symmetry plane's own reaction holds it); with no tangent left the
-            // node's block is frictionless
-            lc.tangents
-                .retain(|row| row.iter().any(|x| x.abs() > 1e-12));
-            if lc.tangents.is_empty() {
-                lc.law.friction = 0.0;
-            }
-            rows.push(lc);
+            let x = &mesh.points[v];
+            let gap = (0..self.dim).map(|i| normal[i] * x[i]).sum::<f64>() - offset;
+            let n: [f64; 3] = std::array::from_fn(|i| normal.get(i).copied().unwrap_or(0.0));
+            rows.push(self.constant_row(dofs, (law, gap, &t), [(bi, v, n, 1.0)]));
         }
         Ok(Box::new(LinearContacts::new(rows)?))
     }
@@ -109,15 +129,15 @@ impl Sides<'_> {
     /// The surface rule's rows of `c` (of body `bi`) against its plane obstacle
     /// ([`crate::contact::surface`]): at the points of the boundary facets whose nodes
     /// all lie in the kept `nodes`, on the kept `dofs` (a fixed node's position only
-    /// enters the offset); with the node each row is named by.
+    /// enters the offset); with the node each row is named by, and whether the rows are
+    /// per face node ([`crate::contact::surface::per_node`]).
     pub(super) fn surface_set(
         &self,
         c: &ContactSpec,
         bi: usize,
         nodes: &[usize],
         dofs: Dofs,
-    ) -> Result<(Box<dyn ContactSet>, Vec<usize>), Error> {
-        use crate::contact::linear::{LinearContact, LinearContacts};
+    ) -> Result<SurfaceSet, Error> {
         let obstacle = self.scene.obstacle(c);
         let Some((normal, offset)) = obstacle.shape().plane() else {
             return Err(Error::invalid(
@@ -129,43 +149,33 @@ impl Sides<'_> {
         let mesh = &self.meshes[bi];
         let facets = mesh.boundary_facets(nodes);
         let rows = crate::contact::surface::collocation_rows(self.dim, &facets, &mesh.points)?;
-        let law = crate::contact::ContactLaw {
+        let law = ContactLaw {
             restitution: c.restitution,
             friction: c.friction,
         };
         // the plane's frame: its tangential rows weigh the face point's velocity as its
         // normal row does
         let t = crate::contact::frame::tangents(&normal[..self.dim]);
-        let k = if law.friction > 0.0 { self.dim - 1 } else { 0 };
+        let n: [f64; 3] = std::array::from_fn(|i| normal.get(i).copied().unwrap_or(0.0));
         let labels = rows.iter().map(|r| r.0).collect();
         let rows = rows
             .into_iter()
             .map(|(_, row)| {
-                let mut lc = LinearContact {
-                    dofs: Vec::new(),
-                    offset: 0.0,
-                    normal: Vec::new(),
-                    tangents: vec![Vec::new(); k],
-                    law,
-                };
-                for (b, w) in row {
-                    let x = &mesh.points[b];
-                    lc.offset +=
-                        w * ((0..self.dim).map(|i| normal[i] * x[i]).sum::<f64>() - offset);
-                    for (i, ni) in normal.iter().enumerate() {
-                        if let Some(d) = dofs.of(bi, b, i) {
-                            lc.dofs.push(d);
-                            lc.normal.push(w * ni);
-                            for (row, tj) in lc.tangents.iter_mut().zip(&t) {
-                                row.push(w * tj[i]);
-                            }
-                        }
-                    }
-                }
-                lc
+                let gap = row
+                    .iter()
+                    .map(|&(b, w)| {
+                        let x = &mesh.points[b];
+                        w * ((0..self.dim).map(|i| n[i] * x[i]).sum::<f64>() - offset)
+                    })
+                    .sum();
+                let terms = row.into_iter().map(|(b, w)| (bi, b, n.map(|ni| w * ni), w));
+                self.constant_row(dofs, (law, gap, &t), terms)
             })
             .collect();
-        Ok((Box::new(LinearContacts::new(rows)?), labels))
+        let per_node = facets
+            .first()
+            .is_some_and(|f| crate::contact::surface::per_node(self.dim, f.len()));
+        Ok((Box::new(LinearContacts::new(rows)?), labels, per_node))
     }
 }
 
@@ -182,7 +192,6 @@ impl Sides<'_> {
         nodes: &[usize],
         dofs: Dofs,
     ) -> Result<(Box<dyn ContactSet>, Vec<usize>), Error> {
-        use crate::contact::linear::{LinearContact, LinearContacts};
         if t.pairing != Pairing::NodeToSurface {
             return Err(Error::invalid(
                 "target.pairing",
@@ -211,51 +220,29 @@ impl Sides<'_> {
                 ),
             ));
         }
-        let law = crate::contact::ContactLaw {
+        let law = ContactLaw {
             restitution: c.restitution,
             friction: c.friction,
         };
         let labels = rows.iter().map(|r| r.node).collect();
-        let dim = self.dim;
         let rows = rows
             .into_iter()
             .map(|r| {
                 // the row's frame: its normal the direction of its slave gradient (the
                 // faces' mean inward normal under `Φ_a`), the tangents of that normal;
                 // the tangential rows weigh the relative velocity as the normal row does
-                let mut n = [0.0; 3];
-                for (_, w) in &r.slave {
-                    for i in 0..3 {
-                        n[i] += w[i];
-                    }
-                }
+                let n = r
+                    .slave
+                    .iter()
+                    .fold([0.0; 3], |n, (_, w)| std::array::from_fn(|i| n[i] + w[i]));
                 let len = n.iter().map(|x| x * x).sum::<f64>().sqrt();
-                let t = crate::contact::frame::tangents(&n.map(|x| x / len)[..dim]);
-                let k = if law.friction > 0.0 { dim - 1 } else { 0 };
-                let mut lc = LinearContact {
-                    dofs: Vec::new(),
-                    offset: r.gap,
-                    normal: Vec::new(),
-                    tangents: vec![Vec::new(); k],
-                    law,
-                };
-                for (body, terms, weights) in [
-                    (bi, &r.slave, &r.slave_weights),
-                    (ti, &r.master, &r.master_weights),
-                ] {
-                    for ((v, w), s) in terms.iter().zip(weights) {
-                        for (i, wi) in w.iter().enumerate().take(dim) {
-                            if let Some(d) = dofs.of(body, *v, i) {
-                                lc.dofs.push(d);
-                                lc.normal.push(*wi);
-                                for (row, tj) in lc.tangents.iter_mut().zip(&t) {
-                                    row.push(s * tj[i]);
-                                }
-                            }
-                        }
-                    }
-                }
-                lc
+                let t = crate::contact::frame::tangents(&n.map(|x| x / len)[..self.dim]);
+                let slave = r.slave.iter().zip(&r.slave_weights);
+                let master = r.master.iter().zip(&r.master_weights);
+                let terms = slave
+                    .map(|((v, w), s)| (bi, *v, *w, *s))
+                    .chain(master.map(|((v, w), s)| (ti, *v, *w, *s)));
+                self.constant_row(dofs, (law, r.gap, &t), terms)
             })
             .collect();
         Ok((Box::new(LinearContacts::new(rows)?), labels))

@@ -218,16 +218,8 @@ impl Sides<'_> {
                 }
                 None if c.rule == ContactRule::Surface => {
                     let name = self.scene.obstacle(c).name().to_string();
-                    let (set, rows) = self.surface_set(c, bi, &nodes, dofs).map_err(at)?;
-                    // triangle and quad8 faces take rows per face node (contact::surface)
-                    let per_node = self.meshes[bi].cells.first().is_some_and(|(k, _)| {
-                        matches!(
-                            k,
-                            crate::model::element::CellKind::Tet4
-                                | crate::model::element::CellKind::Tet10
-                                | crate::model::element::CellKind::Hex20
-                        )
-                    });
+                    let (set, rows, per_node) =
+                        self.surface_set(c, bi, &nodes, dofs).map_err(at)?;
                     interfaces.push(format!(
                         "contacts[{ci}]: {} rows of \"{}\" {} (rule = \"surface\", {} face nodes) \
                          against obstacle \"{name}\"",
