@@ -201,7 +201,8 @@ rule = "surface"
 }
 
 /// Mortar rows between bodies refuse what they do not take, by key: node-to-node
-/// pairing.
+/// pairing, and the node-to-surface search's `search` and `capacity` (they would be
+/// ignored).
 #[test]
 fn mortar_rows_refuse_what_they_do_not_take() {
     let two = |mesh: &str, extra: &str, target: &str| {
@@ -228,12 +229,18 @@ rule = "surface"
         )
     };
     let rect = "{ generator = \"rectangle\", cell = \"quad4\", cells = [2, 1], size = [0.1, 0.05] }\nformulation = \"plane-strain\"";
-    let text = two(rect, "", ", pairing = \"node-to-node\"");
-    let e = match Scene::from_toml(&text).and_then(|s| s.build().map(|_| ())) {
-        Ok(_) => panic!("accepted: node-to-node pairing"),
-        Err(e) => e.to_string(),
-    };
-    assert!(e.contains("pairs nodes"), "{e}");
+    for (target, needle) in [
+        (", pairing = \"node-to-node\"", "pairs nodes"),
+        (", search = 0.001", "target.search"),
+        (", capacity = 8", "target.capacity"),
+    ] {
+        let text = two(rect, "", target);
+        let e = match Scene::from_toml(&text).and_then(|s| s.build().map(|_| ())) {
+            Ok(_) => panic!("accepted: {needle}"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains(needle), "{needle}: {e}");
+    }
 }
 
 /// The 3-D drop: a hex27 block (2 × 2 × 1 cells) dropped at 2 m/s from 1 mm onto a

@@ -199,6 +199,19 @@ impl Sides<'_> {
                 "pairs nodes; rule = \"surface\" integrates over the faces (leave one out)",
             ));
         }
+        // the node-to-surface search's options would be ignored without a word
+        if let Some((key, value)) = t
+            .search
+            .map(|s| ("target.search", crate::error::num(s)))
+            .or(t.capacity.map(|c| ("target.capacity", c.to_string())))
+        {
+            return Err(Error::invalid(
+                key,
+                value,
+                "belongs to node-to-surface rows; mortar rows (rule = \"surface\") pair the \
+                 faces once at set-up and search nothing (leave it out)",
+            ));
+        }
         let (bi, ti) = (
             self.scene.body_index(&c.body),
             self.scene.body_index(&t.body),
